@@ -1,0 +1,182 @@
+//! The acceleration structure: one obvhs BVH2 over every bounded primitive, planes in a short list.
+//!
+//! obvhs traverses in f32 while quadray intersects in f64. Two things keep the f32 traversal
+//! conservative: each box is padded by a few f32 ulps of the largest coordinate any ray origin or
+//! primitive can have (covering the rounding of the ray origin to f32 and obvhs' clamped inverse
+//! direction), and the t handed back to obvhs for culling is rounded up. BVH2 is used rather than
+//! CWBVH because obvhs' CWBVH node test clamps entry distances to 1e-4 world units, which would
+//! break scale invariance.
+
+use crate::geometry::Geometry;
+use crate::math::Ray;
+use crate::shape::PrimRef;
+use glam::{DVec3, Vec3A};
+use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, bvh2::builder::build_bvh2, ray::RayHit};
+use std::time::Duration;
+
+/// A BVH over the bounded primitives of a [`Geometry`], plus its unbounded planes.
+#[derive(Clone)]
+pub struct Accel {
+    bvh: Option<Bvh2>,
+    /// Primitives in BVH leaf order, so a leaf's index needs no indirection.
+    prims: Vec<PrimRef>,
+    planes: u32,
+}
+
+impl std::fmt::Debug for Accel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Accel")
+            .field("prims", &self.prims.len())
+            .field("planes", &self.planes)
+            .finish()
+    }
+}
+
+/// Relative padding applied to f32 boxes: 8 ulps of the magnitude involved.
+const PAD_ULPS: f32 = 8.0 * f32::EPSILON;
+
+impl Accel {
+    /// Builds the BVH. `origin_extent` bounds the magnitude of every coordinate a ray may start at
+    /// outside the primitives' own bounds (the camera).
+    pub fn build(geometry: &Geometry, origin_extent: f64) -> Accel {
+        let mut prims = Vec::new();
+        let mut bounds = Vec::new();
+        for (i, s) in geometry.spheres.iter().enumerate() {
+            prims.push(PrimRef::Sphere(i as u32));
+            bounds.push(s.bounds());
+        }
+        for (i, q) in geometry.quadrics.iter().enumerate() {
+            prims.push(PrimRef::Quadric(i as u32));
+            bounds.push(q.bounds());
+        }
+        for (m, mesh) in geometry.meshes.iter().enumerate() {
+            for t in 0..mesh.triangle_count() as u32 {
+                prims.push(PrimRef::Triangle {
+                    mesh: m as u32,
+                    tri: t,
+                });
+                bounds.push(mesh.triangle_bounds(t));
+            }
+        }
+        let planes = geometry.planes.len() as u32;
+        if prims.is_empty() {
+            return Accel {
+                bvh: None,
+                prims,
+                planes,
+            };
+        }
+        let extent = bounds
+            .iter()
+            .map(|(lo, hi)| lo.abs().max(hi.abs()).max_element())
+            .fold(origin_extent.abs(), f64::max) as f32;
+        let pad = Vec3A::splat(extent * PAD_ULPS);
+        let aabbs: Vec<Aabb> = bounds
+            .iter()
+            .map(|(lo, hi)| {
+                let (lo, hi) = (lo.as_vec3a(), hi.as_vec3a());
+                Aabb::new(
+                    lo - lo.abs() * PAD_ULPS - pad,
+                    hi + hi.abs() * PAD_ULPS + pad,
+                )
+            })
+            .collect();
+        let mut build_time = Duration::ZERO;
+        let bvh = build_bvh2(&aabbs, BvhBuildParams::medium_build(), &mut build_time);
+        let prims = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| prims[i as usize])
+            .collect();
+        Accel {
+            bvh: Some(bvh),
+            prims,
+            planes,
+        }
+    }
+
+    /// Number of primitives in the BVH (triangles counted one by one).
+    pub fn bounded_count(&self) -> usize {
+        self.prims.len()
+    }
+
+    /// The nearest hit in (0, `t_max`), skipping self-hits of the primitive `from` the ray was spawned on.
+    #[inline]
+    pub fn closest(
+        &self,
+        g: &Geometry,
+        ray: &Ray,
+        t_max: f64,
+        from: Option<PrimRef>,
+    ) -> Option<(f64, PrimRef)> {
+        let mut best_t = t_max;
+        let mut best = None;
+        if let Some(bvh) = &self.bvh {
+            let mut hit = RayHit::none();
+            bvh.ray_traverse(to_obvhs(ray, t_max), &mut hit, |_, id| {
+                let prim = self.prims[id];
+                match g.intersect(prim, ray, best_t, from == Some(prim)) {
+                    Some(t) => {
+                        best_t = t;
+                        best = Some(prim);
+                        round_up(t)
+                    }
+                    None => f32::INFINITY,
+                }
+            });
+        }
+        for i in 0..self.planes {
+            let prim = PrimRef::Plane(i);
+            if let Some(t) = g.intersect(prim, ray, best_t, from == Some(prim)) {
+                best_t = t;
+                best = Some(prim);
+            }
+        }
+        best.map(|p| (best_t, p))
+    }
+
+    /// Whether anything blocks the ray in (0, `t_max`): the any-hit query for shadow rays.
+    #[inline]
+    pub fn occluded(&self, g: &Geometry, ray: &Ray, t_max: f64, from: Option<PrimRef>) -> bool {
+        for i in 0..self.planes {
+            let prim = PrimRef::Plane(i);
+            if g.intersect(prim, ray, t_max, from == Some(prim)).is_some() {
+                return true;
+            }
+        }
+        let Some(bvh) = &self.bvh else { return false };
+        !bvh.ray_traverse_miss(to_obvhs(ray, t_max), |_, id| {
+            let prim = self.prims[id];
+            match g.intersect(prim, ray, t_max, from == Some(prim)) {
+                Some(t) => round_up(t).min(f32::MAX),
+                None => f32::INFINITY,
+            }
+        })
+    }
+}
+
+/// The f32 ray obvhs traverses with.
+#[inline]
+fn to_obvhs(ray: &Ray, t_max: f64) -> obvhs::ray::Ray {
+    obvhs::ray::Ray::new(
+        ray.origin.as_vec3a(),
+        ray.dir.as_vec3a(),
+        0.0,
+        round_up(t_max),
+    )
+}
+
+/// `t` as f32, never below its f64 value: culling with it never drops a nearer primitive.
+#[inline]
+fn round_up(t: f64) -> f32 {
+    let f = t as f32;
+    if (f as f64) < t { f.next_up() } else { f }
+}
+
+/// Largest coordinate magnitude among a set of points, for [`Accel::build`]'s `origin_extent`.
+pub fn max_abs_coordinate(points: &[DVec3]) -> f64 {
+    points
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(0.0, f64::max)
+}

@@ -1,0 +1,207 @@
+//! Cameras: perspective look-at, the seed's orbit camera, and orthographic.
+
+use crate::math::Ray;
+use glam::DVec3;
+
+/// How the camera projects the scene onto the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Pinhole camera with a vertical field of view in degrees.
+    Perspective {
+        /// Vertical field of view, degrees, in (0, 180).
+        vfov_deg: f64,
+    },
+    /// Parallel projection; `height` is the world-space height the image covers.
+    Orthographic {
+        /// Height of the viewed region, world units.
+        height: f64,
+    },
+}
+
+/// A camera looking from `from` towards `to`, with `up` giving the image's vertical.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position (perspective) or centre of the image plane (orthographic).
+    pub from: DVec3,
+    /// Point the camera looks at.
+    pub to: DVec3,
+    /// Approximate up direction; only its component orthogonal to the view direction matters.
+    pub up: DVec3,
+    /// Perspective or orthographic.
+    pub projection: Projection,
+}
+
+/// Why a camera cannot produce rays.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CameraError {
+    /// `from` and `to` coincide.
+    #[error("camera position and target coincide")]
+    NoViewDirection,
+    /// `up` is zero or parallel to the view direction.
+    #[error("camera up vector is zero or parallel to the view direction")]
+    DegenerateUp,
+    /// Field of view outside (0, 180) degrees or a non-positive orthographic height.
+    #[error(
+        "camera field of view must be in (0, 180) degrees and orthographic height positive, got {0}"
+    )]
+    BadProjection(f64),
+    /// A coordinate is NaN or infinite.
+    #[error("camera coordinates must be finite")]
+    NotFinite,
+}
+
+impl Camera {
+    /// The seed's orbit camera: `distance` from `target`, at azimuth `yaw_deg` about +z measured
+    /// from +x, and elevation `pitch_deg` above the xy plane, always looking at the target.
+    pub fn orbit(
+        target: DVec3,
+        yaw_deg: f64,
+        pitch_deg: f64,
+        distance: f64,
+        vfov_deg: f64,
+    ) -> Camera {
+        let (sy, cy) = yaw_deg.to_radians().sin_cos();
+        let (sp, cp) = pitch_deg.to_radians().sin_cos();
+        let offset = DVec3::new(cp * cy, cp * sy, sp) * distance;
+        // d(offset)/d(pitch) is orthogonal to the view direction at every pitch, even straight overhead.
+        let up = DVec3::new(-sp * cy, -sp * sy, cp);
+        Camera {
+            from: target + offset,
+            to: target,
+            up,
+            projection: Projection::Perspective { vfov_deg },
+        }
+    }
+
+    /// Checks the camera and precomputes its frame for an image of the given aspect ratio (width / height).
+    pub fn prepare(&self, aspect: f64) -> Result<CameraFrame, CameraError> {
+        if !(self.from.is_finite() && self.to.is_finite() && self.up.is_finite()) {
+            return Err(CameraError::NotFinite);
+        }
+        let forward = (self.to - self.from)
+            .try_normalize()
+            .ok_or(CameraError::NoViewDirection)?;
+        let right = forward
+            .cross(self.up)
+            .try_normalize()
+            .ok_or(CameraError::DegenerateUp)?;
+        let up = right.cross(forward);
+        let half_height = match self.projection {
+            Projection::Perspective { vfov_deg } => {
+                if !(vfov_deg > 0.0 && vfov_deg < 180.0) {
+                    return Err(CameraError::BadProjection(vfov_deg));
+                }
+                (vfov_deg.to_radians() * 0.5).tan()
+            }
+            Projection::Orthographic { height } => {
+                if !(height > 0.0 && height.is_finite()) {
+                    return Err(CameraError::BadProjection(height));
+                }
+                height * 0.5
+            }
+        };
+        Ok(CameraFrame {
+            origin: self.from,
+            forward,
+            right: right * half_height * aspect,
+            up: up * half_height,
+            orthographic: matches!(self.projection, Projection::Orthographic { .. }),
+        })
+    }
+}
+
+/// A camera's precomputed frame: turns image positions into rays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraFrame {
+    origin: DVec3,
+    forward: DVec3,
+    /// Right vector scaled to half the image width (at unit distance for perspective).
+    right: DVec3,
+    /// Up vector scaled to half the image height.
+    up: DVec3,
+    orthographic: bool,
+}
+
+impl CameraFrame {
+    /// The ray through image position (u, v) in [0, 1]², u to the right, v downwards.
+    #[inline]
+    pub fn ray(&self, u: f64, v: f64) -> Ray {
+        let sx = 2.0 * u - 1.0;
+        let sy = 1.0 - 2.0 * v;
+        if self.orthographic {
+            Ray::new(self.origin + self.right * sx + self.up * sy, self.forward)
+        } else {
+            Ray::new(
+                self.origin,
+                (self.forward + self.right * sx + self.up * sy).normalize(),
+            )
+        }
+    }
+
+    /// The eye position (or image-plane centre).
+    pub fn origin(&self) -> DVec3 {
+        self.origin
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn centre_ray_looks_at_target() {
+        let cam = Camera {
+            from: DVec3::new(0.0, -5.0, 1.0),
+            to: DVec3::new(0.0, 0.0, 1.0),
+            up: DVec3::Z,
+            projection: Projection::Perspective { vfov_deg: 60.0 },
+        };
+        let f = cam.prepare(1.5).unwrap();
+        let r = f.ray(0.5, 0.5);
+        assert!((r.dir - DVec3::Y).length() < 1e-15);
+        // Top edge of the image is 30 degrees above the axis.
+        let top = f.ray(0.5, 0.0);
+        assert!((top.dir.z.atan2(top.dir.y).to_degrees() - 30.0).abs() < 1e-9);
+        // Right edge is +x (right-handed, z up, looking along +y).
+        assert!(f.ray(1.0, 0.5).dir.x > 0.0);
+    }
+
+    #[test]
+    fn orbit_camera_keeps_distance_and_target() {
+        for (yaw, pitch) in [(0.0, 0.0), (37.0, 20.0), (200.0, 90.0), (10.0, -90.0)] {
+            let cam = Camera::orbit(DVec3::new(1.0, 2.0, 3.0), yaw, pitch, 7.0, 40.0);
+            assert!(((cam.from - cam.to).length() - 7.0).abs() < 1e-12);
+            let f = cam
+                .prepare(1.0)
+                .expect("orbit camera is valid at every pitch");
+            let d = f.ray(0.5, 0.5).dir;
+            assert!((d - (cam.to - cam.from).normalize()).length() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn orthographic_rays_are_parallel() {
+        let cam = Camera {
+            from: DVec3::new(0.0, 0.0, 10.0),
+            to: DVec3::ZERO,
+            up: DVec3::Y,
+            projection: Projection::Orthographic { height: 4.0 },
+        };
+        let f = cam.prepare(2.0).unwrap();
+        let (a, b) = (f.ray(0.0, 0.0), f.ray(1.0, 1.0));
+        assert_eq!(a.dir, b.dir);
+        assert!((a.origin - b.origin - DVec3::new(-8.0, 4.0, 0.0)).length() < 1e-12);
+    }
+
+    #[test]
+    fn rejects_bad_cameras() {
+        let mut cam = Camera::orbit(DVec3::ZERO, 0.0, 0.0, 5.0, 40.0);
+        cam.projection = Projection::Perspective { vfov_deg: 180.0 };
+        assert!(matches!(
+            cam.prepare(1.0),
+            Err(CameraError::BadProjection(_))
+        ));
+        cam.to = cam.from;
+        assert_eq!(cam.prepare(1.0), Err(CameraError::NoViewDirection));
+    }
+}

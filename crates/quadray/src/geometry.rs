@@ -1,0 +1,84 @@
+//! All primitives of a scene, with the one `match` that dispatches over [`PrimRef`].
+
+use crate::material::MaterialId;
+use crate::math::Ray;
+use crate::mesh::Mesh;
+use crate::plane::Plane;
+use crate::quadric::Quadric;
+use crate::shape::{PrimRef, SurfaceGeometry};
+use crate::sphere::Sphere;
+
+/// The scene's primitives, grouped by kind.
+#[derive(Clone, Debug, Default)]
+pub struct Geometry {
+    /// Spheres.
+    pub spheres: Vec<Sphere>,
+    /// Infinite planes.
+    pub planes: Vec<Plane>,
+    /// Clipped quadrics.
+    pub quadrics: Vec<Quadric>,
+    /// Triangle meshes.
+    pub meshes: Vec<Mesh>,
+}
+
+impl Geometry {
+    /// Phase one: the nearest t in (0, `t_max`) where the ray meets `prim`.
+    #[inline]
+    pub fn intersect(&self, prim: PrimRef, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
+        match prim {
+            PrimRef::Sphere(i) => self.spheres[i as usize].intersect(ray, t_max, from_self),
+            PrimRef::Quadric(i) => self.quadrics[i as usize].intersect(ray, t_max, from_self),
+            PrimRef::Triangle { mesh, tri } => {
+                self.meshes[mesh as usize].intersect(tri, ray, t_max, from_self)
+            }
+            PrimRef::Plane(i) => self.planes[i as usize].intersect(ray, t_max, from_self),
+        }
+    }
+
+    /// Phase two: surface geometry and material of the hit at `t` on `prim`.
+    pub fn surface(&self, prim: PrimRef, ray: &Ray, t: f64) -> (SurfaceGeometry, MaterialId) {
+        match prim {
+            PrimRef::Sphere(i) => {
+                let s = &self.spheres[i as usize];
+                (s.surface(ray, t), s.material)
+            }
+            PrimRef::Quadric(i) => {
+                let q = &self.quadrics[i as usize];
+                (q.surface(ray, t), q.material())
+            }
+            PrimRef::Triangle { mesh, tri } => {
+                let m = &self.meshes[mesh as usize];
+                (m.surface(tri, ray, t), m.material())
+            }
+            PrimRef::Plane(i) => {
+                let p = &self.planes[i as usize];
+                (p.surface(ray, t), p.material)
+            }
+        }
+    }
+
+    /// Every primitive's material index, with a description of the primitive for error messages.
+    pub fn materials_used(&self) -> impl Iterator<Item = (String, MaterialId)> + '_ {
+        let s = self
+            .spheres
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (format!("sphere {i}"), s.material));
+        let p = self
+            .planes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (format!("plane {i}"), p.material));
+        let q = self
+            .quadrics
+            .iter()
+            .enumerate()
+            .map(|(i, q)| (format!("quadric {i}"), q.material()));
+        let m = self
+            .meshes
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (format!("mesh {i}"), m.material()));
+        s.chain(p).chain(q).chain(m)
+    }
+}

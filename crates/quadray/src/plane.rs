@@ -1,0 +1,100 @@
+//! Infinite planes, kept outside the BVH and tested from a short list.
+
+use crate::material::MaterialId;
+use crate::math::{Ray, gamma, orthonormal_basis};
+use crate::shape::SurfaceGeometry;
+use crate::texture::TexturePoint;
+use glam::DVec3;
+
+/// The plane through `point` with unit `normal`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plane {
+    /// A point on the plane, world space; the origin of its texture frame.
+    pub point: DVec3,
+    /// Unit normal; its side is the plane's front.
+    pub normal: DVec3,
+    /// Material index.
+    pub material: MaterialId,
+}
+
+impl Plane {
+    /// Parameter t in (0, `t_max`) where the ray crosses the plane. A ray spawned on the plane never re-hits it.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
+        if from_self {
+            return None;
+        }
+        let denom = ray.dir.dot(self.normal);
+        let t = (self.point - ray.origin).dot(self.normal) / denom;
+        (t > 0.0 && t < t_max).then_some(t)
+    }
+
+    /// Surface geometry at parameter `t` of `ray`.
+    pub fn surface(&self, ray: &Ray, t: f64) -> SurfaceGeometry {
+        let p = ray.at(t);
+        // Project onto the plane so the point's error does not grow with t.
+        let offset = p - self.point;
+        let local3 = offset - self.normal * offset.dot(self.normal);
+        let point = self.point + local3;
+        let (u, v) = orthonormal_basis(self.normal);
+        let error = gamma(8) * (self.point.abs().max_element() + local3.abs().max_element()) * 2.0;
+        SurfaceGeometry {
+            point,
+            geometric_normal: self.normal,
+            shading_normal: self.normal,
+            error,
+            texture: TexturePoint {
+                local: DVec3::new(local3.dot(u), local3.dot(v), 0.0),
+                height: 0.0,
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hits_from_either_side_and_not_parallel() {
+        let p = Plane {
+            point: DVec3::new(0.0, 0.0, 1.0),
+            normal: DVec3::Z,
+            material: 0,
+        };
+        assert_eq!(
+            p.intersect(&Ray::new(DVec3::ZERO, DVec3::Z), f64::INFINITY, false),
+            Some(1.0)
+        );
+        assert_eq!(
+            p.intersect(
+                &Ray::new(DVec3::new(0.0, 0.0, 3.0), -DVec3::Z),
+                f64::INFINITY,
+                false
+            ),
+            Some(2.0)
+        );
+        assert_eq!(
+            p.intersect(&Ray::new(DVec3::ZERO, DVec3::X), f64::INFINITY, false),
+            None
+        );
+        assert_eq!(
+            p.intersect(&Ray::new(DVec3::ZERO, -DVec3::Z), f64::INFINITY, false),
+            None
+        );
+    }
+
+    #[test]
+    fn texture_frame_lies_in_the_plane() {
+        let p = Plane {
+            point: DVec3::new(1.0, 2.0, 3.0),
+            normal: DVec3::new(1.0, 1.0, 0.0).normalize(),
+            material: 0,
+        };
+        let r = Ray::new(DVec3::new(5.0, 0.0, 7.0), DVec3::new(-1.0, 0.0, 0.0));
+        let t = p.intersect(&r, f64::INFINITY, false).unwrap();
+        let s = p.surface(&r, t);
+        assert_eq!(s.texture.local.z, 0.0);
+        assert!((s.point - p.point).dot(p.normal).abs() < 1e-14);
+    }
+}

@@ -1,0 +1,155 @@
+//! Rendering a scene to a film in parallel over rows with rayon, deterministically.
+
+use crate::film::Film;
+use crate::integrator::{RayCounts, Whitted};
+use crate::sampler::{pixel_pattern, sample_2d};
+use crate::scene::Scene;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::sync::Mutex;
+
+/// Largest image side in pixels.
+pub const MAX_SIDE: u32 = 16384;
+/// Largest pixel count (about 134 megapixels, 1.6 GB of f32 RGB).
+pub const MAX_PIXELS: u64 = 1 << 27;
+/// Largest samples per pixel.
+pub const MAX_SPP: u32 = 65536;
+/// Largest ray chain length.
+pub const MAX_DEPTH: u32 = 64;
+/// Largest image aspect ratio (either way).
+pub const MAX_ASPECT: f64 = 64.0;
+
+/// What to render: resolution, sampling and recursion.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel (1: the pixel centre; more: stratified jitter).
+    pub spp: u32,
+    /// The integrator's recursion limits.
+    pub whitted: Whitted,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 640,
+            height: 480,
+            spp: 1,
+            whitted: Whitted::default(),
+        }
+    }
+}
+
+/// Why settings cannot be rendered.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RenderError {
+    /// Resolution outside the documented limits.
+    #[error(
+        "resolution {width}x{height} is outside the limits (1..={MAX_SIDE} per side, at most {MAX_PIXELS} pixels, aspect at most {MAX_ASPECT})"
+    )]
+    Resolution {
+        /// Width asked for.
+        width: u32,
+        /// Height asked for.
+        height: u32,
+    },
+    /// Samples per pixel outside 1..=MAX_SPP.
+    #[error("samples per pixel must be in 1..={MAX_SPP}, got {0}")]
+    Spp(u32),
+    /// Depth outside 1..=MAX_DEPTH.
+    #[error("max depth must be in 1..={MAX_DEPTH}, got {0}")]
+    Depth(u32),
+    /// The camera cannot produce rays at this aspect.
+    #[error("camera: {0}")]
+    Camera(#[from] crate::camera::CameraError),
+}
+
+impl RenderSettings {
+    /// Checks the settings against the documented limits.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        let (w, h) = (self.width, self.height);
+        let aspect = w as f64 / h.max(1) as f64;
+        if w == 0
+            || h == 0
+            || w > MAX_SIDE
+            || h > MAX_SIDE
+            || w as u64 * h as u64 > MAX_PIXELS
+            || !(1.0 / MAX_ASPECT..=MAX_ASPECT).contains(&aspect)
+        {
+            return Err(RenderError::Resolution {
+                width: w,
+                height: h,
+            });
+        }
+        if !(1..=MAX_SPP).contains(&self.spp) {
+            return Err(RenderError::Spp(self.spp));
+        }
+        if !(1..=MAX_DEPTH).contains(&self.whitted.max_depth) {
+            return Err(RenderError::Depth(self.whitted.max_depth));
+        }
+        Ok(())
+    }
+}
+
+/// Receives progress while rendering (implemented by front ends, e.g. a progress bar).
+pub trait Progress: Sync {
+    /// Called after each finished row.
+    fn row_done(&self);
+}
+
+/// A progress sink that ignores everything.
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    fn row_done(&self) {}
+}
+
+/// A finished render.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The image.
+    pub film: Film,
+    /// Rays traced, by kind.
+    pub counts: RayCounts,
+}
+
+/// Renders `scene` on the current rayon pool. Every pixel depends only on its own position, so the
+/// result is bit-identical for any number of threads.
+pub fn render(
+    scene: &Scene,
+    settings: &RenderSettings,
+    progress: &dyn Progress,
+) -> Result<Rendered, RenderError> {
+    settings.validate()?;
+    let (w, h) = (settings.width, settings.height);
+    let camera = scene.camera.prepare(w as f64 / h as f64)?;
+    let mut film = Film::new(w, h);
+    let totals = Mutex::new(RayCounts::default());
+    let spp = settings.spp;
+    let inv_spp = 1.0 / spp as f32;
+    film.pixels_mut()
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let y = y as u32;
+            let mut counts = RayCounts::default();
+            for (x, pixel) in row.iter_mut().enumerate() {
+                let x = x as u32;
+                let pattern = pixel_pattern(x, y);
+                let mut sum = Vec3::ZERO;
+                for s in 0..spp {
+                    let (dx, dy) = sample_2d(s, spp, pattern);
+                    let ray = camera.ray((x as f64 + dx) / w as f64, (y as f64 + dy) / h as f64);
+                    sum += settings.whitted.camera_ray(scene, &ray, &mut counts);
+                }
+                *pixel = sum * inv_spp;
+            }
+            *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
+            progress.row_done();
+        });
+    let counts = totals.into_inner().unwrap_or_else(|e| e.into_inner());
+    Ok(Rendered { film, counts })
+}

@@ -1,0 +1,114 @@
+//! Per-pixel sample positions: correlated multi-jittered sampling (Kensler, "Correlated Multi-Jittered
+//! Sampling", Pixar Technical Memo 13-01, 2013), seeded by the pixel, so every pixel's samples are
+//! fixed whatever the thread count.
+
+/// A pseudo-random permutation of [0, len) indexed by `i`, keyed by `pattern` (Kensler's `permute`).
+fn permute(mut i: u32, len: u32, pattern: u32) -> u32 {
+    let mut w = len - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    let p = pattern;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dcb303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e501cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < len {
+            break;
+        }
+    }
+    (i.wrapping_add(p)) % len
+}
+
+/// A hashed float in [0, 1) from `i` keyed by `pattern` (Kensler's `randfloat`).
+fn rand_float(mut i: u32, pattern: u32) -> f64 {
+    let p = pattern;
+    i ^= p;
+    i ^= i >> 17;
+    i ^= i >> 10;
+    i = i.wrapping_mul(0xb36534e5);
+    i ^= i >> 12;
+    i ^= i >> 21;
+    i = i.wrapping_mul(0x93fc4795);
+    i ^= 0xdf6e307f;
+    i ^= i >> 17;
+    i = i.wrapping_mul(1 | p >> 18);
+    i as f64 / 4294967808.0
+}
+
+/// The pattern key of pixel (x, y): a 32-bit hash, distinct per pixel.
+pub fn pixel_pattern(x: u32, y: u32) -> u32 {
+    let mut h = (x as u64) << 32 | y as u64;
+    // SplitMix64 finaliser.
+    h = h.wrapping_add(0x9E3779B97F4A7C15);
+    h = (h ^ (h >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+    h = (h ^ (h >> 27)).wrapping_mul(0x94D049BB133111EB);
+    (h ^ (h >> 31)) as u32
+}
+
+/// Sample `s` of `count` within the unit pixel: the centre for one sample, else stratified jitter.
+pub fn sample_2d(s: u32, count: u32, pattern: u32) -> (f64, f64) {
+    if count <= 1 {
+        return (0.5, 0.5);
+    }
+    let m = ((count as f64).sqrt() as u32).max(1);
+    let n = count.div_ceil(m);
+    let s = permute(s, count, pattern.wrapping_mul(0x51633e2d));
+    let sx = permute(s % m, m, pattern.wrapping_mul(0x68bc21eb));
+    let sy = permute(s / m, n, pattern.wrapping_mul(0x02e5be93));
+    let jx = rand_float(s, pattern.wrapping_mul(0x967a889b));
+    let jy = rand_float(s, pattern.wrapping_mul(0x368cc8b7));
+    (
+        (sx as f64 + (sy as f64 + jx) / n as f64) / m as f64,
+        (s as f64 + jy) / count as f64,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn samples_are_stratified_in_both_axes() {
+        for count in [2u32, 4, 5, 16, 64] {
+            let pattern = pixel_pattern(17, 42);
+            let pts: Vec<_> = (0..count).map(|s| sample_2d(s, count, pattern)).collect();
+            for axis in 0..2 {
+                let mut strata: Vec<u32> = pts
+                    .iter()
+                    .map(|p| ((if axis == 0 { p.0 } else { p.1 }) * count as f64) as u32)
+                    .collect();
+                strata.sort();
+                if axis == 1 {
+                    assert_eq!(strata, (0..count).collect::<Vec<_>>(), "count {count}");
+                }
+            }
+            assert!(
+                pts.iter()
+                    .all(|&(x, y)| (0.0..1.0).contains(&x) && (0.0..1.0).contains(&y))
+            );
+        }
+    }
+
+    #[test]
+    fn one_sample_is_the_pixel_centre() {
+        assert_eq!(sample_2d(0, 1, 123), (0.5, 0.5));
+    }
+}

@@ -1,0 +1,192 @@
+//! A validated, immutable scene: camera, materials, lights, geometry and its BVH.
+
+use crate::accel::{Accel, max_abs_coordinate};
+use crate::camera::{Camera, CameraError, Projection};
+use crate::geometry::Geometry;
+use crate::light::Light;
+use crate::material::Material;
+use glam::Vec3;
+
+/// Everything a scene holds, before validation.
+#[derive(Clone, Debug)]
+pub struct SceneDescription {
+    /// The camera.
+    pub camera: Camera,
+    /// Radiance of rays that hit nothing (linear RGB).
+    pub background: Vec3,
+    /// Materials, referred to by index.
+    pub materials: Vec<Material>,
+    /// Light sources; without any, no shadow rays are traced.
+    pub lights: Vec<Light>,
+    /// The primitives.
+    pub geometry: Geometry,
+}
+
+/// Why a scene description is not a valid scene.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SceneError {
+    /// A primitive refers to a material that does not exist.
+    #[error("{what} uses material {id}, but the scene has {count} materials")]
+    MaterialOutOfRange {
+        /// Which primitive.
+        what: String,
+        /// The index used.
+        id: u32,
+        /// Number of materials.
+        count: usize,
+    },
+    /// A value is NaN, infinite or out of its range.
+    #[error("{what}: {problem}")]
+    Invalid {
+        /// Which item.
+        what: String,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// The camera cannot produce rays.
+    #[error("camera: {0}")]
+    Camera(#[from] CameraError),
+}
+
+/// A scene ready to render.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The camera.
+    pub camera: Camera,
+    /// Radiance of rays that hit nothing.
+    pub background: Vec3,
+    /// Materials, by index.
+    pub materials: Vec<Material>,
+    /// Light sources.
+    pub lights: Vec<Light>,
+    /// The primitives.
+    pub geometry: Geometry,
+    accel: Accel,
+}
+
+fn invalid(what: impl Into<String>, problem: impl Into<String>) -> SceneError {
+    SceneError::Invalid {
+        what: what.into(),
+        problem: problem.into(),
+    }
+}
+
+impl Scene {
+    /// Validates a description and builds its BVH.
+    pub fn new(d: SceneDescription) -> Result<Scene, SceneError> {
+        d.camera.prepare(1.0)?;
+        if !d.background.is_finite() || d.background.min_element() < 0.0 {
+            return Err(invalid("background", "must be finite and non-negative"));
+        }
+        for (i, m) in d.materials.iter().enumerate() {
+            validate_material(m).map_err(|p| invalid(format!("material {i}"), p))?;
+        }
+        for (what, id) in d.geometry.materials_used() {
+            if id as usize >= d.materials.len() {
+                return Err(SceneError::MaterialOutOfRange {
+                    what,
+                    id,
+                    count: d.materials.len(),
+                });
+            }
+        }
+        for (i, s) in d.geometry.spheres.iter().enumerate() {
+            if !(s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0) {
+                return Err(invalid(
+                    format!("sphere {i}"),
+                    "centre must be finite and radius positive",
+                ));
+            }
+        }
+        for (i, p) in d.geometry.planes.iter().enumerate() {
+            if !(p.point.is_finite()
+                && p.normal.is_finite()
+                && (p.normal.length() - 1.0).abs() < 1e-9)
+            {
+                return Err(invalid(
+                    format!("plane {i}"),
+                    "point must be finite and normal unit length",
+                ));
+            }
+        }
+        for (i, l) in d.lights.iter().enumerate() {
+            let ok = match l {
+                Light::Point {
+                    position,
+                    intensity,
+                } => position.is_finite() && non_negative(*intensity),
+                Light::Directional {
+                    direction,
+                    irradiance,
+                } => {
+                    direction.is_finite()
+                        && (direction.length() - 1.0).abs() < 1e-9
+                        && non_negative(*irradiance)
+                }
+            };
+            if !ok {
+                return Err(invalid(
+                    format!("light {i}"),
+                    "must be finite, with a unit direction and non-negative colour",
+                ));
+            }
+        }
+        let mut origins = vec![d.camera.from, d.camera.to];
+        if let Projection::Orthographic { height } = d.camera.projection {
+            // The image plane can reach this far from `from` (any aspect up to the documented maximum).
+            origins
+                .push(d.camera.from.abs() + glam::DVec3::splat(height * crate::render::MAX_ASPECT));
+        }
+        let accel = Accel::build(&d.geometry, max_abs_coordinate(&origins));
+        Ok(Scene {
+            camera: d.camera,
+            background: d.background,
+            materials: d.materials,
+            lights: d.lights,
+            geometry: d.geometry,
+            accel,
+        })
+    }
+
+    /// The acceleration structure.
+    pub fn accel(&self) -> &Accel {
+        &self.accel
+    }
+}
+
+fn non_negative(c: Vec3) -> bool {
+    c.is_finite() && c.min_element() >= 0.0
+}
+
+fn validate_material(m: &Material) -> Result<(), String> {
+    for (name, v) in [
+        ("ambient", m.ambient),
+        ("diffuse", m.diffuse),
+        ("specular", m.specular),
+        ("shininess", m.shininess),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!(
+                "{name} must be a finite non-negative number, got {v}"
+            ));
+        }
+    }
+    if !(0.0..=1.0).contains(&m.reflectivity) {
+        return Err(format!(
+            "reflectivity must be in [0, 1], got {}",
+            m.reflectivity
+        ));
+    }
+    match &m.texture {
+        crate::texture::Texture::Constant(c) if !non_negative(*c) => {
+            Err("colour must be finite and non-negative".into())
+        }
+        crate::texture::Texture::Checker { size, even, odd }
+            if !(*size > 0.0 && size.is_finite() && non_negative(*even) && non_negative(*odd)) =>
+        {
+            Err("checker size must be positive and colours finite and non-negative".into())
+        }
+        crate::texture::Texture::Bands { steps: 0 } => Err("bands need at least one step".into()),
+        _ => Ok(()),
+    }
+}
