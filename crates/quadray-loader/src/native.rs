@@ -56,6 +56,9 @@ pub struct LoadedScene {
     pub settings: SceneSettings,
     /// Material names, by material index.
     pub material_names: Vec<String>,
+    /// What the loader assumed or skipped (a default camera or light, an unsupported primitive),
+    /// for the user to see on stderr.
+    pub notes: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -443,6 +446,7 @@ impl Builder<'_> {
             },
             settings,
             material_names,
+            notes: Vec::new(),
         })
     }
 
