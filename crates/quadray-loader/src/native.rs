@@ -687,6 +687,7 @@ impl Builder<'_> {
             )?,
             specular_model,
             reflectivity,
+            reflection_tint: 0.0,
         })
     }
 

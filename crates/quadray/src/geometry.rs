@@ -7,6 +7,7 @@ use crate::plane::Plane;
 use crate::quadric::Quadric;
 use crate::shape::{PrimRef, SurfaceGeometry};
 use crate::sphere::Sphere;
+use crate::texture::VertexAttributes;
 
 /// The scene's primitives, grouped by kind.
 #[derive(Clone, Debug, Default)]
@@ -53,6 +54,18 @@ impl Geometry {
             PrimRef::Plane(i) => {
                 let p = &self.planes[i as usize];
                 (p.surface(ray, t), p.material)
+            }
+        }
+    }
+
+    /// Interpolated vertex attributes at `point` on `prim` (texture coordinates and colours exist
+    /// only on meshes; other primitives get the defaults).
+    #[inline]
+    pub fn attributes(&self, prim: PrimRef, point: glam::DVec3) -> VertexAttributes {
+        match prim {
+            PrimRef::Triangle { mesh, tri } => self.meshes[mesh as usize].attributes(tri, point),
+            PrimRef::Sphere(_) | PrimRef::Quadric(_) | PrimRef::Plane(_) => {
+                VertexAttributes::default()
             }
         }
     }

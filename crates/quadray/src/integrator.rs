@@ -64,11 +64,13 @@ impl Whitted {
             .accel()
             .closest(&scene.geometry, ray, f64::INFINITY, from)?;
         let (geometry, material) = scene.geometry.surface(prim, ray, t);
+        let attributes = scene.geometry.attributes(prim, geometry.point);
         Some(SurfaceHit {
             t,
             prim,
             material,
             geometry,
+            attributes,
         })
     }
 
@@ -87,7 +89,7 @@ impl Whitted {
         };
         let m = &scene.materials[hit.material as usize];
         let g = &hit.geometry;
-        let base = m.texture.eval(&g.texture);
+        let base = m.base_color(&g.texture, &hit.attributes);
         let view = -ray.dir.normalize();
         // Two-sided shading: face both normals towards the viewer.
         let facing = if g.geometric_normal.dot(view) >= 0.0 {
@@ -143,7 +145,7 @@ impl Whitted {
             counts.reflection += 1;
             let reflected = Ray::new(offset_origin(g.point, ng, g.error, dir), dir);
             color += self.radiance(scene, &reflected, Some(hit.prim), depth + 1, weight, counts)
-                * m.reflectivity;
+                * m.reflection_color(base);
         }
         color
     }

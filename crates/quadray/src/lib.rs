@@ -46,6 +46,7 @@ pub mod accel;
 pub mod camera;
 pub mod film;
 pub mod geometry;
+pub mod image_texture;
 pub mod integrator;
 pub mod light;
 pub mod material;
@@ -67,7 +68,8 @@ pub use integrator::{RayCounts, Whitted};
 pub use light::Light;
 pub use material::{Material, MaterialId, SpecularModel};
 pub use math::{Ray, Transform};
-pub use mesh::{Mesh, MeshError};
+pub use image_texture::{ColorEncoding, Filter, Image, ImageError, ImageMap, Wrap};
+pub use mesh::{AlphaMask, Mesh, MeshError};
 pub use plane::Plane;
 pub use quadric::{
     ClipBox, Coefficients, Quadric, QuadricClass, QuadricError, QuadricKind, QuadricSurface,
@@ -76,4 +78,4 @@ pub use render::{NoProgress, Progress, RenderError, RenderSettings, Rendered, re
 pub use scene::{Scene, SceneDescription, SceneError};
 pub use shape::{PrimRef, SurfaceGeometry, SurfaceHit};
 pub use sphere::Sphere;
-pub use texture::{Texture, TexturePoint};
+pub use texture::{ImageTexture, Texture, TexturePoint, VertexAttributes};

@@ -1,6 +1,7 @@
 //! The Whitted material: ambient, Lambert diffuse, Phong or Blinn specular, mirror reflection.
 
-use crate::texture::Texture;
+use crate::texture::{Texture, TexturePoint, VertexAttributes};
+use glam::Vec3;
 
 /// Index of a material in [`crate::Scene::materials`].
 pub type MaterialId = u32;
@@ -18,8 +19,9 @@ pub enum SpecularModel {
 /// A surface's response to light, Whitted style.
 ///
 /// Radiance leaving a point is `(1 − reflectivity)·(ambient + diffuse)·base + specular·highlight
-/// + reflectivity·(radiance from the mirror direction)`: a perfect mirror (reflectivity 1) shows no
-/// diffuse colour but keeps its highlights, like a coated surface.
+/// + reflectivity·tint·(radiance from the mirror direction)`: a perfect mirror (reflectivity 1)
+/// shows no diffuse colour but keeps its highlights, like a coated surface. `tint` is white for
+/// `reflection_tint` 0 and the base colour for 1 (a metal, whose reflections take its colour).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Base colour (albedo) source.
@@ -36,18 +38,68 @@ pub struct Material {
     pub specular_model: SpecularModel,
     /// Mirror reflectivity in [0, 1]; 0 spawns no reflection ray.
     pub reflectivity: f32,
+    /// How far mirror reflections take the base colour, in [0, 1]: 0 white (a coating), 1 the base
+    /// colour (a metal; glTF's metallic factor).
+    pub reflection_tint: f32,
+}
+
+impl Material {
+    /// The base colour (albedo) at a hit: the texture times the vertex colour.
+    #[inline]
+    pub fn base_color(&self, p: &TexturePoint, attributes: &VertexAttributes) -> Vec3 {
+        self.texture.eval(p, attributes) * attributes.color.truncate()
+    }
+
+    /// The colour multiplying mirror reflections, given the base colour at the hit.
+    #[inline]
+    pub fn reflection_color(&self, base: Vec3) -> Vec3 {
+        Vec3::ONE.lerp(base, self.reflection_tint) * self.reflectivity
+    }
 }
 
 impl Default for Material {
     fn default() -> Self {
         Material {
-            texture: Texture::Constant(glam::Vec3::splat(0.8)),
+            texture: Texture::Constant(Vec3::splat(0.8)),
             ambient: 0.1,
             diffuse: 0.9,
             specular: 0.0,
             shininess: 32.0,
             specular_model: SpecularModel::Phong,
             reflectivity: 0.0,
+            reflection_tint: 0.0,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{DVec3, Vec4};
+
+    #[test]
+    fn vertex_colour_multiplies_base_and_tint_blends_reflection() {
+        let m = Material {
+            texture: Texture::Constant(Vec3::new(0.5, 1.0, 1.0)),
+            reflectivity: 0.5,
+            reflection_tint: 1.0,
+            ..Material::default()
+        };
+        let p = TexturePoint {
+            local: DVec3::ZERO,
+            height: 0.0,
+        };
+        let a = VertexAttributes {
+            color: Vec4::new(1.0, 0.5, 1.0, 1.0),
+            ..VertexAttributes::default()
+        };
+        let base = m.base_color(&p, &a);
+        assert_eq!(base, Vec3::new(0.5, 0.5, 1.0));
+        assert_eq!(m.reflection_color(base), Vec3::new(0.25, 0.25, 0.5));
+        let coating = Material {
+            reflection_tint: 0.0,
+            ..m
+        };
+        assert_eq!(coating.reflection_color(base), Vec3::splat(0.5));
     }
 }

@@ -1,10 +1,15 @@
-//! Indexed triangle meshes with optional per-vertex normals, intersected in f64.
+//! Indexed triangle meshes with optional per-vertex normals, texture coordinates and colours,
+//! intersected in f64, with optional alpha cut-outs.
+//!
+//! Memory: 12 bytes a triangle (indices) plus 12 a vertex (position), and per vertex 12 more for
+//! normals, 8 per texture coordinate set and 16 for colours, each only when the mesh has them.
 
+use crate::image_texture::ImageMap;
 use crate::material::MaterialId;
 use crate::math::{Ray, gamma};
 use crate::shape::{SurfaceGeometry, normal_or};
-use crate::texture::TexturePoint;
-use glam::{DVec3, Vec3};
+use crate::texture::{TexturePoint, VertexAttributes};
+use glam::{DVec3, Vec2, Vec3, Vec4};
 
 /// Why a mesh is invalid.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -30,6 +35,49 @@ pub enum MeshError {
         /// Normal count.
         normals: usize,
     },
+    /// A per-vertex attribute (texture coordinates, colours) is not given once per vertex.
+    #[error("the mesh has {vertices} vertices but {count} {what}")]
+    AttributeCount {
+        /// Which attribute.
+        what: &'static str,
+        /// Vertex count.
+        vertices: usize,
+        /// Attribute count.
+        count: usize,
+    },
+    /// A texture coordinate or colour is NaN or infinite.
+    #[error("vertex {vertex} has a NaN or infinite {what}")]
+    AttributeNotFinite {
+        /// Which attribute.
+        what: &'static str,
+        /// The vertex.
+        vertex: usize,
+    },
+    /// A texture coordinate set other than 0 or 1.
+    #[error("texture coordinate set {0} does not exist (0 or 1)")]
+    TexCoordSet(usize),
+    /// An alpha cutoff or factor outside [0, 1].
+    #[error("alpha cutoff and factor must be in [0, 1], got {cutoff} and {factor}")]
+    AlphaRange {
+        /// The cutoff.
+        cutoff: f32,
+        /// The factor.
+        factor: f32,
+    },
+}
+
+/// A cut-out (glTF alpha mode MASK): hits where the coverage alpha is below `cutoff` are not hits.
+///
+/// Alpha at a point = `factor` × the map's alpha × the vertex colour's alpha. The test runs inside
+/// BVH traversal, so cut-outs let camera, shadow and reflection rays through alike.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AlphaMask {
+    /// Alpha below this is transparent (glTF alphaCutoff, default 0.5).
+    pub cutoff: f32,
+    /// Constant alpha factor (glTF baseColorFactor's alpha).
+    pub factor: f32,
+    /// The image whose alpha channel modulates coverage, if any (glTF baseColorTexture).
+    pub map: Option<ImageMap>,
 }
 
 /// A triangle mesh in world space (loaders bake the object's transform into the vertices).
@@ -40,6 +88,9 @@ pub struct Mesh {
     indices: Vec<[u32; 3]>,
     material: MaterialId,
     z_range: (f64, f64),
+    texcoords: [Option<Vec<Vec2>>; 2],
+    colors: Option<Vec<Vec4>>,
+    alpha_mask: Option<AlphaMask>,
 }
 
 impl Mesh {
@@ -84,7 +135,62 @@ impl Mesh {
             indices,
             material,
             z_range: (lo, hi),
+            texcoords: [None, None],
+            colors: None,
+            alpha_mask: None,
         })
+    }
+
+    /// Adds texture coordinate set `set` (0 or 1), one per vertex, in the image convention (v down).
+    pub fn with_texcoords(mut self, set: usize, uv: Vec<Vec2>) -> Result<Mesh, MeshError> {
+        if set > 1 {
+            return Err(MeshError::TexCoordSet(set));
+        }
+        self.check_attribute("texture coordinates", uv.len())?;
+        if let Some(vertex) = uv.iter().position(|t| !t.is_finite()) {
+            return Err(MeshError::AttributeNotFinite {
+                what: "texture coordinate",
+                vertex,
+            });
+        }
+        self.texcoords[set] = Some(uv);
+        Ok(self)
+    }
+
+    /// Adds linear RGBA vertex colours, one per vertex.
+    pub fn with_colors(mut self, colors: Vec<Vec4>) -> Result<Mesh, MeshError> {
+        self.check_attribute("colours", colors.len())?;
+        if let Some(vertex) = colors.iter().position(|c| !c.is_finite()) {
+            return Err(MeshError::AttributeNotFinite {
+                what: "colour",
+                vertex,
+            });
+        }
+        self.colors = Some(colors);
+        Ok(self)
+    }
+
+    /// Makes the mesh a cut-out: hits whose alpha is below the mask's cutoff are ignored.
+    pub fn with_alpha_mask(mut self, mask: AlphaMask) -> Result<Mesh, MeshError> {
+        if !((0.0..=1.0).contains(&mask.cutoff) && (0.0..=1.0).contains(&mask.factor)) {
+            return Err(MeshError::AlphaRange {
+                cutoff: mask.cutoff,
+                factor: mask.factor,
+            });
+        }
+        self.alpha_mask = Some(mask);
+        Ok(self)
+    }
+
+    fn check_attribute(&self, what: &'static str, count: usize) -> Result<(), MeshError> {
+        if count != self.positions.len() {
+            return Err(MeshError::AttributeCount {
+                what,
+                vertices: self.positions.len(),
+                count,
+            });
+        }
+        Ok(())
     }
 
     /// Vertex positions.
@@ -102,9 +208,86 @@ impl Mesh {
         &self.indices
     }
 
+    /// Texture coordinate set `set` (0 or 1), if present.
+    pub fn texcoords(&self, set: usize) -> Option<&[Vec2]> {
+        self.texcoords.get(set).and_then(|t| t.as_deref())
+    }
+
+    /// Vertex colours, if present.
+    pub fn colors(&self) -> Option<&[Vec4]> {
+        self.colors.as_deref()
+    }
+
+    /// The alpha cut-out, if any.
+    pub fn alpha_mask(&self) -> Option<&AlphaMask> {
+        self.alpha_mask.as_ref()
+    }
+
     /// Material index.
     pub fn material(&self) -> MaterialId {
         self.material
+    }
+
+    /// The same mesh with another material (a scene file's material override).
+    pub fn with_material(mut self, material: MaterialId) -> Mesh {
+        self.material = material;
+        self
+    }
+
+    /// Bytes of geometry and attribute memory the mesh holds (not counting the BVH).
+    pub fn memory_bytes(&self) -> usize {
+        let v = self.positions.len();
+        let per_vertex = 12
+            + self.normals.as_ref().map_or(0, |_| 12)
+            + self.texcoords.iter().flatten().count() * 8
+            + self.colors.as_ref().map_or(0, |_| 16);
+        v * per_vertex + self.indices.len() * 12
+    }
+
+    /// Whether hits carry interpolated attributes (texture coordinates or colours).
+    #[inline]
+    pub fn has_attributes(&self) -> bool {
+        self.texcoords.iter().any(Option::is_some) || self.colors.is_some()
+    }
+
+    /// Vertex attributes at barycentric coordinates `b` of triangle `tri`.
+    #[inline]
+    fn attributes_at(&self, tri: u32, b: [f32; 3]) -> VertexAttributes {
+        let idx = self.indices[tri as usize].map(|i| i as usize);
+        let mut out = VertexAttributes::default();
+        for (set, uv) in self.texcoords.iter().enumerate() {
+            if let Some(uv) = uv {
+                out.uv[set] = uv[idx[0]] * b[0] + uv[idx[1]] * b[1] + uv[idx[2]] * b[2];
+            }
+        }
+        if let Some(c) = &self.colors {
+            out.color = c[idx[0]] * b[0] + c[idx[1]] * b[1] + c[idx[2]] * b[2];
+        }
+        out
+    }
+
+    /// Interpolated vertex attributes at `point` on triangle `tri` (defaults when the mesh has none).
+    pub fn attributes(&self, tri: u32, point: DVec3) -> VertexAttributes {
+        if !self.has_attributes() {
+            return VertexAttributes::default();
+        }
+        let [v0, v1, v2] = self.vertices(tri);
+        let [b0, b1, b2] = barycentrics(v1 - v0, v2 - v0, point - v0);
+        self.attributes_at(tri, [b0 as f32, b1 as f32, b2 as f32])
+    }
+
+    /// Coverage alpha at barycentric coordinates `b` of triangle `tri`, for the cut-out test.
+    #[inline]
+    fn covered(&self, mask: &AlphaMask, tri: u32, b: [f32; 3]) -> bool {
+        let mut alpha = mask.factor;
+        if mask.map.is_some() || self.colors.is_some() {
+            let a = self.attributes_at(tri, b);
+            alpha *= a.color.w;
+            if let Some(map) = &mask.map {
+                alpha *= map.sample(&a).w;
+            }
+        }
+        alpha >= mask.cutoff
     }
 
     /// Number of triangles.
@@ -151,7 +334,16 @@ impl Mesh {
             return None;
         }
         let t = e2.dot(qvec) * inv;
-        (t > 0.0 && t < t_max).then_some(t)
+        if !(t > 0.0 && t < t_max) {
+            return None;
+        }
+        if let Some(mask) = &self.alpha_mask {
+            let b = [(1.0 - u - v) as f32, u as f32, v as f32];
+            if !self.covered(mask, tri, b) {
+                return None;
+            }
+        }
+        Some(t)
     }
 
     /// Surface geometry where `ray` meets triangle `tri` at parameter `t`.
@@ -162,13 +354,7 @@ impl Mesh {
         let geometric_normal = normal_or(e1.cross(e2), -ray.dir);
         // Barycentrics of the ray point, then the point rebuilt from them: it lies in the triangle's
         // plane up to a few roundings of the vertex magnitudes, whatever t's error.
-        let p = ray.at(t) - v0;
-        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-        let (p1, p2) = (p.dot(e1), p.dot(e2));
-        let denom = d11 * d22 - d12 * d12;
-        let b1 = ((d22 * p1 - d12 * p2) / denom).clamp(0.0, 1.0);
-        let b2 = ((d11 * p2 - d12 * p1) / denom).clamp(0.0, 1.0 - b1);
-        let b0 = 1.0 - b1 - b2;
+        let [b0, b1, b2] = barycentrics(e1, e2, ray.at(t) - v0);
         let point = v0 + e1 * b1 + e2 * b2;
         let error = gamma(7) * (v0.abs() + e1.abs() + e2.abs()).max_element() * 2.0;
         let shading_normal = match &self.normals {
@@ -200,6 +386,18 @@ impl Mesh {
             },
         }
     }
+}
+
+/// Barycentric coordinates (clamped into the triangle) of `p` (relative to `v0`) in the triangle
+/// spanned by edges `e1`, `e2` from `v0`.
+#[inline]
+fn barycentrics(e1: DVec3, e2: DVec3, p: DVec3) -> [f64; 3] {
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (p1, p2) = (p.dot(e1), p.dot(e2));
+    let denom = d11 * d22 - d12 * d12;
+    let b1 = ((d22 * p1 - d12 * p2) / denom).clamp(0.0, 1.0);
+    let b2 = ((d11 * p2 - d12 * p1) / denom).clamp(0.0, 1.0 - b1);
+    [1.0 - b1 - b2, b1, b2]
 }
 
 #[cfg(test)]
@@ -251,5 +449,81 @@ mod tests {
         let g = m.surface(0, &r, t);
         assert_eq!(g.geometric_normal, DVec3::Z);
         assert!((g.point - DVec3::new(0.3, -0.2, 0.0)).length() < 1e-15);
+    }
+
+    #[test]
+    fn attributes_interpolate_barycentrically() {
+        let m = quad()
+            .with_texcoords(
+                0,
+                vec![
+                    Vec2::new(0.0, 1.0),
+                    Vec2::new(1.0, 1.0),
+                    Vec2::new(1.0, 0.0),
+                    Vec2::new(0.0, 0.0),
+                ],
+            )
+            .unwrap()
+            .with_colors(vec![
+                Vec4::new(1.0, 0.0, 0.0, 1.0),
+                Vec4::new(0.0, 1.0, 0.0, 1.0),
+                Vec4::new(0.0, 0.0, 1.0, 1.0),
+                Vec4::ONE,
+            ])
+            .unwrap();
+        let a = m.attributes(0, DVec3::new(0.5, -0.5, 0.0));
+        // (0.5, -0.5) = 0.25·v0 + 0.5·v1 + 0.25·v2 on triangle 0.
+        assert!((a.uv[0] - Vec2::new(0.75, 0.75)).length() < 1e-6, "{:?}", a.uv);
+        assert!((a.color - Vec4::new(0.25, 0.5, 0.25, 1.0)).length() < 1e-6);
+        assert_eq!(a.uv[1], Vec2::ZERO);
+        assert!(matches!(
+            quad().with_texcoords(0, vec![Vec2::ZERO; 3]),
+            Err(MeshError::AttributeCount { count: 3, .. })
+        ));
+        assert!(matches!(
+            quad().with_texcoords(2, vec![Vec2::ZERO; 4]),
+            Err(MeshError::TexCoordSet(2))
+        ));
+        assert_eq!(m.memory_bytes(), 4 * (12 + 8 + 16) + 2 * 12);
+    }
+
+    #[test]
+    fn alpha_mask_cuts_holes_inside_intersection() {
+        // Vertex alpha 0 at x = -1 rising to 1 at x = +1: the left half is cut away at cutoff 0.5.
+        let colors = [-1.0f32, 1.0, 1.0, -1.0]
+            .map(|x| Vec4::new(1.0, 1.0, 1.0, (x + 1.0) * 0.5))
+            .to_vec();
+        let m = quad()
+            .with_colors(colors)
+            .unwrap()
+            .with_alpha_mask(AlphaMask {
+                cutoff: 0.5,
+                factor: 1.0,
+                map: None,
+            })
+            .unwrap();
+        let hit = |x: f64| {
+            let r = Ray::new(DVec3::new(x, 0.1, 1.0), -DVec3::Z);
+            (0..2).any(|t| m.intersect(t, &r, f64::INFINITY, false).is_some())
+        };
+        assert!(!hit(-0.5));
+        assert!(hit(0.5));
+        let dim = quad().with_alpha_mask(AlphaMask {
+            cutoff: 0.5,
+            factor: 0.4,
+            map: None,
+        });
+        let dim = dim.unwrap();
+        let r = Ray::new(DVec3::new(0.5, 0.1, 1.0), -DVec3::Z);
+        assert!(dim.intersect(0, &r, f64::INFINITY, false).is_none());
+        assert!(
+            quad()
+                .with_alpha_mask(AlphaMask {
+                    cutoff: 1.5,
+                    factor: 1.0,
+                    map: None
+                })
+                .is_err()
+        );
     }
 }

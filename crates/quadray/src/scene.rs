@@ -110,26 +110,7 @@ impl Scene {
             }
         }
         for (i, l) in d.lights.iter().enumerate() {
-            let ok = match l {
-                Light::Point {
-                    position,
-                    intensity,
-                } => position.is_finite() && non_negative(*intensity),
-                Light::Directional {
-                    direction,
-                    irradiance,
-                } => {
-                    direction.is_finite()
-                        && (direction.length() - 1.0).abs() < 1e-9
-                        && non_negative(*irradiance)
-                }
-            };
-            if !ok {
-                return Err(invalid(
-                    format!("light {i}"),
-                    "must be finite, with a unit direction and non-negative colour",
-                ));
-            }
+            l.validate().map_err(|p| invalid(format!("light {i}"), p))?;
         }
         let mut origins = vec![d.camera.from, d.camera.to];
         if let Projection::Orthographic { height } = d.camera.projection {
@@ -171,6 +152,12 @@ fn validate_material(m: &Material) -> Result<(), String> {
             ));
         }
     }
+    if !(0.0..=1.0).contains(&m.reflection_tint) {
+        return Err(format!(
+            "reflection tint must be in [0, 1], got {}",
+            m.reflection_tint
+        ));
+    }
     if !(0.0..=1.0).contains(&m.reflectivity) {
         return Err(format!(
             "reflectivity must be in [0, 1], got {}",
@@ -187,6 +174,9 @@ fn validate_material(m: &Material) -> Result<(), String> {
             Err("checker size must be positive and colours finite and non-negative".into())
         }
         crate::texture::Texture::Bands { steps: 0 } => Err("bands need at least one step".into()),
+        crate::texture::Texture::Image(t) if !non_negative(t.factor) => {
+            Err("image colour factor must be finite and non-negative".into())
+        }
         _ => Ok(()),
     }
 }

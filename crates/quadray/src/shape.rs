@@ -4,7 +4,7 @@
 //! [`SurfaceGeometry`] once, for the nearest hit (pbrt-v4's `BasicIntersect` / `InteractionFromIntersection`).
 
 use crate::material::MaterialId;
-use crate::texture::TexturePoint;
+use crate::texture::{TexturePoint, VertexAttributes};
 use glam::DVec3;
 
 /// One primitive of a scene: what the BVH leaves and the plane list refer to.
@@ -51,6 +51,8 @@ pub struct SurfaceHit {
     pub material: MaterialId,
     /// Surface geometry at the hit.
     pub geometry: SurfaceGeometry,
+    /// Interpolated vertex attributes (texture coordinates, colour); defaults off meshes.
+    pub attributes: VertexAttributes,
 }
 
 /// Unit normal from an unnormalised one, or `fallback` where it vanishes (a cone apex).

@@ -1,6 +1,7 @@
-//! Procedural textures: the seed's height ramp, contour bands and checkerboard, plus constant colour.
+//! Textures: the seed's height ramp, contour bands and checkerboard, constant colour, and images.
 
-use glam::{DVec3, Vec3};
+use crate::image_texture::ImageMap;
+use glam::{DVec3, Vec2, Vec3, Vec4};
 
 /// Where a texture is evaluated: the hit in the object's own frame and its normalised height.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -9,6 +10,36 @@ pub struct TexturePoint {
     pub local: DVec3,
     /// Height of the hit within the object's clipped height range, 0 at the bottom, 1 at the top.
     pub height: f32,
+}
+
+/// Per-vertex data interpolated at a hit: texture coordinates and vertex colour.
+///
+/// Only meshes carry them; analytic shapes (and meshes without the attribute) use the
+/// [`Default`]: coordinates (0, 0) and white, which leaves a base colour unchanged.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VertexAttributes {
+    /// Texture coordinate sets 0 and 1 (glTF TEXCOORD_0/1), image convention: v grows downwards.
+    pub uv: [Vec2; 2],
+    /// Linear RGBA vertex colour (glTF COLOR_0); multiplies the base colour, alpha the coverage.
+    pub color: Vec4,
+}
+
+impl Default for VertexAttributes {
+    fn default() -> Self {
+        VertexAttributes {
+            uv: [Vec2::ZERO; 2],
+            color: Vec4::ONE,
+        }
+    }
+}
+
+/// An image texture: an [`ImageMap`] scaled by a constant colour factor (glTF baseColorFactor).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageTexture {
+    /// The image and how it is sampled.
+    pub map: ImageMap,
+    /// Linear RGB factor multiplying the texels.
+    pub factor: Vec3,
 }
 
 /// A colour source for a material, matched in one place ([`Texture::eval`]).
@@ -32,6 +63,8 @@ pub enum Texture {
         /// Colour of the odd squares.
         odd: Vec3,
     },
+    /// An image looked up by the hit's texture coordinates.
+    Image(ImageTexture),
 }
 
 /// Ramp stops of the seed: blue at the bottom, green in the middle, yellow at the top (linear RGB).
@@ -57,9 +90,9 @@ pub fn lighten(c: Vec3) -> Vec3 {
 }
 
 impl Texture {
-    /// The colour at `p`.
+    /// The colour at `p`, whose interpolated vertex attributes are `attributes`.
     #[inline]
-    pub fn eval(&self, p: &TexturePoint) -> Vec3 {
+    pub fn eval(&self, p: &TexturePoint, attributes: &VertexAttributes) -> Vec3 {
         match self {
             Texture::Constant(c) => *c,
             Texture::HeightRamp => height_ramp(p.height),
@@ -74,6 +107,7 @@ impl Texture {
                 let parity = (q.x + q.y + q.z).rem_euclid(2.0);
                 if parity < 0.5 { *even } else { *odd }
             }
+            Texture::Image(t) => t.map.sample(attributes).truncate() * t.factor,
         }
     }
 
@@ -94,21 +128,26 @@ mod tests {
         }
     }
 
+    /// Evaluates without vertex attributes, as for an analytic shape.
+    fn eval(t: &Texture, p: &TexturePoint) -> Vec3 {
+        t.eval(p, &VertexAttributes::default())
+    }
+
     #[test]
     fn ramp_runs_blue_green_yellow() {
-        assert_eq!(Texture::HeightRamp.eval(&at(0.0)), RAMP[0]);
-        assert_eq!(Texture::HeightRamp.eval(&at(0.5)), RAMP[1]);
-        assert_eq!(Texture::HeightRamp.eval(&at(1.0)), RAMP[2]);
-        assert_eq!(Texture::HeightRamp.eval(&at(7.0)), RAMP[2]);
+        assert_eq!(eval(&Texture::HeightRamp, &at(0.0)), RAMP[0]);
+        assert_eq!(eval(&Texture::HeightRamp, &at(0.5)), RAMP[1]);
+        assert_eq!(eval(&Texture::HeightRamp, &at(1.0)), RAMP[2]);
+        assert_eq!(eval(&Texture::HeightRamp, &at(7.0)), RAMP[2]);
     }
 
     #[test]
     fn bands_are_flat_and_span_the_ramp() {
         let t = Texture::Bands { steps: 4 };
-        assert_eq!(t.eval(&at(0.01)), t.eval(&at(0.24)));
-        assert_ne!(t.eval(&at(0.24)), t.eval(&at(0.26)));
-        assert_eq!(t.eval(&at(0.0)), RAMP[0]);
-        assert_eq!(t.eval(&at(1.0)), RAMP[2]);
+        assert_eq!(eval(&t, &at(0.01)), eval(&t, &at(0.24)));
+        assert_ne!(eval(&t, &at(0.24)), eval(&t, &at(0.26)));
+        assert_eq!(eval(&t, &at(0.0)), RAMP[0]);
+        assert_eq!(eval(&t, &at(1.0)), RAMP[2]);
     }
 
     #[test]
@@ -119,14 +158,45 @@ mod tests {
             odd: Vec3::ONE,
         };
         let c = |x, y, z| {
-            t.eval(&TexturePoint {
-                local: DVec3::new(x, y, z),
-                height: 0.0,
-            })
+            eval(
+                &t,
+                &TexturePoint {
+                    local: DVec3::new(x, y, z),
+                    height: 0.0,
+                },
+            )
         };
         assert_eq!(c(0.1, 0.1, 0.1), Vec3::ZERO);
         assert_eq!(c(0.6, 0.1, 0.1), Vec3::ONE);
         assert_eq!(c(-0.1, 0.1, 0.1), Vec3::ONE);
         assert_eq!(c(0.6, 0.6, 0.1), Vec3::ZERO);
+    }
+
+    #[test]
+    fn image_texture_reads_uv_and_scales_by_factor() {
+        use crate::image_texture::{ColorEncoding, Filter, Image, Wrap};
+        let image = Image::from_rgba8(
+            2,
+            1,
+            vec![255, 255, 255, 255, 0, 0, 0, 255],
+            ColorEncoding::Srgb,
+        )
+        .unwrap();
+        let t = Texture::Image(ImageTexture {
+            map: ImageMap {
+                image: std::sync::Arc::new(image),
+                wrap: [Wrap::Repeat; 2],
+                filter: Filter::Nearest,
+                set: 0,
+            },
+            factor: Vec3::new(1.0, 0.5, 0.25),
+        });
+        let with_uv = |u: f32| VertexAttributes {
+            uv: [Vec2::new(u, 0.5), Vec2::ZERO],
+            color: Vec4::ONE,
+        };
+        assert_eq!(t.eval(&at(0.0), &with_uv(0.2)), Vec3::new(1.0, 0.5, 0.25));
+        assert_eq!(t.eval(&at(0.0), &with_uv(0.7)), Vec3::ZERO);
+        assert!(!t.is_constant());
     }
 }
