@@ -44,6 +44,25 @@ pub enum LoadErrorKind {
     /// A feature of the file format that quadray does not support.
     #[error("unsupported: {0}")]
     Unsupported(String),
+    /// A file this one refers to (a glTF buffer, a mesh file) could not be read.
+    #[error("cannot read {what} `{}`: {source}", path.display())]
+    Referenced {
+        /// What the file is for ("buffer 0", "mesh file").
+        what: String,
+        /// The resolved path that was tried.
+        path: PathBuf,
+        /// Why it could not be read.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file included by a scene failed to load; `source` names that file and its problem.
+    #[error("`{key}`: {source}")]
+    Include {
+        /// The key holding the include's path.
+        key: String,
+        /// The included file's own error.
+        source: Box<LoadError>,
+    },
 }
 
 /// An error loading a scene or asset file.
@@ -99,6 +118,8 @@ impl std::error::Error for LoadError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match &self.kind {
             LoadErrorKind::Io(e) => Some(e),
+            LoadErrorKind::Referenced { source, .. } => Some(source),
+            LoadErrorKind::Include { source, .. } => Some(source.as_ref()),
             _ => None,
         }
     }

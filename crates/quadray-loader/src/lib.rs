@@ -3,25 +3,64 @@
 //! # Brief overview
 //! - [`native`]: the TOML scene format documented in `docs/scene-format.md`; [`load_scene`] reads a
 //!   file into a validated [`quadray::SceneDescription`] plus [`SceneSettings`].
+//! - [`obj`] (with [`mtl`]) and [`gltf`] (with the `gltf_*` modules and [`quadrics_ext`], the
+//!   `QUADRAY_quadrics` extension) import other formats into an [`Imported`] scene part, which
+//!   [`standalone`] completes into a scene of its own and [`native`] merges into a native scene.
+//! - [`export`] writes a scene as glTF 2.0 with the `QUADRAY_quadrics` extension.
 //! - [`LoadError`]: every error names the file, the line and column where known, and the bad key.
 
 pub mod error;
+pub mod gltf;
+pub mod gltf_accessor;
+pub mod gltf_camera;
+pub mod gltf_document;
+pub mod gltf_light;
+pub mod gltf_material;
+pub mod gltf_mesh;
+pub mod image_file;
+pub mod import;
+pub mod mtl;
 pub mod native;
+pub mod obj;
+pub mod quadrics_ext;
+pub mod standalone;
 
 pub use error::{LoadError, LoadErrorKind, Location};
+pub use import::{ImportOptions, Imported, Selector, UpAxis};
 pub use native::{LoadedScene, SceneSettings, load_scene, parse_scene};
 
 use std::path::Path;
 
-/// Loads any scene file quadray reads, chosen by its extension (`.toml`: the native format).
+/// Loads any scene file quadray reads, chosen by its extension: `.toml` (the native format),
+/// `.obj`, `.gltf` or `.glb` (rendered on their own: see [`standalone`]).
 pub fn load_any(path: &Path) -> Result<LoadedScene, LoadError> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("toml") => load_scene(path),
-        _ => Err(LoadError::new(
-            path,
-            None,
-            LoadErrorKind::Unsupported("unknown scene file type (expected .toml)".into()),
-        )),
-    }
+    load_any_with(path, &ImportOptions::default(), None)
+}
+
+/// [`load_any`] with import options (scene choice, up axis) and a camera choice for OBJ and glTF
+/// files; native scenes ignore both.
+pub fn load_any_with(
+    path: &Path,
+    options: &ImportOptions,
+    camera: Option<&Selector>,
+) -> Result<LoadedScene, LoadError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let imported = match ext.as_deref() {
+        Some("toml") => return load_scene(path),
+        Some("obj") => obj::import_obj(path, options)?,
+        Some("gltf" | "glb") => gltf::import_gltf(path, options)?,
+        _ => {
+            return Err(LoadError::new(
+                path,
+                None,
+                LoadErrorKind::Unsupported(
+                    "unknown scene file type (expected .toml, .obj, .gltf or .glb)".into(),
+                ),
+            ));
+        }
+    };
+    standalone::scene_from_import(imported, path, camera)
 }

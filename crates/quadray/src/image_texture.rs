@@ -175,12 +175,9 @@ impl Image {
                 let lut = &*SRGB_TO_LINEAR;
                 Vec4::new(lut[r as usize], lut[g as usize], lut[b as usize], alpha)
             }
-            ColorEncoding::Linear => Vec4::new(
-                r as f32 / 255.0,
-                g as f32 / 255.0,
-                b as f32 / 255.0,
-                alpha,
-            ),
+            ColorEncoding::Linear => {
+                Vec4::new(r as f32 / 255.0, g as f32 / 255.0, b as f32 / 255.0, alpha)
+            }
         }
     }
 

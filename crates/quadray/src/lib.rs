@@ -64,11 +64,11 @@ pub mod texture;
 pub use camera::{Camera, CameraError, CameraFrame, Projection};
 pub use film::Film;
 pub use geometry::Geometry;
+pub use image_texture::{ColorEncoding, Filter, Image, ImageError, ImageMap, Wrap};
 pub use integrator::{RayCounts, Whitted};
 pub use light::Light;
 pub use material::{Material, MaterialId, SpecularModel};
 pub use math::{Ray, Transform};
-pub use image_texture::{ColorEncoding, Filter, Image, ImageError, ImageMap, Wrap};
 pub use mesh::{AlphaMask, Mesh, MeshError};
 pub use plane::Plane;
 pub use quadric::{

@@ -67,7 +67,8 @@ impl Light {
             } => {
                 let mut inc = inverse_square(*position, *intensity, p)?;
                 let cos_theta = direction.dot(-inc.to_light);
-                let s = ((cos_theta - cos_outer) / (cos_inner - cos_outer).max(1e-3)).clamp(0.0, 1.0);
+                let s =
+                    ((cos_theta - cos_outer) / (cos_inner - cos_outer).max(1e-3)).clamp(0.0, 1.0);
                 if s <= 0.0 {
                     return None;
                 }
@@ -172,13 +173,19 @@ mod tests {
         };
         l.validate().unwrap();
         // On the axis: the point light's inverse square law.
-        assert_eq!(l.incident(DVec3::ZERO).unwrap().irradiance, Vec3::splat(2.0));
+        assert_eq!(
+            l.incident(DVec3::ZERO).unwrap().irradiance,
+            Vec3::splat(2.0)
+        );
         // At 15 degrees off axis (inside the falloff band): s = (cos15 - cos20)/(cos10 - cos20).
         let p = DVec3::new(2.0 * 15f64.to_radians().tan(), 0.0, 0.0);
         let s = (15f64.to_radians().cos() - outer.cos()) / (inner.cos() - outer.cos());
         let expected = 8.0 / p.distance_squared(DVec3::new(0.0, 0.0, 2.0)) * s * s;
         let got = l.incident(p).unwrap().irradiance.x as f64;
-        assert!((got - expected).abs() < 1e-5 * expected, "{got} vs {expected}");
+        assert!(
+            (got - expected).abs() < 1e-5 * expected,
+            "{got} vs {expected}"
+        );
         // Beyond the outer cone, and behind the light: nothing, so no shadow ray.
         assert!(l.incident(DVec3::new(2.0, 0.0, 0.0)).is_none());
         assert!(l.incident(DVec3::new(0.0, 0.0, 5.0)).is_none());
@@ -194,7 +201,11 @@ mod tests {
             cos_outer,
         };
         assert!(spot(0.5, 0.9, DVec3::Z).validate().is_err());
-        assert!(spot(0.9, 0.5, DVec3::new(0.0, 0.0, 2.0)).validate().is_err());
+        assert!(
+            spot(0.9, 0.5, DVec3::new(0.0, 0.0, 2.0))
+                .validate()
+                .is_err()
+        );
         assert!(spot(0.9, 0.5, DVec3::Z).validate().is_ok());
         let d = Light::Directional {
             direction: DVec3::Z,

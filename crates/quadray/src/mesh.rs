@@ -473,7 +473,11 @@ mod tests {
             .unwrap();
         let a = m.attributes(0, DVec3::new(0.5, -0.5, 0.0));
         // (0.5, -0.5) = 0.25·v0 + 0.5·v1 + 0.25·v2 on triangle 0.
-        assert!((a.uv[0] - Vec2::new(0.75, 0.75)).length() < 1e-6, "{:?}", a.uv);
+        assert!(
+            (a.uv[0] - Vec2::new(0.75, 0.75)).length() < 1e-6,
+            "{:?}",
+            a.uv
+        );
         assert!((a.color - Vec4::new(0.25, 0.5, 0.25, 1.0)).length() < 1e-6);
         assert_eq!(a.uv[1], Vec2::ZERO);
         assert!(matches!(

@@ -1,0 +1,64 @@
+//! glTF cameras as quadray cameras.
+//!
+//! A glTF camera looks down its node's local −z with +y up; its node's world transform (after the
+//! y-up to z-up rotation) gives quadray's `from`, view direction and `up`. Perspective `yfov`
+//! becomes the vertical field of view and `aspectRatio` the image aspect; orthographic `ymag` is
+//! half the viewed height (scaled by the node's scale along its up axis) and `xmag / ymag` the
+//! aspect. Near and far planes have no meaning for a ray tracer and are ignored.
+
+use crate::import::ImportedCamera;
+use glam::{DAffine3, DVec3};
+use quadray::{Camera, Projection};
+
+/// The quadray camera for `camera` seen through a node placed by `to_world`.
+pub fn convert(camera: &gltf::Camera<'_>, to_world: DAffine3) -> Result<ImportedCamera, String> {
+    let from = to_world.translation;
+    let forward = to_world.matrix3 * DVec3::NEG_Z;
+    let up_axis = to_world.matrix3 * DVec3::Y;
+    let (projection, aspect) = match camera.projection() {
+        gltf::camera::Projection::Perspective(p) => {
+            let yfov = p.yfov() as f64;
+            if !(yfov > 0.0 && yfov < std::f64::consts::PI) {
+                return Err(format!("yfov must be in (0, π) radians, got {yfov}"));
+            }
+            let aspect = p.aspect_ratio().map(f64::from);
+            (
+                Projection::Perspective {
+                    vfov_deg: yfov.to_degrees(),
+                },
+                aspect,
+            )
+        }
+        gltf::camera::Projection::Orthographic(o) => {
+            let (xmag, ymag) = (o.xmag() as f64, o.ymag() as f64);
+            if !(ymag.is_finite() && ymag != 0.0 && xmag.is_finite() && xmag != 0.0) {
+                return Err(format!(
+                    "xmag and ymag must be non-zero, got {xmag} and {ymag}"
+                ));
+            }
+            (
+                Projection::Orthographic {
+                    height: 2.0 * ymag.abs() * up_axis.length(),
+                },
+                Some(xmag.abs() / ymag.abs()),
+            )
+        }
+    };
+    let forward = forward
+        .try_normalize()
+        .filter(|f| f.is_finite())
+        .ok_or("the camera node's transform is singular")?;
+    let camera_out = Camera {
+        from,
+        to: from + forward,
+        up: up_axis.normalize_or_zero(),
+        projection,
+    };
+    camera_out.prepare(1.0).map_err(|e| e.to_string())?;
+    let aspect = aspect.filter(|a| a.is_finite() && *a > 0.0);
+    Ok(ImportedCamera {
+        name: camera.name().map(str::to_string),
+        camera: camera_out,
+        aspect,
+    })
+}

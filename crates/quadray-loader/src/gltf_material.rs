@@ -1,0 +1,334 @@
+//! glTF materials (pbrMetallicRoughness) mapped onto quadray's Whitted material.
+//!
+//! Whitted shading has a diffuse term, a Phong/Blinn highlight and a perfect mirror; PBR has a
+//! base colour, a metalness and a microfacet roughness. The mapping (also in
+//! `docs/scene-format-import.md`):
+//!
+//! | glTF | quadray |
+//! |---|---|
+//! | `baseColorFactor` (linear RGB), `baseColorTexture` (sRGB) | base colour: `Texture::Image` scaled by the factor, or `Texture::Constant`; `COLOR_0` multiplies it |
+//! | sampler `wrapS`/`wrapT`, `magFilter`; `texCoord`; KHR_texture_transform | the image's wrap modes, nearest or bilinear filtering, the coordinate set; the transform is applied to the mesh's coordinates at load |
+//! | roughness r | Blinn–Phong exponent n = 2/α² − 2 with α = r² (the exponent whose lobe matches a Beckmann/GGX lobe of that width), clamped to [1, 10⁴] |
+//! | metallic m, roughness r | `reflectivity` = m·(1 − r)²: polished metal is a mirror, rough metal diffuse; `reflection_tint` = m: metals reflect in their base colour |
+//! | metallic m | highlight strength `specular` = min(1, F₀·(n + 8)/8), the normalised Blinn–Phong peak, with F₀ = 0.04·(1 − m) + m·max(base colour) |
+//! | — | `ambient` 0.1 and `diffuse` 0.9, quadray's defaults |
+//! | `alphaMode` MASK, `alphaCutoff`, base colour alpha | an [`AlphaMask`] cut-out on the mesh (tested inside intersection) |
+//! | `alphaMode` BLEND | rendered opaque, with a note |
+//! | KHR_materials_unlit | `ambient` 1, everything else 0: the base colour as is |
+//! | `extensions.QUADRAY_quadrics.whitted` | quadray's parameters exactly, overriding all of the above |
+//! | metallicRoughnessTexture, normal, occlusion and emissive maps, emissive factor | ignored, with a note |
+
+use crate::gltf_document::{GltfFile, read_image};
+use crate::quadrics_ext::{self, MaterialExtension};
+use glam::{Vec2, Vec3};
+use quadray::{
+    AlphaMask, Filter, Image, ImageMap, ImageTexture, Material, SpecularModel, Texture, Wrap,
+};
+use std::collections::{BTreeSet, HashMap};
+use std::sync::Arc;
+
+/// An affine map of texture coordinates (KHR_texture_transform): `uv' = offset + M·uv`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    /// The coordinate set it applies to.
+    pub set: usize,
+    /// Columns of M.
+    pub matrix: [Vec2; 2],
+    /// The offset.
+    pub offset: Vec2,
+}
+
+impl UvTransform {
+    /// KHR_texture_transform's `translation · rotation · scale`, with the rotation matrix of the
+    /// extension's GLSL (`mat3(cos, sin, 0, -sin, cos, 0, 0, 0, 1)`, column-major).
+    pub fn from_khr(set: usize, offset: Vec2, rotation: f32, scale: Vec2) -> UvTransform {
+        let (sin, cos) = rotation.sin_cos();
+        UvTransform {
+            set,
+            matrix: [
+                Vec2::new(cos, sin) * scale.x,
+                Vec2::new(-sin, cos) * scale.y,
+            ],
+            offset,
+        }
+    }
+
+    /// Applies the map to one coordinate pair.
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        self.offset + self.matrix[0] * uv.x + self.matrix[1] * uv.y
+    }
+}
+
+/// A glTF material as quadray uses it: a material index plus what the mesh must carry.
+#[derive(Clone, Debug)]
+pub struct MaterialUse {
+    /// Index into the imported material list.
+    pub id: u32,
+    /// The cut-out, for alpha mode MASK.
+    pub mask: Option<AlphaMask>,
+    /// A texture coordinate transform to bake into the mesh.
+    pub uv_transform: Option<UvTransform>,
+}
+
+/// Converts glTF materials on first use, and their images once each.
+pub struct Materials<'a> {
+    file: &'a GltfFile,
+    converted: HashMap<Option<usize>, MaterialUse>,
+    images: HashMap<usize, Option<Arc<Image>>>,
+    /// The converted materials with their names, in first-use order.
+    pub list: Vec<(String, Material)>,
+    ignored: BTreeSet<&'static str>,
+}
+
+impl<'a> Materials<'a> {
+    /// An empty table for `file`.
+    pub fn new(file: &'a GltfFile) -> Materials<'a> {
+        Materials {
+            file,
+            converted: HashMap::new(),
+            images: HashMap::new(),
+            list: Vec::new(),
+            ignored: BTreeSet::new(),
+        }
+    }
+
+    /// The quadray material for glTF material `m`, converting it on first use.
+    pub fn get(
+        &mut self,
+        m: &gltf::Material<'_>,
+        notes: &mut Vec<String>,
+    ) -> Result<MaterialUse, String> {
+        if let Some(u) = self.converted.get(&m.index()) {
+            return Ok(u.clone());
+        }
+        let converted = self.convert(m, notes)?;
+        self.converted.insert(m.index(), converted.clone());
+        Ok(converted)
+    }
+
+    /// The glTF default material (for shapes that name none): white, metallic 1, roughness 1.
+    pub fn default_material(&mut self) -> MaterialUse {
+        if let Some(u) = self.converted.get(&None) {
+            return u.clone();
+        }
+        let material = pbr_to_whitted(Texture::Constant(Vec3::ONE), Vec3::ONE, 1.0, 1.0);
+        let used = MaterialUse {
+            id: self.list.len() as u32,
+            mask: None,
+            uv_transform: None,
+        };
+        self.list.push(("default".into(), material));
+        self.converted.insert(None, used.clone());
+        used
+    }
+
+    /// One note listing the material features the file uses that quadray ignores.
+    pub fn ignored_note(&self) -> Option<String> {
+        (!self.ignored.is_empty()).then(|| {
+            format!(
+                "material features ignored: {}",
+                self.ignored.iter().copied().collect::<Vec<_>>().join(", ")
+            )
+        })
+    }
+
+    fn convert(
+        &mut self,
+        m: &gltf::Material<'_>,
+        notes: &mut Vec<String>,
+    ) -> Result<MaterialUse, String> {
+        let label = match (m.index(), m.name()) {
+            (Some(i), Some(n)) => format!("material {i} \"{n}\""),
+            (Some(i), None) => format!("material {i}"),
+            (None, _) => "the default material".to_string(),
+        };
+        let pbr = m.pbr_metallic_roughness();
+        let [r, g, b, alpha] = pbr.base_color_factor();
+        let base = Vec3::new(r, g, b);
+        if !(base.is_finite() && alpha.is_finite()) {
+            return Err(format!("{label}: baseColorFactor is not finite"));
+        }
+        let base = base.clamp(Vec3::ZERO, Vec3::ONE);
+        let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
+        let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
+        let mut uv_transform = None;
+        let mut map = None;
+        if let Some(info) = pbr.base_color_texture() {
+            let mut set = info.tex_coord() as usize;
+            if let Some(t) = info.texture_transform() {
+                if let Some(s) = t.tex_coord() {
+                    set = s as usize;
+                }
+                uv_transform = Some(UvTransform::from_khr(
+                    set,
+                    Vec2::from_array(t.offset()),
+                    t.rotation(),
+                    Vec2::from_array(t.scale()),
+                ));
+            }
+            if set > 1 {
+                notes.push(format!(
+                    "{label}: base colour texture reads TEXCOORD_{set}; quadray keeps sets 0 and 1, so set 0 is used"
+                ));
+                set = 0;
+            }
+            let texture = info.texture();
+            let image = texture.source();
+            let cached = match self.images.get(&image.index()) {
+                Some(c) => c.clone(),
+                None => {
+                    let c = match read_image(self.file, &image) {
+                        Ok(img) => Some(Arc::new(img)),
+                        Err(e) => {
+                            notes.push(format!(
+                                "warning: image {}: texture unavailable ({e}); using the base colour",
+                                image.index()
+                            ));
+                            None
+                        }
+                    };
+                    self.images.insert(image.index(), c.clone());
+                    c
+                }
+            };
+            if let Some(image) = cached {
+                let sampler = texture.sampler();
+                let wrap = |w: gltf::texture::WrappingMode| match w {
+                    gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+                    gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+                    gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+                };
+                let filter = match sampler.mag_filter() {
+                    Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
+                    _ => Filter::Bilinear,
+                };
+                map = Some(ImageMap {
+                    image,
+                    wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
+                    filter,
+                    set: set as u8,
+                });
+            }
+        }
+        if pbr.metallic_roughness_texture().is_some() {
+            self.ignored.insert("metallicRoughnessTexture");
+        }
+        if m.normal_texture().is_some() {
+            self.ignored.insert("normalTexture");
+        }
+        if m.occlusion_texture().is_some() {
+            self.ignored.insert("occlusionTexture");
+        }
+        if m.emissive_texture().is_some() || m.emissive_factor().iter().any(|&e| e > 0.0) {
+            self.ignored.insert("emission");
+        }
+        let texture = match &map {
+            Some(map) => Texture::Image(ImageTexture {
+                map: map.clone(),
+                factor: base,
+            }),
+            None => Texture::Constant(base),
+        };
+        let alpha = alpha.clamp(0.0, 1.0);
+        let mask = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => None,
+            gltf::material::AlphaMode::Mask => Some(AlphaMask {
+                cutoff: m.alpha_cutoff().unwrap_or(0.5).clamp(0.0, 1.0),
+                factor: alpha,
+                map: map.clone(),
+            }),
+            gltf::material::AlphaMode::Blend => {
+                notes.push(format!(
+                    "{label}: alpha mode BLEND is rendered opaque (quadray has cut-outs, not blending)"
+                ));
+                None
+            }
+        };
+        let material = if let Some(ext) = m.extension_value(quadrics_ext::EXTENSION) {
+            let ext: MaterialExtension = serde_json::from_value(ext.clone())
+                .map_err(|e| format!("{label}: extensions.{}: {e}", quadrics_ext::EXTENSION))?;
+            quadrics_ext::whitted_material(&ext.whitted, texture)
+                .map_err(|e| format!("{label}: extensions.{}: {e}", quadrics_ext::EXTENSION))?
+        } else if m.unlit() {
+            Material {
+                texture,
+                ambient: 1.0,
+                diffuse: 0.0,
+                specular: 0.0,
+                reflectivity: 0.0,
+                ..Material::default()
+            }
+        } else {
+            pbr_to_whitted(texture, base, metallic, roughness)
+        };
+        let id = self.list.len() as u32;
+        let name = m
+            .name()
+            .map(str::to_string)
+            .unwrap_or_else(|| match m.index() {
+                Some(i) => format!("material {i}"),
+                None => "default".into(),
+            });
+        self.list.push((name, material));
+        Ok(MaterialUse {
+            id,
+            mask,
+            uv_transform,
+        })
+    }
+}
+
+/// The Whitted material for PBR parameters (see the module's table).
+pub fn pbr_to_whitted(texture: Texture, base: Vec3, metallic: f32, roughness: f32) -> Material {
+    let alpha = roughness * roughness;
+    let shininess = if alpha > 0.0 {
+        (2.0 / (alpha * alpha) - 2.0).clamp(1.0, 1e4)
+    } else {
+        1e4
+    };
+    let f0 = 0.04 * (1.0 - metallic) + metallic * base.max_element();
+    Material {
+        texture,
+        specular: (f0 * (shininess + 8.0) / 8.0).min(1.0),
+        shininess,
+        specular_model: SpecularModel::Blinn,
+        reflectivity: metallic * (1.0 - roughness) * (1.0 - roughness),
+        reflection_tint: metallic,
+        ..Material::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pbr_mapping_endpoints() {
+        let gold = Vec3::new(1.0, 0.8, 0.3);
+        let mirror = pbr_to_whitted(Texture::Constant(gold), gold, 1.0, 0.0);
+        assert_eq!((mirror.reflectivity, mirror.reflection_tint), (1.0, 1.0));
+        assert_eq!((mirror.shininess, mirror.specular), (1e4, 1.0));
+        let rough_metal = pbr_to_whitted(Texture::Constant(gold), gold, 1.0, 1.0);
+        assert_eq!(rough_metal.reflectivity, 0.0);
+        assert_eq!(rough_metal.shininess, 1.0);
+        let plastic = pbr_to_whitted(Texture::Constant(gold), gold, 0.0, 0.5);
+        assert_eq!(plastic.reflectivity, 0.0);
+        // r = 0.5: α = 0.25, n = 2/0.0625 − 2 = 30, specular = 0.04·38/8.
+        assert!((plastic.shininess - 30.0).abs() < 1e-4);
+        assert!((plastic.specular - 0.19).abs() < 1e-6);
+        assert_eq!(plastic.specular_model, SpecularModel::Blinn);
+    }
+
+    #[test]
+    fn texture_transform_follows_the_extension_spec() {
+        // The spec's T·R·S with rotation 90° (sin 1, cos 0), scale (2, 3), offset (0.5, 0.25):
+        // u' = 0.5 + cos·sx·u − sin·sy·v, v' = 0.25 + sin·sx·u + cos·sy·v.
+        let t = UvTransform::from_khr(
+            0,
+            Vec2::new(0.5, 0.25),
+            std::f32::consts::FRAC_PI_2,
+            Vec2::new(2.0, 3.0),
+        );
+        assert!((t.apply(Vec2::new(1.0, 1.0)) - Vec2::new(-2.5, 2.25)).length() < 1e-6);
+    }
+}

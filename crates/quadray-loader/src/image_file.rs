@@ -1,0 +1,132 @@
+//! Texture images: decoding PNG and JPEG with the `image` crate, and finding the files that OBJ
+//! material libraries and glTF documents name (relative, absolute or Windows-style paths).
+
+use quadray::{ColorEncoding, Image};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Images read so far, by resolved path, so a texture shared by many materials is decoded once;
+/// a failure is remembered too, so it is reported once.
+#[derive(Default)]
+pub struct ImageCache {
+    images: HashMap<PathBuf, Option<Arc<Image>>>,
+}
+
+impl ImageCache {
+    /// The image at `path`, decoded as sRGB; on failure `None`, with a note saying what happened
+    /// and that the base colour is used instead.
+    pub fn get(&mut self, path: &Path, user: &str, notes: &mut Vec<String>) -> Option<Arc<Image>> {
+        self.images
+            .entry(path.to_path_buf())
+            .or_insert_with(|| match read_image(path, ColorEncoding::Srgb) {
+                Ok(img) => Some(Arc::new(img)),
+                Err(e) => {
+                    notes.push(format!(
+                        "warning: {user}: texture unavailable ({e}); using the base colour"
+                    ));
+                    None
+                }
+            })
+            .clone()
+    }
+}
+
+/// Decodes an encoded PNG or JPEG image (format guessed from its bytes) into 8-bit RGBA.
+pub fn decode_image(bytes: &[u8], encoding: ColorEncoding) -> Result<Image, String> {
+    let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+    let rgba = decoded.into_rgba8();
+    let (w, h) = rgba.dimensions();
+    Image::from_rgba8(w, h, rgba.into_raw(), encoding).map_err(|e| e.to_string())
+}
+
+/// Reads and decodes the image file at `path`.
+pub fn read_image(path: &Path, encoding: ColorEncoding) -> Result<Image, String> {
+    let bytes =
+        std::fs::read(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+    decode_image(&bytes, encoding).map_err(|e| format!("cannot decode `{}`: {e}", path.display()))
+}
+
+/// Resolves a file reference written in another file against that file's folder `base`.
+///
+/// References written on Windows use backslashes (`textures\wood.png`) and sometimes drive
+/// letters; on other systems the backslashes become separators. When the reference does not exist
+/// as written, its last component is tried in `base` (exporters often leave absolute paths of the
+/// author's machine), and then the same name with any letter case (files copied through
+/// case-insensitive file systems). The first existing candidate wins; if none exists, the plain
+/// resolution is returned so that the error names what was expected.
+pub fn resolve_reference(base: &Path, reference: &str) -> PathBuf {
+    let normalised = reference.trim().replace('\\', "/");
+    let written = Path::new(&normalised);
+    let plain = if written.is_absolute() {
+        written.to_path_buf()
+    } else {
+        base.join(written)
+    };
+    if plain.is_file() {
+        return plain;
+    }
+    let Some(name) = normalised.rsplit('/').next().filter(|n| !n.is_empty()) else {
+        return plain;
+    };
+    let beside = base.join(name);
+    if beside.is_file() {
+        return beside;
+    }
+    if let Ok(entries) = std::fs::read_dir(base) {
+        for entry in entries.flatten() {
+            if entry
+                .file_name()
+                .to_string_lossy()
+                .eq_ignore_ascii_case(name)
+            {
+                return entry.path();
+            }
+        }
+    }
+    plain
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn windows_paths_and_stray_folders_resolve() {
+        let dir = std::env::temp_dir().join(format!("quadray-imgref-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("tex")).unwrap();
+        std::fs::write(dir.join("tex").join("Wood.png"), b"x").unwrap();
+        assert_eq!(
+            resolve_reference(&dir, "tex\\Wood.png"),
+            dir.join("tex/Wood.png")
+        );
+        // An absolute path from another machine falls back to the name beside the file... which
+        // here only exists in tex/, so the plain resolution is returned.
+        let far = resolve_reference(&dir, "C:\\Users\\me\\Wood.png");
+        assert!(far.ends_with("C:/Users/me/Wood.png"), "{}", far.display());
+        std::fs::write(dir.join("wood.png"), b"x").unwrap();
+        assert_eq!(
+            resolve_reference(&dir, "C:\\Users\\me\\wood.png"),
+            dir.join("wood.png")
+        );
+        // Case-insensitive fallback.
+        assert_eq!(
+            resolve_reference(&dir.join("tex"), "WOOD.PNG"),
+            dir.join("tex").join("Wood.png")
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn decodes_png_and_reports_garbage() {
+        let mut png = Vec::new();
+        image::RgbaImage::from_raw(2, 1, vec![255, 0, 0, 255, 0, 0, 255, 128])
+            .unwrap()
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        let img = decode_image(&png, ColorEncoding::Srgb).unwrap();
+        assert_eq!((img.width(), img.height()), (2, 1));
+        assert_eq!(img.texel(0, 0), glam::Vec4::new(1.0, 0.0, 0.0, 1.0));
+        assert!(decode_image(b"not an image", ColorEncoding::Srgb).is_err());
+    }
+}

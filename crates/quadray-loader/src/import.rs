@@ -1,0 +1,352 @@
+//! What the OBJ and glTF importers produce, the options they take, and how an import becomes a
+//! scene of its own (for `quadray render FILE.obj|.gltf|.glb`) or joins a native scene.
+//!
+//! # Axes
+//! quadray is right-handed with +z up; glTF is right-handed with +y up, and most OBJ files follow
+//! the same y-up habit (Blender's default export, the Stanford scans, the Utah teapot). Importers
+//! therefore rotate the file by +90° about x, which takes the file's (x, y, z) to quadray's
+//! (x, −z, y): the file's up (+y) becomes +z and its front (+z, towards a glTF viewer's default
+//! camera) becomes −y, the side quadray's cameras usually look from. OBJ files that are already
+//! z-up can opt out (`up = "z"`).
+
+use crate::error::{LoadError, LoadErrorKind};
+use glam::{DAffine3, DMat3, DVec3, Vec3};
+use quadray::{Camera, Geometry, Light, Material, Quadric, Sphere, Transform};
+use std::path::Path;
+
+/// Which of several named items (a glTF scene, a camera) to use: by index or by name.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Selector {
+    /// The item at this index (in file order).
+    Index(usize),
+    /// The first item with this name.
+    Name(String),
+}
+
+impl std::fmt::Display for Selector {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Selector::Index(i) => write!(f, "#{i}"),
+            Selector::Name(n) => write!(f, "\"{n}\""),
+        }
+    }
+}
+
+/// The file's up axis (OBJ only: glTF is always y-up).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum UpAxis {
+    /// +y is up: rotate into quadray's z-up frame (the default, and glTF's rule).
+    #[default]
+    Y,
+    /// +z is up already: take coordinates as they are.
+    Z,
+}
+
+/// How to import a file.
+#[derive(Clone, Debug, Default)]
+pub struct ImportOptions {
+    /// Extra placement applied after the axis conversion (a native scene's `transform`).
+    pub transform: Option<Transform>,
+    /// Which glTF scene to import; the file's default scene (or its first) when `None`.
+    pub scene: Option<Selector>,
+    /// The file's up axis (OBJ only).
+    pub up: UpAxis,
+    /// Skip the file's materials and textures (every surface gets material 0 of an empty list,
+    /// which the caller replaces): for a native scene's material override.
+    pub skip_materials: bool,
+}
+
+/// The rotation taking y-up file coordinates to quadray's z-up world: (x, y, z) → (x, −z, y).
+pub const Y_UP_TO_Z_UP: DMat3 = DMat3::from_cols(
+    DVec3::new(1.0, 0.0, 0.0),
+    DVec3::new(0.0, 0.0, 1.0),
+    DVec3::new(0.0, -1.0, 0.0),
+);
+
+impl ImportOptions {
+    /// The map from file coordinates to quadray world coordinates.
+    pub fn root(&self, up: UpAxis) -> DAffine3 {
+        let axes = match up {
+            UpAxis::Y => DAffine3::from_mat3(Y_UP_TO_Z_UP),
+            UpAxis::Z => DAffine3::IDENTITY,
+        };
+        match &self.transform {
+            Some(t) => t.to_world * axes,
+            None => axes,
+        }
+    }
+}
+
+/// A camera found in a file, with what it says about the image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportedCamera {
+    /// Its name, if the file gives one.
+    pub name: Option<String>,
+    /// The camera, world space.
+    pub camera: Camera,
+    /// Width / height the file asks for, if any.
+    pub aspect: Option<f64>,
+}
+
+/// The camera `sel` picks from `cameras`, or a message listing what there is.
+pub fn select_camera<'a>(
+    cameras: &'a [ImportedCamera],
+    sel: &Selector,
+) -> Result<&'a ImportedCamera, String> {
+    let found = match sel {
+        Selector::Index(i) => cameras.get(*i),
+        Selector::Name(n) => cameras
+            .iter()
+            .find(|c| c.name.as_deref() == Some(n.as_str())),
+    };
+    found.ok_or_else(|| {
+        let names: Vec<String> = cameras
+            .iter()
+            .enumerate()
+            .map(|(i, c)| match &c.name {
+                Some(n) => format!("#{i} \"{n}\""),
+                None => format!("#{i}"),
+            })
+            .collect();
+        format!(
+            "no camera {sel} (the file has {}: {})",
+            cameras.len(),
+            if names.is_empty() {
+                "none".into()
+            } else {
+                names.join(", ")
+            }
+        )
+    })
+}
+
+/// What an importer read: materials, primitives, lights and cameras, in world space.
+#[derive(Clone, Debug, Default)]
+pub struct Imported {
+    /// Materials with their names; primitives refer to them by index.
+    pub materials: Vec<(String, Material)>,
+    /// The primitives.
+    pub geometry: Geometry,
+    /// Light sources.
+    pub lights: Vec<Light>,
+    /// Cameras, in file order.
+    pub cameras: Vec<ImportedCamera>,
+    /// Scene-graph node instances visited (glTF; 0 for OBJ).
+    pub nodes: usize,
+    /// Degenerate triangles (a repeated vertex index) dropped from glTF primitives.
+    pub degenerate: usize,
+    /// What the importer assumed, skipped or could not find, for the user to read.
+    pub notes: Vec<String>,
+}
+
+impl Imported {
+    /// Shifts every primitive's material index by `offset` (to append these materials to others),
+    /// or points them all at `replace` (a material override).
+    pub fn remap_materials(&mut self, path: &Path, map: MaterialMap) -> Result<(), LoadError> {
+        let f = |id: u32| match map {
+            MaterialMap::Offset(o) => id + o,
+            MaterialMap::Replace(r) => r,
+        };
+        let g = &mut self.geometry;
+        for s in &mut g.spheres {
+            s.material = f(s.material);
+        }
+        for p in &mut g.planes {
+            p.material = f(p.material);
+        }
+        for m in std::mem::take(&mut g.meshes) {
+            let id = f(m.material());
+            g.meshes.push(m.with_material(id));
+        }
+        for q in std::mem::take(&mut g.quadrics) {
+            // Quadric keeps its material private; rebuilding it with the same parameters cannot fail
+            // in principle, but an error is still reported rather than unwrapped.
+            let q = Quadric::new(
+                q.surface_description(),
+                q.clip(),
+                *q.transform(),
+                f(q.material()),
+            )
+            .map_err(|e| LoadError::new(path, None, LoadErrorKind::Unsupported(e.to_string())))?;
+            g.quadrics.push(q);
+        }
+        Ok(())
+    }
+
+    /// Number of triangles over all meshes.
+    pub fn triangle_count(&self) -> usize {
+        self.geometry
+            .meshes
+            .iter()
+            .map(|m| m.triangle_count())
+            .sum()
+    }
+
+    /// Bounds of every bounded primitive (planes are unbounded and ignored), if there is any.
+    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        geometry_bounds(&self.geometry)
+    }
+}
+
+/// How [`Imported::remap_materials`] changes material indices.
+#[derive(Clone, Copy, Debug)]
+pub enum MaterialMap {
+    /// Add this to every index.
+    Offset(u32),
+    /// Use this index everywhere.
+    Replace(u32),
+}
+
+/// Bounds of the bounded primitives of `g`, if any.
+pub fn geometry_bounds(g: &Geometry) -> Option<(DVec3, DVec3)> {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    let mut grow = |(a, b): (DVec3, DVec3)| {
+        lo = lo.min(a);
+        hi = hi.max(b);
+    };
+    g.spheres.iter().for_each(|s| grow(s.bounds()));
+    g.quadrics.iter().for_each(|q| grow(q.bounds()));
+    for m in &g.meshes {
+        for p in m.positions() {
+            let p = p.as_dvec3();
+            grow((p, p));
+        }
+    }
+    (lo.cmple(hi).all()).then_some((lo, hi))
+}
+
+/// A sphere of `radius` at the origin of `to_world`: a [`Sphere`] when the map is a similarity
+/// (uniform scale, rotation, translation), else the ellipsoid it becomes, as a clipped quadric.
+pub fn placed_sphere(
+    to_world: DAffine3,
+    radius: f64,
+    material: u32,
+) -> Result<PlacedShape, String> {
+    let m = to_world.matrix3;
+    let lens = DVec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length());
+    let s = lens.x;
+    let orthogonal = m.x_axis.dot(m.y_axis).abs() <= 1e-9 * s * s
+        && m.x_axis.dot(m.z_axis).abs() <= 1e-9 * s * s
+        && m.y_axis.dot(m.z_axis).abs() <= 1e-9 * s * s;
+    if orthogonal && (lens - DVec3::splat(s)).abs().max_element() <= 1e-9 * s {
+        return Ok(PlacedShape::Sphere(Sphere {
+            center: to_world.translation,
+            radius: radius * s,
+            material,
+        }));
+    }
+    let t = Transform::new(to_world).ok_or("the sphere's transform is singular")?;
+    Quadric::new(
+        quadray::QuadricSurface::Canonical {
+            kind: quadray::QuadricKind::Ellipsoid,
+            a: radius,
+            b: radius,
+            c: radius,
+        },
+        quadray::ClipBox::cube(radius),
+        t,
+        material,
+    )
+    .map(|q| PlacedShape::Quadric(Box::new(q)))
+    .map_err(|e| e.to_string())
+}
+
+/// An analytic shape placed in the world.
+#[derive(Clone, Debug)]
+pub enum PlacedShape {
+    /// A clipped quadric (or a sphere a transform stretched); boxed, being much larger than the rest.
+    Quadric(Box<Quadric>),
+    /// A sphere under a similarity.
+    Sphere(Sphere),
+    /// An infinite plane.
+    Plane(quadray::Plane),
+}
+
+impl PlacedShape {
+    /// Adds the shape to `geometry`.
+    pub fn add_to(self, geometry: &mut Geometry) {
+        match self {
+            PlacedShape::Quadric(q) => geometry.quadrics.push(*q),
+            PlacedShape::Sphere(s) => geometry.spheres.push(s),
+            PlacedShape::Plane(p) => geometry.planes.push(p),
+        }
+    }
+}
+
+/// The default key light when a file brings none: a directional light over the camera's left
+/// shoulder, so that the visible sides are lit and shadows fall away to the lower right.
+pub fn default_key_light(camera: &Camera) -> Light {
+    let forward = (camera.to - camera.from).normalize_or(DVec3::Y);
+    let right = forward.cross(camera.up).normalize_or(DVec3::X);
+    let up = right.cross(forward);
+    let towards_light = (-forward + up * 1.2 - right * 0.6).normalize();
+    Light::Directional {
+        direction: -towards_light,
+        irradiance: Vec3::ONE,
+    }
+}
+
+/// A perspective camera framing bounds `(lo, hi)`: from the front-right and above (a three-quarter
+/// view; the front of a y-up file faces −y after import), far enough for the bounding sphere to
+/// fit a 40° vertical field of view with a margin.
+pub fn framing_camera(bounds: Option<(DVec3, DVec3)>) -> Camera {
+    const VFOV: f64 = 40.0;
+    let (center, radius) = match bounds {
+        Some((lo, hi)) => ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-6)),
+        None => (DVec3::ZERO, 1.0),
+    };
+    // sin(half fov) = radius / distance puts the sphere's silhouette at the image's top and bottom.
+    let distance = radius / (VFOV * 0.5).to_radians().sin() * 1.1;
+    Camera::orbit(center, -65.0, 25.0, distance, VFOV)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn y_up_becomes_z_up_and_front_faces_minus_y() {
+        let r = Y_UP_TO_Z_UP;
+        assert_eq!(r * DVec3::Y, DVec3::Z);
+        assert_eq!(r * DVec3::Z, -DVec3::Y);
+        assert_eq!(r * DVec3::X, DVec3::X);
+        assert_eq!(r.determinant(), 1.0);
+    }
+
+    #[test]
+    fn spheres_stay_spheres_under_similarities_only() {
+        let sim = DAffine3::from_scale_rotation_translation(
+            DVec3::splat(2.0),
+            glam::DQuat::from_rotation_z(0.3),
+            DVec3::new(1.0, 2.0, 3.0),
+        );
+        match placed_sphere(sim, 0.5, 0).unwrap() {
+            PlacedShape::Sphere(s) => {
+                assert!((s.radius - 1.0).abs() < 1e-12);
+                assert_eq!(s.center, DVec3::new(1.0, 2.0, 3.0));
+            }
+            _ => panic!("a similarity keeps a sphere"),
+        }
+        let stretch = DAffine3::from_scale(DVec3::new(1.0, 2.0, 1.0));
+        assert!(matches!(
+            placed_sphere(stretch, 1.0, 0).unwrap(),
+            PlacedShape::Quadric(_)
+        ));
+    }
+
+    #[test]
+    fn framing_camera_sees_the_whole_bounding_sphere() {
+        let lo = DVec3::new(-1.0, -2.0, 0.0);
+        let hi = DVec3::new(3.0, 2.0, 1.0);
+        let cam = framing_camera(Some((lo, hi)));
+        let center = (lo + hi) * 0.5;
+        assert!((cam.to - center).length() < 1e-12);
+        let r = (hi - lo).length() * 0.5;
+        let half = (20f64).to_radians();
+        // The angle subtended by the bounding sphere is within the half field of view.
+        assert!((r / (cam.from - center).length()).asin() < half);
+        let key = default_key_light(&cam);
+        key.validate().unwrap();
+    }
+}

@@ -1,0 +1,234 @@
+//! Wavefront MTL materials mapped onto quadray's Whitted material.
+//!
+//! | MTL | quadray |
+//! |---|---|
+//! | `Kd` (default 0.8 grey) | base colour: `Texture::Constant(Kd)` |
+//! | `map_Kd` | `Texture::Image` (sRGB, bilinear, repeat), multiplied by `Kd` as the MTL spec says |
+//! | `Ks`, `Ns` | `specular` = largest channel of `Ks`, `shininess` = `Ns` (Phong); no highlight when `Ns` < 1, an exporter artefact that would otherwise light the whole surface |
+//! | `illum` 3, 5 or 7, or a mirror-like `Ks` (every channel ≥ 0.9 with `Ns` ≥ 500) | `reflectivity` = largest channel of `Ks`, capped at 1 |
+//! | `Ka` | ignored: exporters write it inconsistently (Blender writes 1, which would flatten every surface); `ambient` keeps quadray's default 0.1 |
+//! | `d` < 1, `Tr` > 0, `map_d`, `map_Bump`, `Ke` | ignored, with a note |
+//!
+//! `diffuse` keeps quadray's default 0.9.
+
+use crate::image_file::{ImageCache, resolve_reference};
+use glam::Vec3;
+use quadray::{Filter, ImageMap, ImageTexture, Material, SpecularModel, Texture, Wrap};
+use std::path::Path;
+
+/// The Whitted material for an MTL material whose library lives in `folder`.
+pub fn whitted_material(
+    m: &tobj::Material,
+    folder: &Path,
+    images: &mut ImageCache,
+    notes: &mut Vec<String>,
+) -> Material {
+    let rgb = |c: Option<[f32; 3]>| c.map(|c| Vec3::from_array(c).max(Vec3::ZERO));
+    let kd = rgb(m.diffuse);
+    let ks = rgb(m.specular).unwrap_or(Vec3::ZERO);
+    let ns = m.shininess.unwrap_or(0.0).clamp(0.0, 1e4);
+    let mut texture = Texture::Constant(kd.unwrap_or(Vec3::splat(0.8)));
+    if let Some(reference) = m.diffuse_texture.as_deref().and_then(texture_file_name) {
+        let path = resolve_reference(folder, reference);
+        let user = format!("material \"{}\" map_Kd", m.name);
+        if let Some(image) = images.get(&path, &user, notes) {
+            texture = Texture::Image(ImageTexture {
+                map: ImageMap {
+                    image,
+                    wrap: [Wrap::Repeat; 2],
+                    filter: Filter::Bilinear,
+                    set: 0,
+                },
+                factor: kd.unwrap_or(Vec3::ONE),
+            });
+        }
+    }
+    let (specular, shininess) = if ns >= 1.0 {
+        (ks.max_element(), ns)
+    } else {
+        (0.0, 1.0)
+    };
+    let traced = matches!(m.illumination_model, Some(3 | 5 | 7));
+    let mirror_like = ks.min_element() >= 0.9 && ns >= 500.0;
+    let reflectivity = if traced || mirror_like {
+        ks.max_element().min(1.0)
+    } else {
+        0.0
+    };
+    let mut ignored = Vec::new();
+    if m.dissolve.is_some_and(|d| d < 1.0) {
+        ignored.push("transparency (d)");
+    }
+    if m.unknown_param
+        .get("Tr")
+        .and_then(|t| t.trim().parse::<f32>().ok())
+        .is_some_and(|t| t > 0.0)
+    {
+        ignored.push("transparency (Tr)");
+    }
+    if m.dissolve_texture.is_some() {
+        ignored.push("map_d");
+    }
+    if m.normal_texture.is_some() || m.unknown_param.contains_key("map_Bump") {
+        ignored.push("bump map");
+    }
+    if m.emissive.is_some_and(|e| e.iter().any(|&c| c > 0.0)) {
+        ignored.push("emission (Ke)");
+    }
+    if !ignored.is_empty() {
+        notes.push(format!(
+            "material \"{}\": {} not supported, ignored",
+            m.name,
+            ignored.join(", ")
+        ));
+    }
+    let defaults = Material::default();
+    Material {
+        texture,
+        ambient: defaults.ambient,
+        diffuse: defaults.diffuse,
+        specular,
+        shininess,
+        specular_model: SpecularModel::Phong,
+        reflectivity,
+        reflection_tint: 0.0,
+    }
+}
+
+/// The file name in a `map_Kd` statement, past any options (`-s 1 1 1`, `-clamp on`, `-bm 0.5`).
+fn texture_file_name(statement: &str) -> Option<&str> {
+    let mut rest = statement.trim();
+    while rest.starts_with('-') {
+        let (option, after) = rest.split_once(char::is_whitespace)?;
+        rest = after.trim_start();
+        let arguments = match option {
+            "-blendu" | "-blendv" | "-cc" | "-clamp" | "-bm" | "-boost" | "-texres"
+            | "-imfchan" => 1,
+            "-mm" => 2,
+            // -o, -s, -t take one to three numbers.
+            "-o" | "-s" | "-t" => 3,
+            _ => 0,
+        };
+        for _ in 0..arguments {
+            let Some((word, after)) = rest.split_once(char::is_whitespace) else {
+                break;
+            };
+            let numeric = word.parse::<f32>().is_ok();
+            let flag = matches!(word, "on" | "off" | "r" | "g" | "b" | "m" | "l" | "z");
+            if !(numeric || flag) {
+                break;
+            }
+            rest = after.trim_start();
+        }
+    }
+    (!rest.is_empty()).then_some(rest)
+}
+
+/// Prepares MTL text for tobj: a colour statement (`Ka`, `Kd`, `Ks`, `Ke`) with a single number
+/// means grey (the MTL spec: "g and b default to r") and is expanded to three numbers, because
+/// tobj 4 panics on fewer than three. A statement with no number or two numbers is an error
+/// naming the line.
+pub fn normalise_colour_statements(text: &str) -> Result<String, (usize, String)> {
+    let mut out = String::with_capacity(text.len() + 64);
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) = words.next() {
+            let values: Vec<&str> = words.collect();
+            let all_numbers = values.iter().all(|v| v.parse::<f32>().is_ok());
+            match values.len() {
+                1 if all_numbers => {
+                    let v = values[0];
+                    out.push_str(&format!("{key} {v} {v} {v}\n"));
+                    continue;
+                }
+                0 | 2 => {
+                    return Err((
+                        n + 1,
+                        format!("`{key}` needs one or three numbers, got {}", values.len()),
+                    ));
+                }
+                _ => {}
+            }
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn material(text: &str) -> (tobj::Material, Vec<String>, Material) {
+        let text = normalise_colour_statements(text).unwrap();
+        let (mats, _) = tobj::load_mtl_buf(&mut text.as_bytes()).unwrap();
+        let mut notes = Vec::new();
+        let m = whitted_material(
+            &mats[0],
+            Path::new("/nonexistent"),
+            &mut ImageCache::default(),
+            &mut notes,
+        );
+        (mats[0].clone(), notes, m)
+    }
+
+    #[test]
+    fn maps_kd_ks_ns_and_illum() {
+        let (_, notes, m) =
+            material("newmtl a\nKd 0.5 0.25 1\nKs 0.2 0.4 0.3\nNs 64\nillum 3\nKa 1 1 1\n");
+        assert_eq!(m.texture, Texture::Constant(Vec3::new(0.5, 0.25, 1.0)));
+        assert_eq!((m.specular, m.shininess), (0.4, 64.0));
+        assert_eq!(m.reflectivity, 0.4);
+        assert_eq!(m.ambient, Material::default().ambient);
+        assert!(notes.is_empty());
+        let (_, _, plain) = material("newmtl b\nKd 0.5 0.5 0.5\nKs 0.5 0.5 0.5\nNs 250\nillum 2\n");
+        assert_eq!(plain.reflectivity, 0.0);
+        let (_, _, mirror) = material("newmtl c\nKs 0.95 0.95 1\nNs 900\n");
+        assert_eq!(mirror.reflectivity, 1.0);
+        let (_, _, flat) = material("newmtl d\nKs 0.9 0.9 0.9\nNs 0\n");
+        assert_eq!(flat.specular, 0.0);
+    }
+
+    #[test]
+    fn single_number_colours_are_grey_and_bad_counts_are_errors() {
+        let (raw, _, m) = material("newmtl a\nKd 0.3\n");
+        assert_eq!(raw.diffuse, Some([0.3; 3]));
+        assert_eq!(m.texture, Texture::Constant(Vec3::splat(0.3)));
+        assert_eq!(
+            normalise_colour_statements("newmtl a\n\nKs 1 2\n")
+                .unwrap_err()
+                .0,
+            3
+        );
+        assert!(normalise_colour_statements("Kd\n").is_err());
+    }
+
+    #[test]
+    fn missing_texture_falls_back_with_a_note_and_unsupported_features_are_named() {
+        let (_, notes, m) = material("newmtl a\nKd 0.2 0.3 0.4\nmap_Kd tex\\wood.png\nd 0.5\n");
+        assert_eq!(m.texture, Texture::Constant(Vec3::new(0.2, 0.3, 0.4)));
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.contains("wood.png") && n.contains("base colour")),
+            "{notes:?}"
+        );
+        assert!(
+            notes.iter().any(|n| n.contains("transparency (d)")),
+            "{notes:?}"
+        );
+    }
+
+    #[test]
+    fn texture_options_are_skipped() {
+        assert_eq!(texture_file_name("wood.png"), Some("wood.png"));
+        assert_eq!(
+            texture_file_name("-s 1 2 1 -clamp on my wood.png"),
+            Some("my wood.png")
+        );
+        assert_eq!(texture_file_name("-bm 0.5 bump.png"), Some("bump.png"));
+        assert_eq!(texture_file_name("-o 0.5 wood.png"), Some("wood.png"));
+        assert_eq!(texture_file_name("-s"), None);
+    }
+}

@@ -1,0 +1,415 @@
+//! Wavefront OBJ files, read with tobj: polygons triangulated (fans), positions, normals (smooth
+//! shading where the file has them), texture coordinates, vertex colours, and MTL materials.
+//!
+//! - One quadray mesh per OBJ object/group and material (tobj's models), in world space: the file is
+//!   rotated from y-up to z-up unless the caller says it is z-up already ([`crate::import`]).
+//! - Texture coordinates are flipped to the image convention (OBJ's v grows upwards, quadray's
+//!   downwards, as in glTF).
+//! - Vertex colours (`v x y z r g b`) are read as sRGB-encoded and decoded to linear.
+//! - A missing material library is not fatal: real files often name one that was never shipped
+//!   (SOURCES.md lists five among the test assets); its faces get a default grey material and a
+//!   note names the file that was looked for. A library that exists but cannot be parsed is an error.
+
+use crate::error::{LoadError, LoadErrorKind, Location};
+use crate::image_file::{ImageCache, resolve_reference};
+use crate::import::{ImportOptions, Imported};
+use crate::mtl::{normalise_colour_statements, whitted_material};
+use glam::{DVec3, Vec2, Vec3, Vec4};
+use quadray::{Material, Mesh};
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+
+/// Reads the OBJ file at `path` (and the material libraries and textures it names).
+pub fn import_obj(path: &Path, options: &ImportOptions) -> Result<Imported, LoadError> {
+    let bytes =
+        std::fs::read(path).map_err(|e| LoadError::new(path, None, LoadErrorKind::Io(e)))?;
+    import_obj_bytes(&bytes, path, options)
+}
+
+/// A material library tobj asked for, as this loader found it.
+struct Library {
+    folder: PathBuf,
+    materials: usize,
+}
+
+/// Reads OBJ text already in memory; `path` names it in errors and locates the files it refers to.
+pub fn import_obj_bytes(
+    bytes: &[u8],
+    path: &Path,
+    options: &ImportOptions,
+) -> Result<Imported, LoadError> {
+    let folder = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let libraries = RefCell::new(Vec::<Library>::new());
+    let notes = RefCell::new(Vec::<String>::new());
+    let library_error = RefCell::new(None::<LoadError>);
+    let load_options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let result = tobj::load_obj_buf(&mut &bytes[..], &load_options, |reference| {
+        let mtl_path = resolve_reference(&folder, &reference.to_string_lossy());
+        let text = match std::fs::read(&mtl_path) {
+            Ok(b) => String::from_utf8_lossy(&b).into_owned(),
+            Err(e) => {
+                notes.borrow_mut().push(format!(
+                    "warning: material library `{}` not found ({e}); its materials fall back to a default grey",
+                    mtl_path.display()
+                ));
+                return Err(tobj::LoadError::OpenFileFailed);
+            }
+        };
+        let parsed = normalise_colour_statements(&text)
+            .map_err(|(line, message)| {
+                LoadError::new(
+                    &mtl_path,
+                    Some(Location { line, column: 1 }),
+                    LoadErrorKind::Syntax(message),
+                )
+            })
+            .and_then(|text| {
+                tobj::load_mtl_buf(&mut text.as_bytes()).map_err(|e| {
+                    LoadError::new(&mtl_path, None, LoadErrorKind::Syntax(e.to_string()))
+                })
+            });
+        match parsed {
+            Ok((materials, map)) => {
+                libraries.borrow_mut().push(Library {
+                    folder: mtl_path.parent().unwrap_or(Path::new(".")).to_path_buf(),
+                    materials: materials.len(),
+                });
+                Ok((materials, map))
+            }
+            Err(e) => {
+                library_error.borrow_mut().get_or_insert(e);
+                Err(tobj::LoadError::MaterialParseError)
+            }
+        }
+    });
+    if let Some(e) = library_error.into_inner() {
+        return Err(e);
+    }
+    let (models, materials) = result.map_err(|e| obj_error(bytes, path, e))?;
+    let mut notes = notes.into_inner();
+    // tobj reports a missing library as an error in place of the materials; the note says so.
+    let materials = materials.unwrap_or_default();
+
+    let mut out = Imported::default();
+    let mut images = ImageCache::default();
+    if !options.skip_materials {
+        let libraries = libraries.into_inner();
+        let mut library = libraries
+            .iter()
+            .flat_map(|l| std::iter::repeat_n(&l.folder, l.materials));
+        for m in &materials {
+            let lib_folder = library.next().unwrap_or(&folder);
+            let w = whitted_material(m, lib_folder, &mut images, &mut notes);
+            out.materials.push((m.name.clone(), w));
+        }
+    }
+    let default_id = out.materials.len() as u32;
+    let mut unmatched = 0;
+    let root = options.root(options.up);
+    let normal_matrix = root.matrix3.inverse().transpose();
+    let flip = root.matrix3.determinant() < 0.0;
+    for model in &models {
+        let mesh = &model.mesh;
+        if mesh.indices.is_empty() {
+            continue;
+        }
+        let material = match mesh.material_id {
+            Some(i) if i < materials.len() && !options.skip_materials => i as u32,
+            _ => {
+                if !materials.is_empty() {
+                    unmatched += 1;
+                }
+                default_id
+            }
+        };
+        let positions: Vec<Vec3> = mesh
+            .positions
+            .chunks_exact(3)
+            .map(|p| {
+                root.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+                    .as_vec3()
+            })
+            .collect();
+        let vertices = positions.len();
+        let normals = (mesh.normals.len() == vertices * 3).then(|| {
+            mesh.normals
+                .chunks_exact(3)
+                .map(|n| {
+                    (normal_matrix * DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64))
+                        .normalize_or_zero()
+                        .as_vec3()
+                })
+                .collect()
+        });
+        let indices: Vec<[u32; 3]> = mesh
+            .indices
+            .chunks_exact(3)
+            .map(|t| {
+                if flip {
+                    [t[0], t[2], t[1]]
+                } else {
+                    [t[0], t[1], t[2]]
+                }
+            })
+            .collect();
+        let invalid = |e: quadray::MeshError| {
+            LoadError::invalid(
+                path,
+                None,
+                format!("object \"{}\"", model.name),
+                e.to_string(),
+            )
+        };
+        let mut built = Mesh::new(positions, indices, normals, material).map_err(invalid)?;
+        if mesh.texcoords.len() == vertices * 2 {
+            let uv = mesh
+                .texcoords
+                .chunks_exact(2)
+                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+                .collect();
+            built = built.with_texcoords(0, uv).map_err(invalid)?;
+        }
+        if mesh.vertex_color.len() == vertices * 3 {
+            let decode = |c: f32| {
+                let c = c.clamp(0.0, 1.0);
+                if c <= 0.04045 {
+                    c / 12.92
+                } else {
+                    ((c + 0.055) / 1.055).powf(2.4)
+                }
+            };
+            let colors = mesh
+                .vertex_color
+                .chunks_exact(3)
+                .map(|c| Vec4::new(decode(c[0]), decode(c[1]), decode(c[2]), 1.0))
+                .collect();
+            built = built.with_colors(colors).map_err(invalid)?;
+        }
+        out.geometry.meshes.push(built);
+    }
+    if unmatched > 0 {
+        notes.push(format!(
+            "{unmatched} object(s) name no material, or one their libraries do not define; they use a default grey"
+        ));
+    }
+    if out
+        .geometry
+        .meshes
+        .iter()
+        .any(|m| m.material() == default_id)
+        || out.materials.is_empty()
+    {
+        out.materials.push(("default".into(), Material::default()));
+    }
+    if out.geometry.meshes.is_empty() {
+        notes.push("the file has no faces".into());
+    }
+    out.notes = notes;
+    Ok(out)
+}
+
+/// A tobj error as a [`LoadError`]; out-of-range face indices are located by a second look at the
+/// text, because tobj does not say where they are.
+fn obj_error(bytes: &[u8], path: &Path, e: tobj::LoadError) -> LoadError {
+    use tobj::LoadError as T;
+    if matches!(
+        e,
+        T::FaceVertexOutOfBounds
+            | T::FaceTexCoordOutOfBounds
+            | T::FaceNormalOutOfBounds
+            | T::FaceColorOutOfBounds
+    ) && let Some((line, message)) = locate_bad_index(bytes)
+    {
+        return LoadError::new(
+            path,
+            Some(Location { line, column: 1 }),
+            LoadErrorKind::Syntax(message),
+        );
+    }
+    let message = match e {
+        T::ReadError => "the file is not text (invalid UTF-8)".to_string(),
+        other => other.to_string(),
+    };
+    LoadError::new(path, None, LoadErrorKind::Syntax(message))
+}
+
+/// The first face-index statement whose index refers to an element not defined before it: its
+/// line number and a message. A diagnostic only; the parse itself is tobj's.
+fn locate_bad_index(bytes: &[u8]) -> Option<(usize, String)> {
+    let text = String::from_utf8_lossy(bytes);
+    let (mut v, mut vt, mut vn) = (0i64, 0i64, 0i64);
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => v += 1,
+            Some("vt") => vt += 1,
+            Some("vn") => vn += 1,
+            Some("f") => {
+                for corner in words {
+                    for (slot, field) in corner.split('/').enumerate() {
+                        let (count, what) = match slot {
+                            0 => (v, "vertices (v)"),
+                            1 => (vt, "texture coordinates (vt)"),
+                            _ => (vn, "normals (vn)"),
+                        };
+                        let Ok(i) = field.parse::<i64>() else {
+                            continue;
+                        };
+                        let resolved = if i < 0 { count + 1 + i } else { i };
+                        if !(1..=count).contains(&resolved) {
+                            return Some((
+                                n + 1,
+                                format!(
+                                    "face index {i} is out of range: {count} {what} are defined before this line"
+                                ),
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("quadray-obj-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    const QUAD: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1 4/4/1\n";
+
+    #[test]
+    fn quads_are_triangulated_with_uv_flipped_and_axes_converted() {
+        let obj = import_obj_bytes(
+            QUAD.as_bytes(),
+            Path::new("q.obj"),
+            &ImportOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(obj.triangle_count(), 2);
+        let m = &obj.geometry.meshes[0];
+        // y-up file: (1, 1, 0) becomes (1, 0, 1); the +z normal becomes -y.
+        assert!(m.positions().contains(&Vec3::new(1.0, 0.0, 1.0)));
+        assert!(
+            m.normals()
+                .unwrap()
+                .iter()
+                .all(|n| (*n - Vec3::NEG_Y).length() < 1e-6)
+        );
+        // vt (0, 0) is the bottom-left of the image: v = 1 in the image convention.
+        let i = m.positions().iter().position(|p| *p == Vec3::ZERO).unwrap();
+        assert_eq!(m.texcoords(0).unwrap()[i], Vec2::new(0.0, 1.0));
+        assert_eq!(obj.materials.len(), 1);
+        let z_up = ImportOptions {
+            up: crate::import::UpAxis::Z,
+            ..ImportOptions::default()
+        };
+        let obj = import_obj_bytes(QUAD.as_bytes(), Path::new("q.obj"), &z_up).unwrap();
+        assert!(
+            obj.geometry.meshes[0]
+                .positions()
+                .contains(&Vec3::new(1.0, 1.0, 0.0))
+        );
+    }
+
+    #[test]
+    fn out_of_range_index_is_located() {
+        let e = import_obj_bytes(
+            b"v 0 0 0\nv 1 0 0\n\nf 1 2 7\n",
+            Path::new("bad.obj"),
+            &ImportOptions::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("bad.obj:4:1:") && e.contains("face index 7 is out of range"),
+            "{e}"
+        );
+        let e = import_obj_bytes(
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n",
+            Path::new("t.obj"),
+            &ImportOptions::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains(":5:1:") && e.contains("texture coordinates"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn materials_textures_and_missing_libraries() {
+        let dir = temp_dir("mtl");
+        std::fs::create_dir_all(dir.join("tex")).unwrap();
+        let mut png = Vec::new();
+        image::RgbaImage::from_raw(1, 1, vec![255, 0, 0, 255])
+            .unwrap()
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        std::fs::write(dir.join("tex/red.png"), png).unwrap();
+        std::fs::write(
+            dir.join("m.mtl"),
+            "newmtl red\nKd 1 1 1\nmap_Kd tex\\red.png\nnewmtl mirror\nKs 1 1 1\nillum 3\nNs 10\n",
+        )
+        .unwrap();
+        let obj = format!(
+            "mtllib m.mtl\nmtllib gone.mtl\n{QUAD}usemtl red\nf 1 2 3\nusemtl mirror\nf 1 3 4\nusemtl nope\nf 2 3 4\n"
+        );
+        std::fs::write(dir.join("a.obj"), obj).unwrap();
+        let got = import_obj(&dir.join("a.obj"), &ImportOptions::default()).unwrap();
+        let names: Vec<_> = got.materials.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["red", "mirror", "default"]);
+        assert!(matches!(
+            got.materials[0].1.texture,
+            quadray::Texture::Image(_)
+        ));
+        assert_eq!(got.materials[1].1.reflectivity, 1.0);
+        let notes = got.notes.join("\n");
+        assert!(
+            notes.contains("gone.mtl") && notes.contains("not found"),
+            "{notes}"
+        );
+        assert!(notes.contains("2 object(s) name no material"), "{notes}");
+        // A broken library is an error naming it.
+        std::fs::write(dir.join("m.mtl"), "newmtl red\nKd 1 1\n").unwrap();
+        let e = import_obj(&dir.join("a.obj"), &ImportOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("m.mtl:2:1:") && e.contains("`Kd` needs one or three numbers"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn garbage_is_an_error_not_a_panic() {
+        for text in [
+            &b"v 0 0\n"[..],
+            b"f 1 2 3\n",
+            b"v 1 2 3\nf 1\n",
+            b"\xff\xfe\x00v",
+            b"v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        ] {
+            let r = import_obj_bytes(text, Path::new("g.obj"), &ImportOptions::default());
+            if let Err(e) = &r {
+                assert!(e.to_string().starts_with("g.obj"), "{e}");
+            }
+        }
+        let e = import_obj(Path::new("/nonexistent/x.obj"), &ImportOptions::default()).unwrap_err();
+        assert!(matches!(e.kind, LoadErrorKind::Io(_)));
+    }
+}

@@ -1,0 +1,80 @@
+//! An imported OBJ or glTF file as a scene of its own, for `quadray render FILE.obj|.gltf|.glb`:
+//! the file's camera if it has one (else one framing its bounds), its lights if any (else a
+//! default key light), and a note for every assumption.
+
+use crate::error::LoadError;
+use crate::import::{Imported, Selector, default_key_light, framing_camera};
+use crate::native::{LoadedScene, SceneSettings};
+use glam::Vec3;
+use quadray::SceneDescription;
+use std::path::Path;
+
+/// Background of scenes without one of their own: a dark grey, so black objects still show.
+pub const DEFAULT_BACKGROUND: Vec3 = Vec3::splat(0.05);
+
+/// Turns an import of `path` into a complete scene, choosing its camera by `camera` when given.
+pub fn scene_from_import(
+    imported: Imported,
+    path: &Path,
+    camera: Option<&Selector>,
+) -> Result<LoadedScene, LoadError> {
+    let mut notes = imported.notes.clone();
+    let mut settings = SceneSettings::default();
+    let chosen = match camera {
+        Some(sel) => Some(
+            crate::import::select_camera(&imported.cameras, sel)
+                .map_err(|m| LoadError::invalid(path, None, "camera", m))?,
+        ),
+        None => {
+            if imported.cameras.len() > 1 {
+                let c = &imported.cameras[0];
+                notes.push(format!(
+                    "the file has {} cameras; using the first{}",
+                    imported.cameras.len(),
+                    c.name
+                        .as_deref()
+                        .map(|n| format!(" (\"{n}\")"))
+                        .unwrap_or_default()
+                ));
+            }
+            imported.cameras.first()
+        }
+    };
+    let camera = match chosen {
+        Some(c) => {
+            if let Some(aspect) = c.aspect {
+                settings.height = ((settings.width as f64 / aspect).round() as u32)
+                    .clamp(1, quadray::render::MAX_SIDE);
+            }
+            c.camera
+        }
+        None => {
+            notes.push(
+                "no camera in the file: using one that frames its bounds from the front-right, above"
+                    .into(),
+            );
+            framing_camera(imported.bounds())
+        }
+    };
+    let mut lights = imported.lights;
+    if lights.is_empty() {
+        notes.push(
+            "no lights in the file: using a default key light over the camera's left shoulder"
+                .into(),
+        );
+        lights.push(default_key_light(&camera));
+    }
+    let (material_names, materials) = imported.materials.into_iter().unzip();
+    Ok(LoadedScene {
+        description: SceneDescription {
+            camera,
+            background: DEFAULT_BACKGROUND,
+            materials,
+            lights,
+            geometry: imported.geometry,
+        },
+        settings,
+        material_names,
+        notes,
+    })
+}
