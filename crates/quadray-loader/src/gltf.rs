@@ -15,7 +15,7 @@ use crate::gltf_material::{MaterialUse, Materials};
 use crate::import::{ImportOptions, Imported, Selector, UpAxis};
 use crate::quadrics_ext::{self, NodeExtension, RootExtension};
 use crate::{gltf_camera, gltf_light, gltf_mesh};
-use glam::{DAffine3, DMat4, DQuat, DVec3};
+use glam::DAffine3;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -132,7 +132,13 @@ pub fn convert(
                 format!("the scene expands to more than {MAX_INSTANCES} node instances"),
             ));
         }
-        let world = parent * local_transform(&node).map_err(|m| invalid(key.clone(), m))?;
+        let local = file
+            .node_transforms
+            .get(node.index())
+            .cloned()
+            .unwrap_or(Ok(DAffine3::IDENTITY))
+            .map_err(|m| invalid(key.clone(), m))?;
+        let world = parent * local;
         let shape = match node.extension_value(quadrics_ext::EXTENSION) {
             Some(v) => Some(
                 serde_json::from_value::<NodeExtension>(v.clone()).map_err(|e| {
@@ -297,39 +303,4 @@ pub fn convert(
     }
     out.notes = notes;
     Ok(out)
-}
-
-/// A node's local transform in f64: its matrix (which must be affine), or its TRS with the
-/// rotation normalised (the spec requires a unit quaternion; exporters round).
-fn local_transform(node: &gltf::Node<'_>) -> Result<DAffine3, String> {
-    match node.transform() {
-        gltf::scene::Transform::Matrix { matrix } => {
-            let m = DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)));
-            if !m.is_finite() {
-                return Err("matrix is not finite".into());
-            }
-            let last_row = DVec3::new(m.x_axis.w, m.y_axis.w, m.z_axis.w);
-            if last_row.abs().max_element() > 1e-6 || (m.w_axis.w - 1.0).abs() > 1e-6 {
-                return Err("matrix is not affine (its last row must be 0 0 0 1)".into());
-            }
-            Ok(DAffine3::from_mat4(m))
-        }
-        gltf::scene::Transform::Decomposed {
-            translation,
-            rotation,
-            scale,
-        } => {
-            let q = DQuat::from_array(rotation.map(f64::from));
-            let len = q.length();
-            if !(len.is_finite() && len > 0.0) {
-                return Err(format!("rotation {rotation:?} is not a unit quaternion"));
-            }
-            let t = DVec3::from_array(translation.map(f64::from));
-            let s = DVec3::from_array(scale.map(f64::from));
-            if !(t.is_finite() && s.is_finite()) {
-                return Err("translation and scale must be finite".into());
-            }
-            Ok(DAffine3::from_scale_rotation_translation(s, q / len, t))
-        }
-    }
 }

@@ -9,6 +9,7 @@
 use crate::error::{LoadError, LoadErrorKind, Location};
 use crate::image_file::{decode_image, resolve_reference};
 use base64::Engine;
+use glam::{DAffine3, DMat4, DQuat, DVec3};
 use gltf::json::Value;
 use quadray::{ColorEncoding, Image};
 use std::path::{Path, PathBuf};
@@ -30,6 +31,9 @@ pub struct GltfFile {
     pub buffers: Vec<Vec<u8>>,
     /// The folder relative URIs resolve against.
     pub base: PathBuf,
+    /// Each node's local transform, read from the JSON in f64 (the gltf crate keeps f32, which
+    /// would blur quadric placements written by quadray); an error says what is wrong with it.
+    pub node_transforms: Vec<Result<DAffine3, String>>,
 }
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -60,6 +64,11 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
     check_version(&value).map_err(|k| LoadError::new(path, None, k))?;
     check_required_extensions(&mut value).map_err(|k| LoadError::new(path, None, k))?;
     check_position_indices(&value).map_err(|k| LoadError::new(path, None, k))?;
+    let node_transforms = value
+        .get("nodes")
+        .and_then(Value::as_array)
+        .map(|nodes| nodes.iter().map(node_transform).collect())
+        .unwrap_or_default();
     let root: gltf::json::Root = serde_json::from_value(value).map_err(|e| {
         LoadError::new(
             path,
@@ -115,7 +124,42 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
         document,
         buffers,
         base,
+        node_transforms,
     })
+}
+
+/// A node's local transform from its JSON: `matrix` (column-major, must be affine) or
+/// translation · rotation · scale, with the rotation normalised (the spec requires a unit
+/// quaternion; exporters round).
+fn node_transform(node: &Value) -> Result<DAffine3, String> {
+    let numbers = |key: &str, n: usize| -> Result<Option<Vec<f64>>, String> {
+        match node.get(key) {
+            None => Ok(None),
+            Some(Value::Array(a)) if a.len() == n => a
+                .iter()
+                .map(|v| v.as_f64().filter(|x| x.is_finite()))
+                .collect::<Option<Vec<f64>>>()
+                .map(Some)
+                .ok_or_else(|| format!("`{key}` must hold {n} finite numbers")),
+            Some(_) => Err(format!("`{key}` must be an array of {n} numbers")),
+        }
+    };
+    if let Some(m) = numbers("matrix", 16)? {
+        let m = DMat4::from_cols_slice(&m);
+        let last_row = [m.x_axis.w, m.y_axis.w, m.z_axis.w];
+        if last_row.iter().any(|x| x.abs() > 1e-6) || (m.w_axis.w - 1.0).abs() > 1e-6 {
+            return Err("`matrix` is not affine (its last row must be 0 0 0 1)".into());
+        }
+        return Ok(DAffine3::from_mat4(m));
+    }
+    let t = numbers("translation", 3)?.map_or(DVec3::ZERO, |v| DVec3::from_slice(&v));
+    let s = numbers("scale", 3)?.map_or(DVec3::ONE, |v| DVec3::from_slice(&v));
+    let q = numbers("rotation", 4)?.map_or(DQuat::IDENTITY, |v| DQuat::from_slice(&v));
+    let len = q.length();
+    if !(len > 0.0) {
+        return Err("`rotation` is not a unit quaternion".into());
+    }
+    Ok(DAffine3::from_scale_rotation_translation(s, q / len, t))
 }
 
 /// The JSON and BIN chunks of a GLB file, every length checked against the data.

@@ -10,6 +10,7 @@
 //! - [`LoadError`]: every error names the file, the line and column where known, and the bad key.
 
 pub mod error;
+pub mod export;
 pub mod gltf;
 pub mod gltf_accessor;
 pub mod gltf_camera;
@@ -24,6 +25,7 @@ pub mod native;
 pub mod obj;
 pub mod quadrics_ext;
 pub mod standalone;
+pub mod tessellate;
 
 pub use error::{LoadError, LoadErrorKind, Location};
 pub use import::{ImportOptions, Imported, Selector, UpAxis};

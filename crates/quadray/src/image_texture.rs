@@ -160,6 +160,17 @@ impl Image {
         self.height
     }
 
+    /// How the colour channels are encoded.
+    pub fn encoding(&self) -> ColorEncoding {
+        self.encoding
+    }
+
+    /// The texels as stored: 8-bit RGBA codes, row-major from the top-left (for writing the image
+    /// back out losslessly).
+    pub fn texels(&self) -> &[[u8; 4]] {
+        &self.texels
+    }
+
     /// Bytes of texel memory the image holds.
     pub fn memory_bytes(&self) -> usize {
         self.texels.len() * 4

@@ -1,0 +1,833 @@
+//! Writing a scene as glTF 2.0 (`.gltf` with a `.bin` beside it, or `.glb`), analytic shapes as
+//! `QUADRAY_quadrics` shapes with tessellated fallback meshes, so quadray scenes open in other
+//! tools and read back into quadray exactly.
+//!
+//! Layout of the file written:
+//! - One root node, "quadray (z up)", whose matrix turns quadray's z-up world into glTF's y-up
+//!   one (exactly: its entries are 0 and ±1); every other node is its child and keeps quadray's
+//!   coordinates.
+//! - A mesh node per quadray mesh (vertices in world space), a node per quadric (matrix = its
+//!   placement, fallback mesh in its object frame), per sphere (translation) and per plane (its
+//!   frame; the fallback is a square as large as the scene), a node for the camera and one per
+//!   light (KHR_lights_punctual; intensities times 683·π, the inverse of the import).
+//! - Materials carry a pbrMetallicRoughness approximation for other viewers and quadray's exact
+//!   parameters in `extensions.QUADRAY_quadrics.whitted`; image textures are written as PNG from
+//!   the original 8-bit codes, so nothing is lost.
+//! - Both extensions are listed in `extensionsUsed` only, never `extensionsRequired`.
+//!
+//! The background colour and the render settings have no place in glTF and are not written.
+
+use crate::gltf_light::LUMENS_PER_WATT;
+use crate::import::geometry_bounds;
+use crate::native::LoadedScene;
+use crate::quadrics_ext::{
+    self, MaterialExtension, NodeExtension, RootExtension, ShapeDef, SphereDef,
+};
+use crate::tessellate::{self, TriMesh};
+use glam::{DAffine3, DMat3, DVec3, Vec2, Vec3, Vec4};
+use quadray::math::orthonormal_basis;
+use quadray::{ImageTexture, Light, Material, Mesh, Projection, Texture};
+use serde_json::{Value, json};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Why a scene could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    /// The output file (or its .bin) could not be written.
+    #[error("cannot write `{}`: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The output name does not end in .gltf or .glb.
+    #[error("`{}`: the output must end in .gltf or .glb", .0.display())]
+    Extension(PathBuf),
+    /// Something in the scene cannot be written.
+    #[error("{0}")]
+    Unsupported(String),
+}
+
+/// Grid cells along a quadric's clip box for its fallback mesh.
+const QUADRIC_CELLS: u32 = 40;
+/// Longitude segments of a sphere's fallback mesh (half as many latitude rings).
+const SPHERE_SEGMENTS: u32 = 48;
+
+/// glTF sampler and accessor enumerations used here.
+mod gl {
+    pub const FLOAT: u32 = 5126;
+    pub const UNSIGNED_INT: u32 = 5125;
+    pub const ARRAY_BUFFER: u32 = 34962;
+    pub const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+    pub const REPEAT: u32 = 10497;
+    pub const MIRRORED_REPEAT: u32 = 33648;
+    pub const CLAMP_TO_EDGE: u32 = 33071;
+    pub const NEAREST: u32 = 9728;
+    pub const LINEAR: u32 = 9729;
+}
+
+/// The glTF document being built: the binary buffer and the JSON arrays pointing into it.
+#[derive(Default)]
+struct Document {
+    bin: Vec<u8>,
+    buffer_views: Vec<Value>,
+    accessors: Vec<Value>,
+    meshes: Vec<Value>,
+    materials: Vec<Value>,
+    images: Vec<Value>,
+    samplers: Vec<Value>,
+    textures: Vec<Value>,
+    nodes: Vec<Value>,
+    cameras: Vec<Value>,
+    lights: Vec<Value>,
+    shapes: Vec<ShapeDef>,
+    /// glTF image index by the address of the shared quadray image.
+    image_ids: HashMap<usize, usize>,
+    /// glTF material index of (quadray material, cutoff bits, factor bits) for alpha-masked meshes.
+    masked: HashMap<(u32, u32, u32), usize>,
+}
+
+/// One mesh's vertex data, borrowed.
+struct MeshData<'a> {
+    positions: &'a [Vec3],
+    normals: Option<&'a [Vec3]>,
+    texcoords: [Option<&'a [Vec2]>; 2],
+    colors: Option<&'a [Vec4]>,
+    indices: &'a [[u32; 3]],
+}
+
+impl Document {
+    /// Appends bytes as a new 4-byte-aligned buffer view; returns its index.
+    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+        self.bin.resize(self.bin.len().next_multiple_of(4), 0);
+        let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        self.bin.extend_from_slice(bytes);
+        self.buffer_views.push(v);
+        self.buffer_views.len() - 1
+    }
+
+    /// A float accessor of `count` elements of `kind`; POSITION accessors need `min`/`max`.
+    fn floats(&mut self, data: &[f32], count: usize, kind: &str, bounds: bool) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|f| f.to_le_bytes()).collect();
+        let view = self.view(&bytes, Some(gl::ARRAY_BUFFER));
+        let mut a =
+            json!({"bufferView": view, "componentType": gl::FLOAT, "count": count, "type": kind});
+        if bounds {
+            let width = data.len() / count.max(1);
+            let mut lo = vec![f32::INFINITY; width];
+            let mut hi = vec![f32::NEG_INFINITY; width];
+            for chunk in data.chunks_exact(width) {
+                for (k, &x) in chunk.iter().enumerate() {
+                    lo[k] = lo[k].min(x);
+                    hi[k] = hi[k].max(x);
+                }
+            }
+            a["min"] = json!(lo);
+            a["max"] = json!(hi);
+        }
+        self.accessors.push(a);
+        self.accessors.len() - 1
+    }
+
+    fn indices(&mut self, tris: &[[u32; 3]]) -> usize {
+        let bytes: Vec<u8> = tris
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        let view = self.view(&bytes, Some(gl::ELEMENT_ARRAY_BUFFER));
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": gl::UNSIGNED_INT, "count": tris.len() * 3, "type": "SCALAR"
+        }));
+        self.accessors.len() - 1
+    }
+
+    /// Adds a one-primitive mesh; returns its index.
+    fn mesh(&mut self, name: &str, m: &MeshData<'_>, material: usize) -> usize {
+        let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
+        let mut attributes = serde_json::Map::new();
+        let pos = self.floats(&flat(m.positions), m.positions.len(), "VEC3", true);
+        attributes.insert("POSITION".into(), json!(pos));
+        if let Some(n) = m.normals {
+            let a = self.floats(&flat(n), n.len(), "VEC3", false);
+            attributes.insert("NORMAL".into(), json!(a));
+        }
+        for (set, uv) in m.texcoords.iter().enumerate() {
+            if let Some(uv) = uv {
+                let data: Vec<f32> = uv.iter().flat_map(|t| t.to_array()).collect();
+                let a = self.floats(&data, uv.len(), "VEC2", false);
+                attributes.insert(format!("TEXCOORD_{set}"), json!(a));
+            }
+        }
+        if let Some(c) = m.colors {
+            let data: Vec<f32> = c.iter().flat_map(|v| v.to_array()).collect();
+            let a = self.floats(&data, c.len(), "VEC4", false);
+            attributes.insert("COLOR_0".into(), json!(a));
+        }
+        let idx = self.indices(m.indices);
+        self.meshes.push(json!({
+            "name": name,
+            "primitives": [{"attributes": attributes, "indices": idx, "material": material}]
+        }));
+        self.meshes.len() - 1
+    }
+
+    /// Adds a fallback mesh, if the tessellation produced any triangle.
+    fn fallback(&mut self, name: &str, t: &TriMesh, material: usize) -> Option<usize> {
+        (!t.indices.is_empty()).then(|| {
+            let data = MeshData {
+                positions: &t.positions,
+                normals: Some(&t.normals),
+                texcoords: [None, None],
+                colors: None,
+                indices: &t.indices,
+            };
+            self.mesh(name, &data, material)
+        })
+    }
+
+    fn node(&mut self, node: Value) -> usize {
+        self.nodes.push(node);
+        self.nodes.len() - 1
+    }
+
+    /// A glTF texture for an image texture (image written once per shared image).
+    fn texture(&mut self, t: &ImageTexture) -> Result<usize, ExportError> {
+        let key = std::sync::Arc::as_ptr(&t.map.image) as usize;
+        let image = match self.image_ids.get(&key) {
+            Some(&i) => i,
+            None => {
+                let img = &t.map.image;
+                let rgba: Vec<u8> = img.texels().iter().flatten().copied().collect();
+                let mut png = Vec::new();
+                image::RgbaImage::from_raw(img.width(), img.height(), rgba)
+                    .ok_or_else(|| ExportError::Unsupported("texture size mismatch".into()))?
+                    .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+                    .map_err(|e| {
+                        ExportError::Unsupported(format!("cannot encode a texture as PNG: {e}"))
+                    })?;
+                let view = self.view(&png, None);
+                self.images
+                    .push(json!({"bufferView": view, "mimeType": "image/png"}));
+                self.image_ids.insert(key, self.images.len() - 1);
+                self.images.len() - 1
+            }
+        };
+        let wrap = |w: quadray::Wrap| match w {
+            quadray::Wrap::Repeat => gl::REPEAT,
+            quadray::Wrap::MirroredRepeat => gl::MIRRORED_REPEAT,
+            quadray::Wrap::ClampToEdge => gl::CLAMP_TO_EDGE,
+        };
+        let mag = match t.map.filter {
+            quadray::Filter::Nearest => gl::NEAREST,
+            quadray::Filter::Bilinear => gl::LINEAR,
+        };
+        self.samplers.push(json!({
+            "wrapS": wrap(t.map.wrap[0]), "wrapT": wrap(t.map.wrap[1]), "magFilter": mag
+        }));
+        self.textures
+            .push(json!({"source": image, "sampler": self.samplers.len() - 1}));
+        Ok(self.textures.len() - 1)
+    }
+
+    /// The glTF material for quadray material `m`: a PBR approximation plus the exact parameters.
+    fn material(&mut self, name: &str, m: &Material) -> Result<Value, ExportError> {
+        let (base, image) = match &m.texture {
+            Texture::Constant(c) => (*c, None),
+            // Other viewers get a representative colour of the procedural textures.
+            Texture::HeightRamp | Texture::Bands { .. } => {
+                (quadray::texture::height_ramp(0.5), None)
+            }
+            Texture::Checker { even, odd, .. } => ((*even + *odd) * 0.5, None),
+            Texture::Image(t) => (t.factor, Some(t)),
+        };
+        // Inverse of the import's mapping where it is one-to-one: a mirror is a polished metal.
+        let roughness = if m.reflectivity > 0.0 {
+            1.0 - m.reflectivity.sqrt()
+        } else if m.specular > 0.0 {
+            (2.0 / (m.shininess + 2.0)).powf(0.25)
+        } else {
+            1.0
+        };
+        let mut pbr = json!({
+            "baseColorFactor": [base.x.min(1.0), base.y.min(1.0), base.z.min(1.0), 1.0],
+            "metallicFactor": m.reflectivity,
+            "roughnessFactor": roughness,
+        });
+        if let Some(t) = image {
+            let tex = self.texture(t)?;
+            pbr["baseColorTexture"] = json!({"index": tex, "texCoord": t.map.set});
+        }
+        let ext = MaterialExtension {
+            whitted: quadrics_ext::whitted_def(m),
+        };
+        Ok(json!({
+            "name": name,
+            "pbrMetallicRoughness": pbr,
+            "extensions": {quadrics_ext::EXTENSION: ext},
+        }))
+    }
+
+    /// The material index for `mesh`: its own, or a copy with the mesh's alpha cut-out.
+    fn mesh_material(&mut self, mesh: &Mesh) -> usize {
+        let id = mesh.material();
+        let Some(mask) = mesh.alpha_mask() else {
+            return id as usize;
+        };
+        let key = (id, mask.cutoff.to_bits(), mask.factor.to_bits());
+        if let Some(&m) = self.masked.get(&key) {
+            return m;
+        }
+        let mut copy = self.materials[id as usize].clone();
+        copy["alphaMode"] = json!("MASK");
+        copy["alphaCutoff"] = json!(mask.cutoff);
+        copy["pbrMetallicRoughness"]["baseColorFactor"][3] = json!(mask.factor);
+        self.materials.push(copy);
+        self.masked.insert(key, self.materials.len() - 1);
+        self.materials.len() - 1
+    }
+}
+
+/// A node matrix (column-major) from an affine map.
+fn matrix(a: &DAffine3) -> Value {
+    json!(glam::DMat4::from(*a).to_cols_array())
+}
+
+/// An affine map whose local −z is `direction` and local +y the part of `up` orthogonal to it.
+fn looking(from: DVec3, direction: DVec3, up: DVec3) -> DAffine3 {
+    let back = -direction.normalize();
+    let right = up
+        .cross(back)
+        .try_normalize()
+        .unwrap_or_else(|| orthonormal_basis(back).0);
+    let true_up = back.cross(right);
+    DAffine3::from_mat3_translation(DMat3::from_cols(right, true_up, back), from)
+}
+
+/// Writes `scene` to `out` (`.gltf` + `.bin` beside it, or `.glb`); returns notes on what other
+/// viewers will see differently.
+pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, ExportError> {
+    let ext = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let binary = match ext.as_deref() {
+        Some("glb") => true,
+        Some("gltf") => false,
+        _ => return Err(ExportError::Extension(out.to_path_buf())),
+    };
+    let d = &scene.description;
+    let mut doc = Document::default();
+    let mut notes = Vec::new();
+    let mut children = Vec::new();
+
+    for (i, m) in d.materials.iter().enumerate() {
+        let name = scene
+            .material_names
+            .get(i)
+            .cloned()
+            .unwrap_or_else(|| format!("material {i}"));
+        let v = doc.material(&name, m)?;
+        doc.materials.push(v);
+    }
+    // glTF needs a material for fallback meshes whose shape names none; quadray shapes always have one.
+    let g = &d.geometry;
+    let extent = geometry_bounds(g)
+        .map(|(lo, hi)| (hi - lo).length().max(lo.abs().max(hi.abs()).max_element()))
+        .unwrap_or(10.0)
+        .max(1.0);
+
+    for (i, m) in g.meshes.iter().enumerate() {
+        let material = doc.mesh_material(m);
+        let data = MeshData {
+            positions: m.positions(),
+            normals: m.normals(),
+            texcoords: [m.texcoords(0), m.texcoords(1)],
+            colors: m.colors(),
+            indices: m.indices(),
+        };
+        let mesh = doc.mesh(&format!("mesh {i}"), &data, material);
+        children.push(doc.node(json!({"name": format!("mesh {i}"), "mesh": mesh})));
+    }
+    for (i, q) in g.quadrics.iter().enumerate() {
+        let name = format!("quadric {i} ({})", describe(q));
+        let material = q.material() as usize;
+        let fallback = tessellate::quadric(
+            &q.surface_description().coefficients(),
+            q.clip(),
+            QUADRIC_CELLS,
+        );
+        let mesh = doc.fallback(&name, &fallback, material);
+        doc.shapes.push(quadrics_ext::quadric_def(
+            q,
+            Some(material),
+            Some(name.clone()),
+        ));
+        let mut node = json!({
+            "name": name,
+            "matrix": matrix(&q.transform().to_world),
+            "extensions": {quadrics_ext::EXTENSION: NodeExtension { shape: doc.shapes.len() - 1, extensions: None, extras: None }},
+        });
+        if let Some(mesh) = mesh {
+            node["mesh"] = json!(mesh);
+        }
+        children.push(doc.node(node));
+    }
+    for (i, s) in g.spheres.iter().enumerate() {
+        let name = format!("sphere {i}");
+        let material = s.material as usize;
+        let mesh = doc.fallback(
+            &name,
+            &tessellate::sphere(s.radius, SPHERE_SEGMENTS, SPHERE_SEGMENTS / 2),
+            material,
+        );
+        doc.shapes.push(ShapeDef {
+            kind: "sphere".into(),
+            name: Some(name.clone()),
+            sphere: Some(SphereDef { radius: s.radius }),
+            material: Some(material),
+            ..ShapeDef::default()
+        });
+        let mut node = json!({
+            "name": name,
+            "translation": s.center.to_array(),
+            "extensions": {quadrics_ext::EXTENSION: NodeExtension { shape: doc.shapes.len() - 1, extensions: None, extras: None }},
+        });
+        if let Some(mesh) = mesh {
+            node["mesh"] = json!(mesh);
+        }
+        children.push(doc.node(node));
+    }
+    if !g.planes.is_empty() {
+        notes.push(format!(
+            "infinite planes get a square of side {:.4} as their fallback mesh in other viewers",
+            4.0 * extent
+        ));
+    }
+    for (i, p) in g.planes.iter().enumerate() {
+        let name = format!("plane {i}");
+        let material = p.material as usize;
+        let mesh = doc.fallback(&name, &tessellate::square(2.0 * extent), material);
+        doc.shapes.push(ShapeDef {
+            kind: "plane".into(),
+            name: Some(name.clone()),
+            material: Some(material),
+            ..ShapeDef::default()
+        });
+        let (u, v) = orthonormal_basis(p.normal);
+        let frame = DAffine3::from_mat3_translation(DMat3::from_cols(u, v, p.normal), p.point);
+        let mut node = json!({
+            "name": name,
+            "matrix": matrix(&frame),
+            "extensions": {quadrics_ext::EXTENSION: NodeExtension { shape: doc.shapes.len() - 1, extensions: None, extras: None }},
+        });
+        if let Some(mesh) = mesh {
+            node["mesh"] = json!(mesh);
+        }
+        children.push(doc.node(node));
+    }
+
+    let cam = &d.camera;
+    let aspect = scene.settings.width as f64 / scene.settings.height.max(1) as f64;
+    let camera = match cam.projection {
+        Projection::Perspective { vfov_deg } => json!({
+            "name": "camera",
+            "type": "perspective",
+            "perspective": {"yfov": vfov_deg.to_radians(), "aspectRatio": aspect, "znear": 1e-3 * extent}
+        }),
+        Projection::Orthographic { height } => json!({
+            "name": "camera",
+            "type": "orthographic",
+            "orthographic": {"xmag": height * 0.5 * aspect, "ymag": height * 0.5, "znear": 0.0, "zfar": 1e4 * extent}
+        }),
+    };
+    doc.cameras.push(camera);
+    let view = looking(cam.from, cam.to - cam.from, cam.up);
+    children.push(doc.node(json!({"name": "camera", "camera": 0, "matrix": matrix(&view)})));
+
+    let scale = (LUMENS_PER_WATT * std::f64::consts::PI) as f32;
+    let colour_and_intensity = |c: Vec3| {
+        let peak = c.max_element();
+        if peak > 0.0 {
+            ((c / peak).to_array(), peak * scale)
+        } else {
+            ([1.0; 3], 0.0)
+        }
+    };
+    for (i, l) in d.lights.iter().enumerate() {
+        let name = format!("light {i}");
+        let (light, node_matrix) = match *l {
+            Light::Point {
+                position,
+                intensity,
+            } => {
+                let (color, intensity) = colour_and_intensity(intensity);
+                (
+                    json!({"name": name, "type": "point", "color": color, "intensity": intensity}),
+                    DAffine3::from_translation(position),
+                )
+            }
+            Light::Directional {
+                direction,
+                irradiance,
+            } => {
+                let (color, intensity) = colour_and_intensity(irradiance);
+                (
+                    json!({"name": name, "type": "directional", "color": color, "intensity": intensity}),
+                    looking(DVec3::ZERO, direction, DVec3::Z),
+                )
+            }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_inner,
+                cos_outer,
+            } => {
+                let (color, intensity) = colour_and_intensity(intensity);
+                let outer = cos_outer.clamp(-1.0, 1.0).acos();
+                let inner = cos_inner.clamp(-1.0, 1.0).acos();
+                let limit = std::f64::consts::FRAC_PI_2;
+                if outer > limit {
+                    notes.push(format!(
+                        "{name}: its cone is wider than glTF's 90° limit; written as 90°"
+                    ));
+                }
+                let outer = outer.min(limit);
+                let inner = inner.min(outer * 0.999_999);
+                (
+                    json!({"name": name, "type": "spot", "color": color, "intensity": intensity,
+                           "spot": {"innerConeAngle": inner, "outerConeAngle": outer}}),
+                    looking(position, direction, DVec3::Z),
+                )
+            }
+        };
+        doc.lights.push(light);
+        children.push(doc.node(json!({
+            "name": name,
+            "matrix": matrix(&node_matrix),
+            "extensions": {"KHR_lights_punctual": {"light": doc.lights.len() - 1}},
+        })));
+    }
+
+    // quadray (x, y, z) → glTF (x, z, −y): columns are the images of x, y and z.
+    let root = doc.node(json!({
+        "name": "quadray (z up)",
+        "matrix": [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+        "children": children,
+    }));
+    notes.push(
+        "the background colour and render settings are not part of glTF and were not written"
+            .into(),
+    );
+
+    let mut used = vec![quadrics_ext::EXTENSION];
+    if !doc.lights.is_empty() {
+        used.push("KHR_lights_punctual");
+    }
+    let root_ext = RootExtension {
+        shapes: std::mem::take(&mut doc.shapes),
+        extensions: None,
+        extras: None,
+    };
+    let mut extensions = json!({quadrics_ext::EXTENSION: root_ext});
+    if !doc.lights.is_empty() {
+        extensions["KHR_lights_punctual"] = json!({"lights": doc.lights});
+    }
+    let bin_path = out.with_extension("bin");
+    let mut buffer = json!({"byteLength": doc.bin.len()});
+    if !binary {
+        let name = bin_path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .ok_or_else(|| ExportError::Unsupported("the output name is not valid UTF-8".into()))?;
+        buffer["uri"] = json!(percent_encoding::utf8_percent_encode(name, URI_UNSAFE).to_string());
+    }
+    let mut gltf = json!({
+        "asset": {"version": "2.0", "generator": concat!("quadray ", env!("CARGO_PKG_VERSION"))},
+        "extensionsUsed": used,
+        "extensions": extensions,
+        "scene": 0,
+        "scenes": [{"name": "quadray scene", "nodes": [root]}],
+        "nodes": doc.nodes,
+        "meshes": doc.meshes,
+        "materials": doc.materials,
+        "cameras": doc.cameras,
+        "buffers": [buffer],
+        "bufferViews": doc.buffer_views,
+        "accessors": doc.accessors,
+    });
+    for (key, list) in [
+        ("images", doc.images),
+        ("samplers", doc.samplers),
+        ("textures", doc.textures),
+    ] {
+        if !list.is_empty() {
+            gltf[key] = json!(list);
+        }
+    }
+    let text =
+        serde_json::to_vec_pretty(&gltf).map_err(|e| ExportError::Unsupported(e.to_string()))?;
+    if binary {
+        write_atomically(out, &glb(&text, &doc.bin))?;
+    } else {
+        write_atomically(&bin_path, &doc.bin)?;
+        write_atomically(out, &text)?;
+    }
+    Ok(notes)
+}
+
+/// Characters escaped in the .bin file name written as a URI.
+const URI_UNSAFE: &percent_encoding::AsciiSet = &percent_encoding::CONTROLS
+    .add(b' ')
+    .add(b'"')
+    .add(b'#')
+    .add(b'%')
+    .add(b'<')
+    .add(b'>')
+    .add(b'?')
+    .add(b'\\')
+    .add(b'`')
+    .add(b'{')
+    .add(b'}');
+
+fn describe(q: &quadray::Quadric) -> String {
+    match q.surface_description() {
+        quadray::QuadricSurface::Canonical { kind, .. } => kind.name().to_string(),
+        quadray::QuadricSurface::General(_) => "general".to_string(),
+    }
+}
+
+/// A GLB container: header, JSON chunk padded with spaces, BIN chunk padded with zeros.
+fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let json_len = json.len().next_multiple_of(4);
+    let bin_len = bin.len().next_multiple_of(4);
+    let total = 12 + 8 + json_len + if bin.is_empty() { 0 } else { 8 + bin_len };
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json_len as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(json);
+    out.resize(12 + 8 + json_len, b' ');
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin_len as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(bin);
+        out.resize(total, 0);
+    }
+    out
+}
+
+/// Writes `bytes` to a temporary name beside `path`, then renames it into place, so a failed
+/// write never leaves a truncated file under the real name.
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ExportError> {
+    let io = |source| ExportError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(format!(".tmp{}", std::process::id()));
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes).map_err(io)?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io(e)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::import::ImportOptions;
+
+    const SCENE: &str = r#"
+version = 1
+[camera]
+from = [3, -6, 2]
+to = [0, 0, 0.5]
+vfov = 35
+[render]
+resolution = [320, 180]
+[[material]]
+name = "ramp"
+texture = "ramp"
+reflectivity = 0.3
+specular = 0.5
+shininess = 40
+[[material]]
+name = "floor"
+texture = "checker"
+checker_size = 0.5
+color = [0.2, 0.3, 0.4]
+[[material]]
+name = "red"
+color = [0.8, 0.1, 0.1]
+specular_model = "blinn"
+[[sphere]]
+center = [1, 2, 0.5]
+radius = 0.5
+material = "red"
+[[plane]]
+point = [0, 0, -1]
+normal = [0, 0.6, 0.8]
+material = "floor"
+[[quadric]]
+kind = "hyperboloid1"
+a = 0.4
+b = 0.5
+c = 0.6
+clip = { min = [-1, -1, -0.5], max = [1, 1, 1] }
+transform = { translate = [-1, 0.5, 0.2], rotate = [10, 20, 30], scale = [1, 2, 0.5] }
+material = "ramp"
+[[quadric]]
+kind = "general"
+coefficients = [1, 1, -1, 0.2, 0, 0, 0, 0, 0.1, -0.5]
+clip = 1.5
+material = "red"
+[[mesh]]
+vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0.5]]
+indices = [[0, 1, 2]]
+normals = [[0, 0, 1], [0, 0, 1], [0, 0.1, 1]]
+material = "red"
+[[light]]
+type = "point"
+position = [2, -3, 4]
+color = [1, 0.5, 0.25]
+intensity = 20
+[[light]]
+type = "directional"
+direction = [-1, 1, -2]
+intensity = 0.8
+"#;
+
+    fn temp(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("quadray-export-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d.join(name)
+    }
+
+    fn close(a: DVec3, b: DVec3) -> bool {
+        (a - b).length() <= 1e-12 * (1.0 + a.length())
+    }
+
+    #[test]
+    fn native_scene_round_trips_through_gltf_and_glb() {
+        let scene = crate::native::parse_scene(SCENE, Path::new("s.toml")).unwrap();
+        for name in ["round trip.gltf", "round-trip.glb"] {
+            let out = temp(name);
+            let notes = export_gltf(&scene, &out).unwrap();
+            assert!(notes.iter().any(|n| n.contains("background")), "{notes:?}");
+            let back = crate::gltf::import_gltf(&out, &ImportOptions::default()).unwrap();
+            let (a, b) = (&scene.description.geometry, &back.geometry);
+            assert_eq!(b.quadrics.len(), 2);
+            for (qa, qb) in a.quadrics.iter().zip(&b.quadrics) {
+                assert_eq!(qa.surface_description(), qb.surface_description());
+                assert_eq!(qa.clip(), qb.clip());
+                let (ta, tb) = (qa.transform().to_world, qb.transform().to_world);
+                assert!(close(ta.translation, tb.translation));
+                for c in 0..3 {
+                    assert!(
+                        close(ta.matrix3.col(c), tb.matrix3.col(c)),
+                        "{ta:?} vs {tb:?}"
+                    );
+                }
+                // Materials are appended in first-use order on import; compare by name.
+                let name = |s: &[String], id: u32| s[id as usize].clone();
+                let back_names: Vec<String> =
+                    back.materials.iter().map(|(n, _)| n.clone()).collect();
+                assert_eq!(
+                    name(&scene.material_names, qa.material()),
+                    name(&back_names, qb.material())
+                );
+                assert_eq!(
+                    scene.description.materials[qa.material() as usize],
+                    back.materials[qb.material() as usize].1
+                );
+            }
+            assert_eq!(b.spheres.len(), 1);
+            assert!(close(a.spheres[0].center, b.spheres[0].center));
+            assert!((a.spheres[0].radius - b.spheres[0].radius).abs() < 1e-12);
+            assert_eq!(b.planes.len(), 1);
+            assert!(close(a.planes[0].point, b.planes[0].point));
+            assert!(close(a.planes[0].normal, b.planes[0].normal));
+            // Fallback meshes are skipped; the one real mesh comes back vertex for vertex.
+            assert_eq!(b.meshes.len(), 1);
+            assert_eq!(a.meshes[0].positions(), b.meshes[0].positions());
+            assert_eq!(a.meshes[0].indices(), b.meshes[0].indices());
+            let (na, nb) = (
+                a.meshes[0].normals().unwrap(),
+                b.meshes[0].normals().unwrap(),
+            );
+            assert!(na.iter().zip(nb).all(|(x, y)| (*x - *y).length() < 1e-6));
+            assert_eq!(back.lights.len(), 2);
+            for (la, lb) in scene.description.lights.iter().zip(&back.lights) {
+                match (la, lb) {
+                    (
+                        Light::Point {
+                            position: pa,
+                            intensity: ia,
+                        },
+                        Light::Point {
+                            position: pb,
+                            intensity: ib,
+                        },
+                    ) => {
+                        assert!(close(*pa, *pb));
+                        assert!((*ia - *ib).length() < 1e-5 * ia.length());
+                    }
+                    (
+                        Light::Directional {
+                            direction: da,
+                            irradiance: ia,
+                        },
+                        Light::Directional {
+                            direction: db,
+                            irradiance: ib,
+                        },
+                    ) => {
+                        assert!(close(*da, *db), "{da} vs {db}");
+                        assert!((*ia - *ib).length() < 1e-5 * ia.length());
+                    }
+                    other => panic!("light kinds differ: {other:?}"),
+                }
+            }
+            let (ca, cb) = (&scene.description.camera, &back.cameras[0]);
+            assert!(close(ca.from, cb.camera.from));
+            assert!(close(
+                (ca.to - ca.from).normalize(),
+                (cb.camera.to - cb.camera.from).normalize()
+            ));
+            // The gltf crate reads camera parameters as f32.
+            let Projection::Perspective { vfov_deg } = cb.camera.projection else {
+                panic!()
+            };
+            assert!((vfov_deg - 35.0).abs() < 1e-5);
+            assert!((cb.aspect.unwrap() - 320.0 / 180.0).abs() < 1e-6);
+            // Listed as used, never required.
+            let doc = crate::gltf_document::open(&out).unwrap().document;
+            assert!(doc.extensions_used().any(|e| e == quadrics_ext::EXTENSION));
+            assert_eq!(doc.extensions_required().count(), 0);
+            // Other viewers get fallback meshes: one per shape, on the nodes carrying the shapes.
+            assert_eq!(doc.meshes().len(), 1 + 2 + 1 + 1);
+        }
+    }
+
+    #[test]
+    fn refuses_unknown_output_types() {
+        let scene = crate::native::parse_scene(SCENE, Path::new("s.toml")).unwrap();
+        assert!(matches!(
+            export_gltf(&scene, &temp("x.obj")),
+            Err(ExportError::Extension(_))
+        ));
+        let e = export_gltf(&scene, Path::new("/nonexistent-dir/x.gltf")).unwrap_err();
+        assert!(e.to_string().contains("/nonexistent-dir/x.bin"), "{e}");
+    }
+}
