@@ -20,6 +20,7 @@ pub mod gltf_material;
 pub mod gltf_mesh;
 pub mod image_file;
 pub mod import;
+pub mod include;
 pub mod mtl;
 pub mod native;
 pub mod obj;

@@ -6,6 +6,10 @@
 //! flat table rather than serde-tagged enums, because tagged enums lose spans (toml-rs #535).
 
 use crate::error::{LoadError, LoadErrorKind, Location};
+use crate::import::{
+    ImportOptions, Selector, UpAxis, framing_camera, geometry_bounds, select_camera,
+};
+use crate::include;
 use glam::{DVec3, Vec3};
 use quadray::render::{MAX_DEPTH, MAX_SIDE, MAX_SPP};
 use quadray::{
@@ -65,7 +69,7 @@ pub struct LoadedScene {
 #[serde(deny_unknown_fields)]
 struct SceneFile {
     version: Spanned<i64>,
-    camera: Spanned<CameraSpec>,
+    camera: Option<Spanned<CameraSpec>>,
     #[serde(default)]
     render: RenderSpec,
     #[serde(default, rename = "material")]
@@ -80,6 +84,27 @@ struct SceneFile {
     meshes: Vec<Spanned<MeshSpec>>,
     #[serde(default, rename = "light")]
     lights: Vec<Spanned<LightSpec>>,
+    #[serde(default, rename = "include")]
+    includes: Vec<Spanned<IncludeSpec>>,
+}
+
+/// A glTF scene or camera chosen by index or by name.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum SelectorSpec {
+    Index(i64),
+    Name(String),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct IncludeSpec {
+    path: Spanned<String>,
+    transform: Option<Spanned<TransformSpec>>,
+    scene: Option<Spanned<SelectorSpec>>,
+    camera: Option<Spanned<SelectorSpec>>,
+    lights: Option<bool>,
+    up: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
@@ -127,6 +152,7 @@ struct MaterialSpec {
     shininess: Option<Spanned<f64>>,
     specular_model: Option<Spanned<String>>,
     reflectivity: Option<Spanned<f64>>,
+    reflection_tint: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -183,11 +209,14 @@ struct TransformSpec {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MeshSpec {
-    vertices: Spanned<Vec<V3>>,
-    indices: Spanned<Vec<[i64; 3]>>,
+    path: Option<Spanned<String>>,
+    vertices: Option<Spanned<Vec<V3>>>,
+    indices: Option<Spanned<Vec<[i64; 3]>>>,
     normals: Option<Spanned<Vec<V3>>>,
     transform: Option<Spanned<TransformSpec>>,
-    material: Spanned<String>,
+    material: Option<Spanned<String>>,
+    up: Option<Spanned<String>>,
+    scene: Option<Spanned<SelectorSpec>>,
 }
 
 #[derive(Deserialize)]
@@ -199,6 +228,8 @@ struct LightSpec {
     direction: Option<Spanned<V3>>,
     color: Option<Spanned<V3>>,
     intensity: Option<Spanned<f64>>,
+    inner_angle: Option<Spanned<f64>>,
+    outer_angle: Option<Spanned<f64>>,
 }
 
 /// Reads and validates the scene file at `path`.
@@ -387,8 +418,8 @@ impl Builder<'_> {
                 ),
             ));
         }
-        let camera = self.camera(&file.camera)?;
-        let (settings, background) = self.render(&file.render)?;
+        let (mut settings, background) = self.render(&file.render)?;
+        let mut notes = Vec::new();
 
         let mut names = HashMap::new();
         let mut materials = Vec::new();
@@ -430,12 +461,98 @@ impl Builder<'_> {
         }
         for (i, m) in file.meshes.iter().enumerate() {
             let key = format!("mesh[{i}]");
-            geometry.meshes.push(self.mesh(m, &key, &names)?);
+            if m.get_ref().path.is_some() {
+                let imported = self.mesh_file(m, &key, &names)?;
+                let (path, replace) = imported.1;
+                let merged = include::merge(
+                    imported.0,
+                    &path,
+                    replace,
+                    &mut materials,
+                    &mut material_names,
+                    &mut geometry,
+                )
+                .map_err(|e| self.include_err(m.get_ref().path.as_ref(), &key, e))?;
+                notes.extend(merged.notes);
+                if !merged.lights.is_empty() || !merged.cameras.is_empty() {
+                    notes.push(format!(
+                        "{key}: the file's {} light(s) and {} camera(s) are not used by [[mesh]]; [[include]] brings them in",
+                        merged.lights.len(),
+                        merged.cameras.len()
+                    ));
+                }
+            } else {
+                geometry.meshes.push(self.mesh(m, &key, &names)?);
+            }
         }
         let mut lights = Vec::new();
         for (i, l) in file.lights.iter().enumerate() {
             lights.push(self.light(l.get_ref(), &format!("light[{i}]"))?);
         }
+        let mut included_cameras = Vec::new();
+        for (i, inc) in file.includes.iter().enumerate() {
+            let key = format!("include[{i}]");
+            let spec = inc.get_ref();
+            let options = ImportOptions {
+                transform: Some(self.transform(&spec.transform, &format!("{key}.transform"))?),
+                scene: spec
+                    .scene
+                    .as_ref()
+                    .map(|s| self.selector(s, &format!("{key}.scene")))
+                    .transpose()?,
+                up: self.up_axis(&spec.up, &format!("{key}.up"))?,
+                skip_materials: false,
+            };
+            let path = include::resolve(self.path, spec.path.get_ref());
+            let imported = include::import_file(&path, &options)
+                .map_err(|e| self.include_err(Some(&spec.path), &format!("{key}.path"), e))?;
+            let mut merged = include::merge(
+                imported,
+                &path,
+                None,
+                &mut materials,
+                &mut material_names,
+                &mut geometry,
+            )
+            .map_err(|e| self.include_err(Some(&spec.path), &format!("{key}.path"), e))?;
+            notes.append(&mut merged.notes);
+            if spec.lights.unwrap_or(true) {
+                lights.append(&mut merged.lights);
+            }
+            let chosen = match &spec.camera {
+                Some(sel) => {
+                    let s = self.selector(sel, &format!("{key}.camera"))?;
+                    let c = select_camera(&merged.cameras, &s)
+                        .map_err(|m| self.err(sel.span(), format!("{key}.camera"), m))?;
+                    vec![c.clone()]
+                }
+                None => merged.cameras,
+            };
+            included_cameras.extend(chosen);
+        }
+        let camera = match &file.camera {
+            Some(c) => self.camera(c)?,
+            None => match included_cameras.first() {
+                Some(c) => {
+                    notes.push(format!(
+                        "no [camera]: using the included file's camera{}",
+                        c.name
+                            .as_deref()
+                            .map(|n| format!(" \"{n}\""))
+                            .unwrap_or_default()
+                    ));
+                    if let (Some(aspect), None) = (c.aspect, &file.render.resolution) {
+                        settings.height =
+                            ((settings.width as f64 / aspect).round() as u32).clamp(1, MAX_SIDE);
+                    }
+                    c.camera
+                }
+                None => {
+                    notes.push("no [camera] and no included camera: using one that frames the scene's bounds".into());
+                    framing_camera(geometry_bounds(&geometry))
+                }
+            },
+        };
         Ok(LoadedScene {
             description: SceneDescription {
                 camera,
@@ -446,8 +563,88 @@ impl Builder<'_> {
             },
             settings,
             material_names,
-            notes: Vec::new(),
+            notes,
         })
+    }
+
+    /// An included file's error, wrapped so that it names the scene, the key and the file.
+    fn include_err(&self, path: Option<&Spanned<String>>, key: &str, e: LoadError) -> LoadError {
+        LoadError::new(
+            self.path,
+            path.and_then(|p| self.at(p.span())),
+            LoadErrorKind::Include {
+                key: key.into(),
+                source: Box::new(e),
+            },
+        )
+    }
+
+    fn selector(&self, s: &Spanned<SelectorSpec>, key: &str) -> Result<Selector, LoadError> {
+        match s.get_ref() {
+            SelectorSpec::Index(i) if *i >= 0 => Ok(Selector::Index(*i as usize)),
+            SelectorSpec::Index(i) => Err(self.err(
+                s.span(),
+                key,
+                format!("an index must not be negative, got {i}"),
+            )),
+            SelectorSpec::Name(n) => Ok(Selector::Name(n.clone())),
+        }
+    }
+
+    fn up_axis(&self, up: &Option<Spanned<String>>, key: &str) -> Result<UpAxis, LoadError> {
+        match up.as_ref().map(|u| (u.get_ref().as_str(), u.span())) {
+            None | Some(("y", _)) => Ok(UpAxis::Y),
+            Some(("z", _)) => Ok(UpAxis::Z),
+            Some((other, span)) => {
+                Err(self.err(span, key, format!("unknown up axis \"{other}\" (y, z)")))
+            }
+        }
+    }
+
+    /// Imports the file of a `[[mesh]] path = …`; returns it with its path and the override material.
+    #[allow(clippy::type_complexity)]
+    fn mesh_file(
+        &self,
+        spec: &Spanned<MeshSpec>,
+        key: &str,
+        names: &HashMap<String, u32>,
+    ) -> Result<(crate::import::Imported, (std::path::PathBuf, Option<u32>)), LoadError> {
+        let m = spec.get_ref();
+        let Some(path_spec) = &m.path else {
+            return Err(self.err(spec.span(), key, "needs `path`"));
+        };
+        for (present, name) in [
+            (m.vertices.is_some(), "vertices"),
+            (m.indices.is_some(), "indices"),
+            (m.normals.is_some(), "normals"),
+        ] {
+            if present {
+                return Err(self.err(
+                    spec.span(),
+                    format!("{key}.{name}"),
+                    "a mesh is either read from `path` or given inline, not both",
+                ));
+            }
+        }
+        let replace = m
+            .material
+            .as_ref()
+            .map(|v| self.material_id(names, v, &format!("{key}.material")))
+            .transpose()?;
+        let options = ImportOptions {
+            transform: Some(self.transform(&m.transform, &format!("{key}.transform"))?),
+            scene: m
+                .scene
+                .as_ref()
+                .map(|s| self.selector(s, &format!("{key}.scene")))
+                .transpose()?,
+            up: self.up_axis(&m.up, &format!("{key}.up"))?,
+            skip_materials: replace.is_some(),
+        };
+        let path = include::resolve(self.path, path_spec.get_ref());
+        let imported = include::import_file(&path, &options)
+            .map_err(|e| self.include_err(Some(path_spec), &format!("{key}.path"), e))?;
+        Ok((imported, (path, replace)))
     }
 
     fn camera(&self, spec: &Spanned<CameraSpec>) -> Result<Camera, LoadError> {
@@ -687,7 +884,20 @@ impl Builder<'_> {
             )?,
             specular_model,
             reflectivity,
-            reflection_tint: 0.0,
+            reflection_tint: match &m.reflection_tint {
+                None => 0.0,
+                Some(v) => {
+                    let t = self.number(v, &format!("{key}.reflection_tint"))?;
+                    if !(0.0..=1.0).contains(&t) {
+                        return Err(self.err(
+                            v.span(),
+                            format!("{key}.reflection_tint"),
+                            format!("must be in [0, 1], got {t}"),
+                        ));
+                    }
+                    t as f32
+                }
+            },
         })
     }
 
@@ -782,9 +992,27 @@ impl Builder<'_> {
         names: &HashMap<String, u32>,
     ) -> Result<Mesh, LoadError> {
         let m = spec.get_ref();
+        let missing = |name: &str| {
+            self.err(
+                spec.span(),
+                format!("{key}.{name}"),
+                format!("an inline mesh needs `{name}` (or give `path` to read a file)"),
+            )
+        };
+        let vertices = m.vertices.as_ref().ok_or_else(|| missing("vertices"))?;
+        let indices_spec = m.indices.as_ref().ok_or_else(|| missing("indices"))?;
+        let material_spec = m.material.as_ref().ok_or_else(|| missing("material"))?;
+        for (present, name) in [(m.up.is_some(), "up"), (m.scene.is_some(), "scene")] {
+            if present {
+                return Err(self.err(
+                    spec.span(),
+                    format!("{key}.{name}"),
+                    "only applies to a mesh read from `path`",
+                ));
+            }
+        }
         let transform = self.transform(&m.transform, &format!("{key}.transform"))?;
-        let positions: Vec<Vec3> = m
-            .vertices
+        let positions: Vec<Vec3> = vertices
             .get_ref()
             .iter()
             .map(|v| {
@@ -795,18 +1023,21 @@ impl Builder<'_> {
             })
             .collect();
         let vertex_count = positions.len() as i64;
-        let mut indices = Vec::with_capacity(m.indices.get_ref().len());
-        for (t, tri) in m.indices.get_ref().iter().enumerate() {
+        let mut indices = Vec::with_capacity(indices_spec.get_ref().len());
+        let flip = transform.to_world.matrix3.determinant() < 0.0;
+        for (t, tri) in indices_spec.get_ref().iter().enumerate() {
             if let Some(&bad) = tri.iter().find(|&&i| !(0..vertex_count).contains(&i)) {
                 return Err(self.err(
-                    m.indices.span(),
+                    indices_spec.span(),
                     format!("{key}.indices[{t}]"),
                     format!(
                         "vertex index {bad} is out of range (the mesh has {vertex_count} vertices)"
                     ),
                 ));
             }
-            indices.push(tri.map(|i| i as u32));
+            // A mirroring transform would turn the triangle's front face away: keep the winding's meaning.
+            let t = tri.map(|i| i as u32);
+            indices.push(if flip { [t[0], t[2], t[1]] } else { t });
         }
         let normals = m.normals.as_ref().map(|n| {
             n.get_ref()
@@ -818,7 +1049,7 @@ impl Builder<'_> {
                 })
                 .collect()
         });
-        let material = self.material_id(names, &m.material, &format!("{key}.material"))?;
+        let material = self.material_id(names, material_spec, &format!("{key}.material"))?;
         Mesh::new(positions, indices, normals, material)
             .map_err(|e| self.err(spec.span(), key, e.to_string()))
     }
@@ -839,7 +1070,67 @@ impl Builder<'_> {
             )),
             None => Ok(()),
         };
-        match l.kind.get_ref().as_str() {
+        let kind = l.kind.get_ref().as_str();
+        if kind != "spot" {
+            for (field, name) in [
+                (&l.inner_angle, "inner_angle"),
+                (&l.outer_angle, "outer_angle"),
+            ] {
+                if let Some(v) = field {
+                    return Err(self.err(
+                        v.span(),
+                        format!("{key}.{name}"),
+                        format!("a {kind} light has no {name} (only spot lights do)"),
+                    ));
+                }
+            }
+        }
+        match kind {
+            "spot" => {
+                let need = |name: &str| {
+                    self.err(
+                        l.kind.span(),
+                        format!("{key}.{name}"),
+                        format!("a spot light needs `{name}`"),
+                    )
+                };
+                let position = l.position.as_ref().ok_or_else(|| need("position"))?;
+                let position = self.vec3(position, &format!("{key}.position"))?;
+                let direction = l.direction.as_ref().ok_or_else(|| need("direction"))?;
+                let direction = self.unit(direction, &format!("{key}.direction"))?;
+                let angle = |v: &Option<Spanned<f64>>,
+                             name: &str,
+                             default: f64|
+                 -> Result<f64, LoadError> {
+                    let Some(v) = v else { return Ok(default) };
+                    let a = self.number(v, &format!("{key}.{name}"))?;
+                    if !(0.0..=180.0).contains(&a) {
+                        return Err(self.err(
+                            v.span(),
+                            format!("{key}.{name}"),
+                            format!("must be an angle in [0, 180] degrees, got {a}"),
+                        ));
+                    }
+                    Ok(a)
+                };
+                let inner = angle(&l.inner_angle, "inner_angle", 0.0)?;
+                let outer = angle(&l.outer_angle, "outer_angle", 45.0)?;
+                if inner > outer {
+                    let span = l.inner_angle.as_ref().map_or(l.kind.span(), |v| v.span());
+                    return Err(self.err(
+                        span,
+                        format!("{key}.inner_angle"),
+                        format!("must not exceed outer_angle ({outer}), got {inner}"),
+                    ));
+                }
+                Ok(Light::Spot {
+                    position,
+                    direction,
+                    intensity: color * intensity,
+                    cos_inner: inner.to_radians().cos(),
+                    cos_outer: outer.to_radians().cos(),
+                })
+            }
             "point" => {
                 unused(&l.direction, "direction", "point")?;
                 let p = l.position.as_ref().ok_or_else(|| {
@@ -871,7 +1162,7 @@ impl Builder<'_> {
             other => Err(self.err(
                 l.kind.span(),
                 format!("{key}.type"),
-                format!("unknown light type \"{other}\" (point, directional)"),
+                format!("unknown light type \"{other}\" (point, directional, spot)"),
             )),
         }
     }
@@ -1051,5 +1342,133 @@ direction = [0, 0, -1]
         )
         .unwrap_err();
         assert!(e.to_string().contains("version"));
+    }
+
+    fn temp_dir(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("quadray-native-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    const TRIANGLE_OBJ: &str = "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl blue\nf 1 2 3\n";
+
+    #[test]
+    fn mesh_files_resolve_against_the_scene_and_take_transforms_and_overrides() {
+        let dir = temp_dir("meshfile");
+        std::fs::create_dir_all(dir.join("models")).unwrap();
+        std::fs::write(dir.join("models/tri.obj"), TRIANGLE_OBJ).unwrap();
+        std::fs::write(dir.join("models/tri.mtl"), "newmtl blue\nKd 0 0 1\n").unwrap();
+        let text = format!(
+            "{MINIMAL}[[mesh]]\npath = \"models\\\\tri.obj\"\ntransform = {{ translate = [0, 0, 5] }}\n\
+             [[mesh]]\npath = \"models/tri.obj\"\nup = \"z\"\nmaterial = \"red\"\n"
+        );
+        let s = parse_scene(&text, &dir.join("scene.toml")).unwrap();
+        let g = &s.description.geometry;
+        assert_eq!(g.meshes.len(), 2);
+        // y-up file rotated to z-up, then moved up by 5: (0, 1, 0) lands at (0, 0, 6).
+        assert!(g.meshes[0].positions().contains(&Vec3::new(0.0, 0.0, 6.0)));
+        assert_eq!(s.material_names, ["red", "tri.obj:blue"]);
+        assert_eq!(g.meshes[0].material(), 1);
+        assert_eq!(
+            s.description.materials[1].texture,
+            Texture::Constant(Vec3::Z)
+        );
+        // The override takes the scene's material, and `up = "z"` keeps coordinates.
+        assert_eq!(g.meshes[1].material(), 0);
+        assert!(g.meshes[1].positions().contains(&Vec3::new(0.0, 1.0, 0.0)));
+        quadray::Scene::new(s.description).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn includes_bring_lights_and_camera_and_errors_name_both_files() {
+        let dir = temp_dir("include");
+        let inner = parse_scene(
+            "version = 1\n[camera]\nfrom = [0, -4, 1]\nto = [0, 0, 0]\n[render]\nresolution = [400, 200]\n\
+             [[material]]\nname = \"m\"\n[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n\
+             [[light]]\ntype = \"point\"\nposition = [0, 0, 3]\n",
+            Path::new("inner.toml"),
+        )
+        .unwrap();
+        crate::export::export_gltf(&inner, &dir.join("part.gltf")).unwrap();
+        let text = "version = 1\n[[material]]\nname = \"red\"\n\
+                    [[include]]\npath = \"part.gltf\"\ntransform = { translate = [10, 0, 0] }\n\
+                    [[sphere]]\ncenter = [0, 0, 0]\nradius = 0.5\nmaterial = \"red\"\n";
+        let s = parse_scene(text, &dir.join("scene.toml")).unwrap();
+        let g = &s.description.geometry;
+        assert_eq!(g.spheres.len(), 2);
+        assert!((g.spheres[1].center - DVec3::new(10.0, 0.0, 0.0)).length() < 1e-12);
+        assert_eq!(s.description.lights.len(), 1);
+        // No [camera]: the included one, moved with the include, and its aspect.
+        assert!((s.description.camera.from - DVec3::new(10.0, -4.0, 1.0)).length() < 1e-9);
+        assert_eq!((s.settings.width, s.settings.height), (640, 320));
+        assert!(
+            s.notes.iter().any(|n| n.contains("included file's camera")),
+            "{:?}",
+            s.notes
+        );
+        let no_lights = text.replace("[[sphere]]", "lights = false\n[[sphere]]");
+        let s = parse_scene(&no_lights, &dir.join("scene.toml")).unwrap();
+        assert!(s.description.lights.is_empty());
+        // A missing file: the scene, the line of `path`, and the file that is missing.
+        let e = parse_scene(
+            &text.replace("part.gltf", "gone.glb"),
+            &dir.join("scene.toml"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("scene.toml:5:8: `include[0].path`") && e.contains("gone.glb"),
+            "{e}"
+        );
+        let e = parse_scene(
+            "version = 1\n[[include]]\npath = \"part.gltf\"\ncamera = \"nope\"\n",
+            &dir.join("scene.toml"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("include[0].camera") && e.contains("no camera \"nope\""),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn spot_lights_and_mesh_form_errors() {
+        let s = parse(
+            "[[light]]\ntype = \"spot\"\nposition = [0, 0, 5]\ndirection = [0, 0, -1]\ninner_angle = 10\nouter_angle = 20\n",
+        )
+        .unwrap();
+        let Light::Spot {
+            cos_inner,
+            cos_outer,
+            ..
+        } = s.description.lights[0]
+        else {
+            panic!("not a spot light")
+        };
+        assert!((cos_inner - 10f64.to_radians().cos()).abs() < 1e-15);
+        assert!((cos_outer - 20f64.to_radians().cos()).abs() < 1e-15);
+        assert!(
+            error("[[light]]\ntype = \"spot\"\nposition = [0, 0, 5]\n")
+                .contains("needs `direction`")
+        );
+        assert!(error("[[light]]\ntype = \"spot\"\nposition = [0,0,5]\ndirection = [0,0,-1]\ninner_angle = 30\nouter_angle = 20\n").contains("must not exceed"));
+        assert!(
+            error("[[light]]\ntype = \"point\"\nposition = [0,0,5]\nouter_angle = 20\n")
+                .contains("only spot lights")
+        );
+        let e = error("[[mesh]]\npath = \"a.obj\"\nvertices = [[0,0,0]]\n");
+        assert!(e.contains("either read from `path` or given inline"), "{e}");
+        assert!(
+            error("[[mesh]]\nvertices = [[0,0,0]]\nindices = [[0,0,0]]\n")
+                .contains("needs `material`")
+        );
+        let e = error("[[mesh]]\npath = \"model.ply\"\n");
+        assert!(
+            e.contains("`mesh[0].path`") && e.contains("only .obj, .gltf and .glb"),
+            "{e}"
+        );
     }
 }
