@@ -1,0 +1,280 @@
+//! Malformed glTF and OBJ files written by the test: each must give a clear error naming the file
+//! and the problem (or, for a missing texture, a warning and the base colour), never a panic.
+
+use quadray_loader::{LoadErrorKind, load_any};
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("quadray-bad-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A valid one-triangle glTF whose buffer lives in `tri.bin`: 3 positions, 3 u16 indices.
+fn triangle() -> (Value, Vec<u8>) {
+    let mut bin = Vec::new();
+    for v in [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        for c in v {
+            bin.extend(c.to_le_bytes());
+        }
+    }
+    for i in [0u16, 1, 2] {
+        bin.extend(i.to_le_bytes());
+    }
+    bin.extend([0, 0]);
+    let gltf = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 6}
+        ],
+        "buffers": [{"uri": "tri.bin", "byteLength": 44}]
+    });
+    (gltf, bin)
+}
+
+/// Writes the glTF (and its bin) into a fresh folder; loads it; returns the error text.
+fn load(
+    name: &str,
+    gltf: &Value,
+    bin: Option<&[u8]>,
+) -> Result<quadray_loader::LoadedScene, String> {
+    let d = dir(name);
+    if let Some(bin) = bin {
+        std::fs::write(d.join("tri.bin"), bin).unwrap();
+    }
+    let path = d.join(format!("{name}.gltf"));
+    std::fs::write(&path, serde_json::to_vec(gltf).unwrap()).unwrap();
+    let r = load_any(&path).map_err(|e| e.to_string());
+    std::fs::remove_dir_all(&d).unwrap();
+    r
+}
+
+fn error(name: &str, edit: impl FnOnce(&mut Value, &mut Vec<u8>)) -> String {
+    let (mut gltf, mut bin) = triangle();
+    edit(&mut gltf, &mut bin);
+    match load(name, &gltf, Some(&bin)) {
+        Ok(_) => panic!("{name}: accepted"),
+        Err(e) => {
+            assert!(
+                e.contains(&format!("{name}.gltf")),
+                "the error does not name the file: {e}"
+            );
+            e
+        }
+    }
+}
+
+#[test]
+fn the_valid_triangle_loads() {
+    let (gltf, bin) = triangle();
+    let s = load("valid", &gltf, Some(&bin)).unwrap();
+    assert_eq!(s.description.geometry.meshes[0].triangle_count(), 1);
+}
+
+#[test]
+fn missing_or_short_buffers() {
+    let (gltf, _) = triangle();
+    let e = load("nobin", &gltf, None).unwrap_err();
+    assert!(
+        e.contains("nobin.gltf") && e.contains("cannot read buffer 0") && e.contains("tri.bin"),
+        "{e}"
+    );
+    let e = error("shortbin", |_, bin| bin.truncate(20));
+    assert!(e.contains("byteLength is 44 but only 20 bytes"), "{e}");
+}
+
+#[test]
+fn accessors_out_of_range_mistyped_or_absurd() {
+    let e = error("count", |g, _| g["accessors"][0]["count"] = json!(4));
+    assert!(
+        e.contains("meshes[0].primitives[0]") && e.contains("run past the end of buffer view 0"),
+        "{e}"
+    );
+    let e = error("absurd", |g, _| {
+        g["accessors"][0]["count"] = json!(4_000_000_000u64)
+    });
+    assert!(e.contains("4000000000 elements"), "{e}");
+    let e = error("zero", |g, _| g["accessors"][0]["count"] = json!(0));
+    assert!(e.contains("0 elements"), "{e}");
+    let e = error("offset", |g, _| {
+        g["bufferViews"][1]["byteOffset"] = json!(40)
+    });
+    assert!(e.contains("past the end of buffer 0"), "{e}");
+    let e = error("type", |g, _| g["accessors"][0]["type"] = json!("VEC2"));
+    assert!(
+        e.contains("is VEC2 of FLOAT, expected VEC3 of FLOAT"),
+        "{e}"
+    );
+    let e = error("stride", |g, _| {
+        g["bufferViews"][0]["byteStride"] = json!(8)
+    });
+    assert!(
+        e.contains("byteStride 8 is smaller than one element (12 bytes)"),
+        "{e}"
+    );
+    let e = error("index", |g, bin| {
+        bin[38] = 9;
+        let _ = g;
+    });
+    assert!(
+        e.contains("vertex index 9, but the primitive has 3 vertices"),
+        "{e}"
+    );
+    let e = error("position", |g, _| {
+        g["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(7)
+    });
+    assert!(
+        e.contains("accessor 7 is out of range (the file has 2 accessors)"),
+        "{e}"
+    );
+    let e = error("sparse", |g, bin| {
+        // One sparse substitute whose index (the first u16 of view 1, set to 5) is past the end.
+        g["accessors"][0]["sparse"] = json!({"count": 1,
+            "indices": {"bufferView": 1, "componentType": 5123},
+            "values": {"bufferView": 0}});
+        bin[36] = 5;
+    });
+    assert!(e.contains("sparse index 5 is out of range"), "{e}");
+}
+
+#[test]
+fn graph_and_transform_problems() {
+    let e = error("cycle", |g, _| {
+        g["nodes"] = json!([{"mesh": 0, "children": [1]}, {"children": [0]}]);
+    });
+    assert!(e.contains("deeper than 1024 levels"), "{e}");
+    let e = error("matrix", |g, _| {
+        g["nodes"][0]["matrix"] = json!([1, 0, 0, 1, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
+    });
+    assert!(e.contains("nodes[0]") && e.contains("not affine"), "{e}");
+    let e = error("quat", |g, _| {
+        g["nodes"][0]["rotation"] = json!([0, 0, 0, 0])
+    });
+    assert!(e.contains("not a unit quaternion"), "{e}");
+    let e = error("mode", |g, _| {
+        g["meshes"][0]["primitives"][0]["mode"] = json!(9)
+    });
+    assert!(e.contains("mode"), "{e}");
+}
+
+#[test]
+fn unsupported_and_old_files() {
+    let e = error("draco", |g, _| {
+        g["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
+        g["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    });
+    assert!(
+        e.contains("requires the glTF extension KHR_draco_mesh_compression"),
+        "{e}"
+    );
+    let e = error("v1", |g, _| g["asset"]["version"] = json!("1.0"));
+    assert!(e.contains("glTF 1.0") && e.contains("2.0 only"), "{e}");
+    let e = error("json", |g, _| *g = json!("not an object"));
+    assert!(e.contains("asset.version"), "{e}");
+}
+
+#[test]
+fn a_missing_texture_warns_and_keeps_the_base_colour() {
+    let (mut gltf, bin) = triangle();
+    gltf["materials"] = json!([{"pbrMetallicRoughness": {
+        "baseColorFactor": [0.2, 0.4, 0.6, 1.0], "baseColorTexture": {"index": 0}}}]);
+    gltf["textures"] = json!([{"source": 0}]);
+    gltf["images"] = json!([{"uri": "missing.png"}]);
+    gltf["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = load("texture", &gltf, Some(&bin)).unwrap();
+    assert!(
+        s.notes
+            .iter()
+            .any(|n| n.contains("missing.png") && n.contains("using the base colour")),
+        "{:?}",
+        s.notes
+    );
+    assert_eq!(
+        s.description.materials[0].texture,
+        quadray::Texture::Constant(glam::Vec3::new(0.2, 0.4, 0.6))
+    );
+}
+
+#[test]
+fn garbage_never_panics() {
+    let d = dir("garbage");
+    // Truncations of a valid GLB at every length, and single-byte corruptions of its header.
+    let (gltf, bin) = triangle();
+    let mut json_bytes = serde_json::to_vec(&{
+        let mut g = gltf.clone();
+        g["buffers"][0] = json!({"byteLength": 44});
+        g
+    })
+    .unwrap();
+    json_bytes.resize(json_bytes.len().next_multiple_of(4), b' ');
+    let mut glb = b"glTF".to_vec();
+    let total = 12 + 8 + json_bytes.len() + 8 + bin.len();
+    glb.extend(2u32.to_le_bytes());
+    glb.extend((total as u32).to_le_bytes());
+    glb.extend((json_bytes.len() as u32).to_le_bytes());
+    glb.extend(b"JSON");
+    glb.extend(&json_bytes);
+    glb.extend((bin.len() as u32).to_le_bytes());
+    glb.extend(b"BIN\0");
+    glb.extend(&bin);
+    let path = d.join("t.glb");
+    std::fs::write(&path, &glb).unwrap();
+    load_any(&path).expect("the valid GLB loads");
+    for len in 0..glb.len() {
+        std::fs::write(&path, &glb[..len]).unwrap();
+        if let Err(e) = load_any(&path) {
+            assert_eq!(e.path, path);
+        }
+    }
+    for at in 0..24 {
+        let mut bad = glb.clone();
+        bad[at] ^= 0xff;
+        std::fs::write(&path, &bad).unwrap();
+        let _ = load_any(&path);
+    }
+    // OBJ oddities.
+    let obj = d.join("t.obj");
+    for text in [
+        "v 1 2\n",
+        "f 1 2 3\n",
+        "v 0 0 0\nf 1 1 1 1\n",
+        "vt 0\n",
+        "mtllib\n",
+        "usemtl\n",
+        "f\n",
+    ] {
+        std::fs::write(&obj, text).unwrap();
+        if let Err(e) = load_any(&obj) {
+            assert_eq!(e.path, obj, "{text:?}: {e}");
+        }
+    }
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap();
+    let e = load_any(&obj).unwrap_err();
+    assert!(matches!(e.kind, LoadErrorKind::Syntax(_)));
+    assert!(
+        e.to_string()
+            .contains("t.obj:4:1: face index 4 is out of range"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn unknown_file_types_are_refused() {
+    let e = load_any(Path::new("model.ply")).unwrap_err().to_string();
+    assert!(
+        e.contains("model.ply") && e.contains(".toml, .obj, .gltf or .glb"),
+        "{e}"
+    );
+}
