@@ -15,7 +15,10 @@ use std::path::Path;
 
 /// Loads any scene file quadray reads, chosen by its extension (`.toml`: the native format).
 pub fn load_any(path: &Path) -> Result<LoadedScene, LoadError> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("toml") => load_scene(path),
         _ => Err(LoadError::new(

@@ -438,7 +438,8 @@ impl Quadric {
         let (t_in, t_out) = slab_interval(o, d, -DVec3::ONE, DVec3::ONE);
         let lo = t_in.max(0.0);
         let hi = t_out.min(t_max);
-        if !(lo <= hi) {
+        // Also rejects NaN bounds (a zero direction).
+        if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
             return None;
         }
         let ad = self.a * d;
