@@ -50,17 +50,21 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let built_at = Instant::now();
 
     let bar = RowBar::new(settings.height, args.quiet);
+    let cpu_start = cpu_time::ProcessTime::try_now().ok();
     let rendered = pool.install(|| quadray::render(&scene, &settings, &bar))?;
     bar.finish();
     let render_time = built_at.elapsed();
+    let render_cpu = cpu_start.and_then(|t| t.try_elapsed().ok());
     write_film(&rendered.film, &args.output)?;
 
     if !args.quiet {
         let c = rendered.counts;
         let secs = render_time.as_secs_f64();
         if args.stats {
+            let cpu =
+                render_cpu.map_or("unknown".to_string(), |d| format!("{:.3}", d.as_secs_f64()));
             eprintln!(
-                "load {:.3} s, BVH build {:.3} s ({} bounded primitives), threads {}",
+                "load {:.3} s, BVH build {:.3} s ({} bounded primitives), threads {}, render CPU {cpu} s",
                 (loaded_at - start).as_secs_f64(),
                 (built_at - loaded_at).as_secs_f64(),
                 scene.accel().bounded_count(),

@@ -82,7 +82,25 @@ impl Accel {
             })
             .collect();
         let mut build_time = Duration::ZERO;
-        let bvh = build_bvh2(&aabbs, BvhBuildParams::medium_build(), &mut build_time);
+        // obvhs' collapse treats every primitive as equally costly. An f64 quadric or sphere test
+        // costs several triangle tests, so analytic-dominated scenes keep one primitive per leaf
+        // (measured: 6% faster on scenes/reflective.toml than leaves of up to 8), while
+        // triangle-dominated scenes keep obvhs' default leaves.
+        let triangles = prims
+            .iter()
+            .filter(|p| matches!(p, PrimRef::Triangle { .. }))
+            .count();
+        let analytic = prims.len() - triangles;
+        let leaf = if triangles > 4 * analytic {
+            BvhBuildParams::medium_build().max_prims_per_leaf
+        } else {
+            1
+        };
+        let params = BvhBuildParams {
+            max_prims_per_leaf: leaf,
+            ..BvhBuildParams::medium_build()
+        };
+        let bvh = build_bvh2(&aabbs, params, &mut build_time);
         let prims = bvh
             .primitive_indices
             .iter()
