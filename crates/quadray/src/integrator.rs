@@ -4,6 +4,7 @@ use crate::material::SpecularModel;
 use crate::math::{Ray, offset_origin};
 use crate::scene::Scene;
 use crate::shape::{PrimRef, SurfaceHit};
+use crate::texture::Texture;
 use glam::{DVec3, Vec3};
 use std::ops::AddAssign;
 
@@ -63,7 +64,8 @@ impl Whitted {
         let (t, prim) = scene
             .accel()
             .closest(&scene.geometry, ray, f64::INFINITY, from)?;
-        let (geometry, material) = scene.geometry.surface(prim, ray, t);
+        let geometry = scene.geometry.surface(prim, ray, t);
+        let material = scene.geometry.material(prim);
         Some(SurfaceHit {
             t,
             prim,
@@ -87,7 +89,10 @@ impl Whitted {
         };
         let m = &scene.materials[hit.material as usize];
         let g = &hit.geometry;
-        let base = m.texture.eval(&g.texture);
+        let base = match &m.texture {
+            Texture::Constant(c) => *c,
+            textured => textured.eval(&scene.geometry.texture_point(hit.prim, g.point)),
+        };
         let view = -ray.dir.normalize();
         // Two-sided shading: face both normals towards the viewer.
         let facing = if g.geometric_normal.dot(view) >= 0.0 {

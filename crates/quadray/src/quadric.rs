@@ -469,22 +469,27 @@ impl Quadric {
         let half_grad = self.a * u + self.b;
         let geometric_normal = normal_or(self.local.normal_to_world * half_grad, -ray.dir);
         let error = self.point_error(point, u, half_grad);
-        let object = self.transform.from_world.transform_point3(point);
+        SurfaceGeometry {
+            point,
+            geometric_normal,
+            shading_normal: geometric_normal,
+            error,
+        }
+    }
+
+    /// Texture coordinates of a surface point: the point in the object frame, and its height
+    /// within the visible part of the surface (the texture ramp's extent).
+    pub fn texture_point(&self, point: DVec3) -> TexturePoint {
+        let u = self.local.from_world.transform_point3(point);
         let (lo, hi) = self.height;
         let height = if hi > lo {
             ((u.z - lo) / (hi - lo)) as f32
         } else {
             0.5
         };
-        SurfaceGeometry {
-            point,
-            geometric_normal,
-            shading_normal: geometric_normal,
-            error,
-            texture: TexturePoint {
-                local: object,
-                height,
-            },
+        TexturePoint {
+            local: self.transform.from_world.transform_point3(point),
+            height,
         }
     }
 

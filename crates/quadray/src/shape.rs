@@ -4,7 +4,6 @@
 //! [`SurfaceGeometry`] once, for the nearest hit (pbrt-v4's `BasicIntersect` / `InteractionFromIntersection`).
 
 use crate::material::MaterialId;
-use crate::texture::TexturePoint;
 use glam::DVec3;
 
 /// One primitive of a scene: what the BVH leaves and the plane list refer to.
@@ -36,8 +35,6 @@ pub struct SurfaceGeometry {
     pub shading_normal: DVec3,
     /// Bound on the distance between `point` and the true surface: spawned rays start this far off it.
     pub error: f64,
-    /// Texture lookup coordinates.
-    pub texture: TexturePoint,
 }
 
 /// A complete hit: which primitive, where along the ray, and its surface geometry.
