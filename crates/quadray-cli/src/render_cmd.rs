@@ -4,7 +4,7 @@ use crate::args::RenderArgs;
 use crate::output::{check_writable, write_film};
 use crate::progress::RowBar;
 use anyhow::{Context, Result};
-use quadray::{RenderSettings, Scene, Whitted};
+use quadray::Scene;
 use std::time::Instant;
 
 /// Runs the render subcommand.
@@ -23,15 +23,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     s.spp = args.spp.unwrap_or(s.spp);
     s.max_depth = args.max_depth.unwrap_or(s.max_depth);
-    let settings = RenderSettings {
-        width: s.width,
-        height: s.height,
-        spp: s.spp,
-        whitted: Whitted {
-            max_depth: s.max_depth,
-            ..Whitted::default()
-        },
-    };
+    let settings = s.render_settings();
     settings.validate()?;
     let loaded_at = Instant::now();
 
