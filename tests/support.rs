@@ -1,6 +1,6 @@
 //! Shared helpers for the end-to-end tests: locating the repository's scenes and rendering them.
 
-use quadray::{NoProgress, RenderSettings, Rendered, Scene, Whitted};
+use quadray::{NoProgress, RenderSettings, Rendered, Scene};
 use std::path::{Path, PathBuf};
 
 /// The repository root.
@@ -19,16 +19,7 @@ pub fn scene_path(name: &str) -> PathBuf {
 /// Loads a bundled scene and its settings.
 pub fn load(name: &str) -> (Scene, RenderSettings) {
     let loaded = quadray_loader::load_scene(&scene_path(name)).expect("bundled scene loads");
-    let s = loaded.settings;
-    let settings = RenderSettings {
-        width: s.width,
-        height: s.height,
-        spp: s.spp,
-        whitted: Whitted {
-            max_depth: s.max_depth,
-            ..Whitted::default()
-        },
-    };
+    let settings = loaded.settings.render_settings();
     (
         Scene::new(loaded.description).expect("bundled scene is valid"),
         settings,
