@@ -13,3 +13,4 @@ pub mod hardcases;
 pub mod metrics;
 pub mod oracle;
 pub mod variants;
+pub mod report;

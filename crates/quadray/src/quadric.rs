@@ -16,7 +16,7 @@
 //! everywhere the surface is smooth, including where it is not a graph z = f(x, y).
 
 use crate::material::MaterialId;
-use crate::math::{Ray, Transform, gamma, slab_interval, solve_quadratic};
+use crate::math::{Ray, Transform, discriminant, gamma, slab_interval, solve_quadratic};
 use crate::shape::{SurfaceGeometry, normal_or};
 use crate::texture::TexturePoint;
 use glam::{DAffine3, DMat3, DVec3};
@@ -468,6 +468,12 @@ impl Quadric {
     ///
     /// `from_self` marks a ray spawned on this quadric: its origin is on the surface, so γ = 0 and
     /// the roots are 0 and −2β/a; the second is a genuine re-hit (a concave mirror) and is kept.
+    ///
+    /// The slab test against the box comes first, so rays that miss the box never reach the
+    /// quadratic, and the accepted roots are exactly those in the closed interval [t_in, t_out]. The
+    /// origin then moves to the box entry, so a far origin leaves no cancellation in γ, and near
+    /// tangency (β² ≈ aγ) once more to the vertex s = −β/a of g, where β ≈ 0 and f is as small as it
+    /// gets along the line, so Δ ≈ −aγ carries no cancellation (quadric-numerics.md §2, Wald).
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
         let Ray { origin: o, dir: d } = self.local_ray(ray);
@@ -489,9 +495,6 @@ impl Quadric {
         let mut o = o + d * lo;
         let mut beta = ad.dot(o) + self.b.dot(d);
         let mut gamma_ = self.eval_local(o);
-        // Near tangency β² ≈ aγ, and γ's rounding error (relative to f's magnitude at o) can swamp
-        // Δ. Move once more, towards the vertex s = −β/a of g (kept inside the box), where β ≈ 0 and
-        // f is as small as it gets along the line, so Δ ≈ −aγ carries no cancellation (§5, Wald).
         let (bb, ag) = (beta * beta, a * gamma_);
         if (bb - ag).abs() * 1024.0 < bb + ag.abs() {
             let s = (-beta / a).clamp(0.0, hi - lo);
@@ -502,12 +505,22 @@ impl Quadric {
                 gamma_ = self.eval_local(o);
             }
         }
-        let roots = solve_quadratic(a, beta, gamma_);
-        roots
-            .as_slice()
-            .iter()
-            .map(|&s| base + s)
-            .find(|&t| t >= lo && t > 0.0 && t <= hi)
+        // solve_quadratic's sign-aware roots, inlined without its bookkeeping: a non-finite root
+        // (a = 0 gives q/a = ±∞, a double zero gives NaN) fails the interval test by itself.
+        let disc = discriminant(a, beta, gamma_);
+        if !(disc >= 0.0) {
+            return None;
+        }
+        let q = -(beta + disc.sqrt().copysign(beta));
+        let (r0, r1) = (base + q / a, base + gamma_ / q);
+        let (near, far) = if r0 <= r1 { (r0, r1) } else { (r1, r0) };
+        if near >= lo && near > 0.0 && near <= hi {
+            Some(near)
+        } else if far >= lo && far > 0.0 && far <= hi {
+            Some(far)
+        } else {
+            None
+        }
     }
 
     /// Surface geometry at parameter `t` of `ray`.
