@@ -611,22 +611,22 @@ pub fn scene(size_: SuiteSize, s: f64, shift: DVec3, name: &'static str) -> Fami
     }
 }
 
-/// Families 3–4 from production hits of `base`: for each of `hits` hit points, `dirs` rays leaving
-/// the surface in uniformly random directions (either side), offset by the hit's error bound and
-/// flagged as spawned (so the concave re-hits of family 4 are included).
+/// Families 3–4 from production hits of `base`: for each of `hits` hit points per quadric, `dirs`
+/// rays leaving the surface in uniformly random directions (either side), offset by the hit's error
+/// bound and flagged as spawned (so the concave re-hits of family 4 are included).
 pub fn spawned(base: &Family, hits: usize, dirs: usize, seed: u64) -> Family {
     let mut rng = StdRng::seed_from_u64(seed);
     let mut cases = Vec::new();
-    let mut found = 0;
+    let mut found = vec![0usize; base.quadrics.len()];
     for c in &base.cases {
-        if found == hits {
-            break;
+        if found[c.quadric] == hits {
+            continue;
         }
         let q = &base.quadrics[c.quadric];
         let Some(t) = q.intersect(&c.ray, c.t_max, c.from_self) else {
             continue;
         };
-        found += 1;
+        found[c.quadric] += 1;
         let g = q.surface(&c.ray, t);
         for _ in 0..dirs {
             let w = unit(&mut rng);

@@ -33,11 +33,11 @@ use twofloat::TwoFloat;
 /// Bits carried by the exact tier's divisions and square roots.
 pub const EXACT_BITS: u64 = 320;
 
-/// Relative ambiguity margin δ: a case is ambiguous when its margin is below δ·max(1, |oₗ|).
+/// Relative ambiguity margin δ: a case is ambiguous when its margin is below δ·max(1, |L||o − T|).
 ///
-/// |oₗ| is the ray origin's distance from the clip-box centre in local units; an f64 intersector
-/// cannot know the ray better than u·|oₗ| once it has moved it into the local frame (u = 2⁻⁵³), and
-/// 2⁻⁴³ ≈ 1.1e-13 leaves a factor 1024 of room above that.
+/// |L||o − T| (local units, L the world-to-local map taken entry-wise in absolute value) bounds the
+/// rounding of any f64 map of the ray origin into the local frame: an f64 intersector cannot know
+/// the ray better than u·|L||o − T| (u = 2⁻⁵³), and 2⁻⁴³ ≈ 1.1e-13 leaves a factor 1024 above that.
 pub const DELTA_REL: f64 = 1.1368683772161603e-13;
 
 /// The arithmetic the oracle needs: exact ring operations (or as good as the tier allows), and
@@ -279,6 +279,11 @@ pub struct Prepared<N: Field> {
     half: DVec3,
     origin_local: f64,
     dir_local: f64,
+    /// |(|L|·|o − T|)| and |(|L|·|d|)| with L = H⁻¹M⁻¹ the world-to-local map taken entry-wise in
+    /// absolute value: the scale of the rounding error of any f64 map of the ray into the local
+    /// frame (larger than |oₗ| when the placement is anisotropic and the origin far off-axis).
+    origin_scale: f64,
+    dir_scale: f64,
 }
 
 /// One root of the exact quadratic and what the oracle decided about it.
@@ -305,7 +310,7 @@ pub struct Reference {
     pub margin: f64,
     /// The silhouette part of `margin` (local units).
     pub silhouette: f64,
-    /// The ambiguity threshold δ·max(1, |oₗ|) of this case (local units).
+    /// The ambiguity threshold δ·max(1, |L||o − T|) of this case (local units).
     pub delta: f64,
     /// The line lies on the surface (a' = β' = γ' = 0): every answer is acceptable.
     pub degenerate_line: bool,
@@ -440,7 +445,17 @@ impl<N: Field> Prepared<N> {
         let to_vec = |x: &[N; 3]| DVec3::new(x[0].to_f64(), x[1].to_f64(), x[2].to_f64());
         let origin_obj = to_vec(&p) / det_f;
         let dir_obj = to_vec(&v) / det_f;
+        let lin = (DMat3::from_diagonal(half.recip()) * m.inverse()).transpose();
+        let abs_rows = [lin.x_axis.abs(), lin.y_axis.abs(), lin.z_axis.abs()];
+        let mag = |v: DVec3| {
+            let v = v.abs();
+            DVec3::new(abs_rows[0].dot(v), abs_rows[1].dot(v), abs_rows[2].dot(v)).length()
+        };
+        let origin_scale = mag(ray.origin - t);
+        let dir_scale = mag(ray.dir);
         Prepared {
+            origin_scale,
+            dir_scale,
             a,
             beta,
             gamma,
@@ -590,16 +605,18 @@ impl<N: Field> Prepared<N> {
         self.residual(0.0)
     }
 
-    /// Condition number κ of root t*: ((|oₗ| + |t*·dₗ|)·|∇ᵤf(p*)| + M(p*)) / (|t*|·|g'(t*)|), at least 1.
+    /// Condition number κ of root t*: ((|L||o − T| + |t*|·|L||d|)·|∇ᵤf(p*)| + M(p*)) / (|t*|·|g'(t*)|),
+    /// at least 1 (|L| the entry-wise absolute world-to-local map, see `origin_scale`).
     ///
-    /// g(t) = f(X(t)); an intersector that moves the ray by u·|oₗ| (local units) and evaluates f with
-    /// error u·M returns a root off by about u·((|oₗ| + |t·dₗ|)|∇f| + M)/|g'|: κ is that over u·|t*|.
+    /// g(t) = f(X(t)); an intersector that maps the ray into the local frame with error
+    /// u·(|L||o − T| + t·|L||d|) (local units) and evaluates f with error u·M returns a root off by
+    /// about u·((|L||o − T| + t·|L||d|)·|∇f| + M)/|g'|: κ is that over u·|t*|.
     pub fn condition(&self, t: &N) -> f64 {
         let x = self.point(t);
         let grad = self.local_gradient(x).length();
         let slope = (self.a.mul(t).add(&self.beta).to_f64() * 2.0 / (self.det_f * self.det_f)).abs();
         let tf = t.to_f64().abs();
-        let num = (self.origin_local + tf * self.dir_local) * grad + self.local_magnitude(x);
+        let num = (self.origin_scale + tf * self.dir_scale) * grad + self.local_magnitude(x);
         (num / (tf * slope)).max(1.0)
     }
 
@@ -639,7 +656,7 @@ impl<N: Field> Prepared<N> {
 
     /// The oracle's verdict.
     pub fn reference(&self) -> Reference {
-        let delta = DELTA_REL * self.origin_local.max(1.0);
+        let delta = DELTA_REL * self.origin_scale.max(1.0);
         let Some(roots) = self.roots() else {
             return Reference {
                 roots: vec![],
@@ -691,9 +708,12 @@ pub fn double_double(q: &Quadric, ray: &Ray, t_max: f64) -> Reference {
 }
 
 /// Whether a double-double verdict can be trusted: the discriminant kept at least 2⁻⁶⁰ of its terms
-/// (so ≥ 40 of double-double's 106 bits survive) and no decision is within 1e-9 local units.
+/// (so ≥ 40 of double-double's 106 bits survive for its sign) and no decision is within
+/// 1e-18·max(1, |oₗ|) local units (double-double carries the line to about 1e-30·|oₗ|).
 pub fn double_double_is_reliable(r: &Reference) -> bool {
-    !r.degenerate_line && r.cancellation >= 2f64.powi(-60) && r.margin > 1e-9
+    !r.degenerate_line
+        && r.cancellation >= 2f64.powi(-60)
+        && r.margin > 1e-18 * r.origin_local.max(1.0)
 }
 
 /// The double-double verdict, replaced by the exact one where it is not reliable.

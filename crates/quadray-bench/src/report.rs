@@ -16,7 +16,7 @@ pub struct Settings {
     pub size: SuiteSize,
     /// Timed runs per variant and family (the median is reported).
     pub runs: usize,
-    /// Hit points per family from which rays are spawned for the acne protocol.
+    /// Hit points per quadric of each family from which rays are spawned for the acne protocol.
     pub acne_hits: usize,
     /// Rays spawned per hit point (pbrt's protocol uses 10⁴).
     pub acne_dirs: usize,
@@ -27,7 +27,7 @@ impl Default for Settings {
         Settings {
             size: SuiteSize::REPORT,
             runs: 7,
-            acne_hits: 4,
+            acne_hits: 1,
             acne_dirs: 10_000,
         }
     }
