@@ -269,7 +269,10 @@ pub fn asymptote(size_: SuiteSize) -> Family {
         (QuadricKind::Hyperboloid1, DVec3::new(0.0, 1.0, 1.0)),
         (QuadricKind::Hyperboloid2, DVec3::new(1.0, 0.0, -1.0)),
         (QuadricKind::HyperbolicCylinder, DVec3::new(1.0, 1.0, 0.0)),
-        (QuadricKind::HyperbolicParaboloid, DVec3::new(1.0, -1.0, 0.0)),
+        (
+            QuadricKind::HyperbolicParaboloid,
+            DVec3::new(1.0, -1.0, 0.0),
+        ),
     ];
     // Unit parameters make x² − z² etc. vanish exactly along (1, 0, 1).
     let quadrics: Vec<Quadric> = kinds
@@ -502,8 +505,7 @@ pub fn clip_face(size_: SuiteSize) -> Family {
             let mut w = unit(&mut rng);
             w[axis] = 0.0;
             let (a, b, _) = k.to_matrix_form();
-            let roots =
-                quadray::math::solve_quadratic(w.dot(a * w), w.dot(a * p + b), k.eval(p));
+            let roots = quadray::math::solve_quadratic(w.dot(a * w), w.dot(a * p + b), k.eval(p));
             let Some(&s) = roots.as_slice().first() else {
                 continue;
             };
@@ -546,7 +548,9 @@ pub fn waist(size_: SuiteSize) -> Family {
         })
         .collect();
     let per = size_.rays.div_ceil(2).max(1);
-    let cases = shoot(&quadrics, &mut rng, per, |q, rng| centre(q) + unit(rng) * 4.0);
+    let cases = shoot(&quadrics, &mut rng, per, |q, rng| {
+        centre(q) + unit(rng) * 4.0
+    });
     Family {
         name: "waist",
         about: "§4.14: hyperboloid waist 1 → 1e-14 → 0 (the cone), all through one sweep of rays",

@@ -12,5 +12,5 @@
 pub mod hardcases;
 pub mod metrics;
 pub mod oracle;
-pub mod variants;
 pub mod report;
+pub mod variants;

@@ -158,7 +158,10 @@ impl Field for Dyadic {
     }
 
     fn sqrt(&self) -> Self {
-        assert!(!self.m.is_negative(), "oracle square root of a negative number");
+        assert!(
+            !self.m.is_negative(),
+            "oracle square root of a negative number"
+        );
         if self.m.is_zero() {
             return self.clone();
         }
@@ -191,7 +194,9 @@ impl Field for Dyadic {
         // Keep the top 64 bits (truncated), then one rounding to f64: within one ulp.
         let bits = self.m.bits();
         let drop = bits.saturating_sub(64);
-        let top = (self.m.abs() >> (drop as usize)).to_u64().unwrap_or(u64::MAX) as f64;
+        let top = (self.m.abs() >> (drop as usize))
+            .to_u64()
+            .unwrap_or(u64::MAX) as f64;
         let v = pow2(top, self.e + drop as i64);
         if self.m.is_negative() { -v } else { v }
     }
@@ -349,9 +354,8 @@ impl Reference {
             return true;
         }
         let limit = self.delta + 4.0 * self.origin_distance;
-        let known = (0..self.roots.len()).min_by(|&i, &j| {
-            self.roots[i].t.abs().total_cmp(&self.roots[j].t.abs())
-        });
+        let known = (0..self.roots.len())
+            .min_by(|&i, &j| self.roots[i].t.abs().total_cmp(&self.roots[j].t.abs()));
         let considered = self.hit.map_or(self.roots.len(), |h| h + 1);
         let roots = self.roots[..considered]
             .iter()
@@ -579,7 +583,7 @@ impl<N: Field> Prepared<N> {
             return f64::INFINITY;
         }
         let (t_in, t_out) = self.box_interval();
-        if !(t_in <= t_out) {
+        if t_in.is_nan() || t_out.is_nan() || t_in > t_out {
             return f64::INFINITY;
         }
         let vertex = self.beta.neg().div(&self.a).to_f64().clamp(t_in, t_out);
@@ -614,7 +618,8 @@ impl<N: Field> Prepared<N> {
     pub fn condition(&self, t: &N) -> f64 {
         let x = self.point(t);
         let grad = self.local_gradient(x).length();
-        let slope = (self.a.mul(t).add(&self.beta).to_f64() * 2.0 / (self.det_f * self.det_f)).abs();
+        let slope =
+            (self.a.mul(t).add(&self.beta).to_f64() * 2.0 / (self.det_f * self.det_f)).abs();
         let tf = t.to_f64().abs();
         let num = (self.origin_scale + tf * self.dir_scale) * grad + self.local_magnitude(x);
         (num / (tf * slope)).max(1.0)

@@ -84,7 +84,13 @@ impl VariantQuadric {
     /// Nearest hit in (0, `t_max`] by `variant`; `from_self` is honoured only by variants that know
     /// spawned rays ([`Variant::knows_spawned_rays`]).
     #[inline]
-    pub fn intersect(&self, variant: Variant, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
+    pub fn intersect(
+        &self,
+        variant: Variant,
+        ray: &Ray,
+        t_max: f64,
+        from_self: bool,
+    ) -> Option<f64> {
         match variant {
             Variant::NaiveF32 => self.naive_f32(ray, t_max),
             Variant::NaiveF64 => self.naive_f64(ray, t_max),
@@ -166,7 +172,7 @@ impl VariantQuadric {
         let (t_in, t_out) = slab_interval(o, d, -DVec3::ONE, DVec3::ONE);
         let lo = t_in.max(0.0);
         let hi = t_out.min(t_max);
-        if !(lo <= hi) {
+        if lo.is_nan() || hi.is_nan() || lo > hi {
             return None;
         }
         let ad = self.a * d;

@@ -5,8 +5,8 @@
 use glam::DVec3;
 use quadray::math::offset_origin;
 use quadray::{
-    ClipBox, Coefficients, Plane, Quadric, QuadricClass, QuadricError, QuadricKind,
-    QuadricSurface, Ray, Transform,
+    ClipBox, Coefficients, Plane, Quadric, QuadricClass, QuadricError, QuadricKind, QuadricSurface,
+    Ray, Transform,
 };
 use quadray_bench::hardcases::{self, Family, SuiteSize};
 use quadray_bench::metrics::{self, K_BOUND, Tally, Tier, U};
@@ -245,14 +245,22 @@ fn degenerate_inputs_are_classified_at_load() {
     let z = 0.0;
     for s in [1e-6, 1.0, 1e6] {
         let e = |class| Err(QuadricError::Degenerate(class));
-        assert_eq!(general([1.0, z, z, z, z, z, z, z, z, z], s), e(QuadricClass::DoublePlane));
-        assert_eq!(general([1.0, 1.0, 1.0, z, z, z, z, z, z, 1.0], s), e(QuadricClass::Empty));
+        assert_eq!(
+            general([1.0, z, z, z, z, z, z, z, z, z], s),
+            e(QuadricClass::DoublePlane)
+        );
+        assert_eq!(
+            general([1.0, 1.0, 1.0, z, z, z, z, z, z, 1.0], s),
+            e(QuadricClass::Empty)
+        );
         assert_eq!(general([z; 10], s), e(QuadricClass::AllZero));
         let pair = general([1.0, z, z, z, z, z, z, z, z, -1.0], s).unwrap();
         assert_eq!(pair.class(), QuadricClass::ParallelPlanes);
         // x² − 1 = 0 renders as its two planes: a ray along x hits x = −1 first.
         let ray = Ray::new(
-            pair.transform().to_world.transform_point3(DVec3::new(-5.0, 0.1, 0.2)),
+            pair.transform()
+                .to_world
+                .transform_point3(DVec3::new(-5.0, 0.1, 0.2)),
             pair.transform().to_world.transform_vector3(DVec3::X),
         );
         let t = pair.intersect(&ray, f64::INFINITY, false).unwrap();
@@ -265,7 +273,12 @@ fn degenerate_inputs_are_classified_at_load() {
             max: DVec3::new(1.01e-4, 1.01, 1.01e4),
         },
     ] {
-        let thin = hardcases::make(QuadricKind::Ellipsoid, [1e-4, 1.0, 1e4], clip, Transform::IDENTITY);
+        let thin = hardcases::make(
+            QuadricKind::Ellipsoid,
+            [1e-4, 1.0, 1e4],
+            clip,
+            Transform::IDENTITY,
+        );
         assert_eq!(thin.class(), QuadricClass::Proper(QuadricKind::Ellipsoid));
     }
     // The waist of x² + y² − z² = J shrinking to 0 stays a hyperboloid until J is exactly 0.

@@ -29,27 +29,30 @@ fn quadric() -> impl Strategy<Value = Quadric> {
         vec3(-1.0..1.0),
         -3.0..3.0f64,
     )
-        .prop_filter_map("valid quadric", |(k, abc, lo, hi, log_scale, rot, dir, log_t)| {
-            let scale = DVec3::new(
-                10f64.powf(log_scale.x),
-                10f64.powf(log_scale.y),
-                10f64.powf(log_scale.z),
-            );
-            let t = Transform::from_srt(scale, rot, dir * 10f64.powf(log_t))?;
-            let q = Quadric::new(
-                QuadricSurface::Canonical {
-                    kind: QuadricKind::ALL[k],
-                    a: abc.x,
-                    b: abc.y,
-                    c: abc.z,
-                },
-                ClipBox { min: lo, max: hi },
-                t,
-                0,
-            )
-            .ok()?;
-            q.is_visible().then_some(q)
-        })
+        .prop_filter_map(
+            "valid quadric",
+            |(k, abc, lo, hi, log_scale, rot, dir, log_t)| {
+                let scale = DVec3::new(
+                    10f64.powf(log_scale.x),
+                    10f64.powf(log_scale.y),
+                    10f64.powf(log_scale.z),
+                );
+                let t = Transform::from_srt(scale, rot, dir * 10f64.powf(log_t))?;
+                let q = Quadric::new(
+                    QuadricSurface::Canonical {
+                        kind: QuadricKind::ALL[k],
+                        a: abc.x,
+                        b: abc.y,
+                        c: abc.z,
+                    },
+                    ClipBox { min: lo, max: hi },
+                    t,
+                    0,
+                )
+                .ok()?;
+                q.is_visible().then_some(q)
+            },
+        )
 }
 
 /// A ray from 1.5..50 bounding radii away (or inside) aimed at a random point of the bounds.

@@ -17,9 +17,9 @@ pub enum SpecularModel {
 
 /// A surface's response to light, Whitted style.
 ///
-/// Radiance leaving a point is `(1 − reflectivity)·(ambient + diffuse)·base + specular·highlight
-/// + reflectivity·(radiance from the mirror direction)`: a perfect mirror (reflectivity 1) shows no
-/// diffuse colour but keeps its highlights, like a coated surface.
+/// Radiance leaving a point is `(1 − reflectivity)·(ambient + diffuse)·base + specular·highlight +
+/// reflectivity·(radiance from the mirror direction)`: a perfect mirror (reflectivity 1) shows
+/// no diffuse colour but keeps its highlights, like a coated surface.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Base colour (albedo) source.

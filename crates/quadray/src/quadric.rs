@@ -480,7 +480,8 @@ impl Quadric {
         let (t_in, t_out) = slab_interval(o, d, -DVec3::ONE, DVec3::ONE);
         let lo = t_in.max(0.0);
         let hi = t_out.min(t_max);
-        if !(lo <= hi) {
+        // Also rejects NaN bounds (a zero direction).
+        if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
             return None;
         }
         let ad = self.a * d;
@@ -508,7 +509,8 @@ impl Quadric {
         // solve_quadratic's sign-aware roots, inlined without its bookkeeping: a non-finite root
         // (a = 0 gives q/a = ±∞, a double zero gives NaN) fails the interval test by itself.
         let disc = discriminant(a, beta, gamma_);
-        if !(disc >= 0.0) {
+        // Negative or NaN: no real root.
+        if disc.is_nan() || disc < 0.0 {
             return None;
         }
         let q = -(beta + disc.sqrt().copysign(beta));
@@ -697,11 +699,7 @@ impl Quadric {
 pub fn classify(a: DMat3, b: DVec3, c: f64) -> QuadricClass {
     const TOL: f64 = 1e-10;
     let diag = DVec3::new(a.x_axis.x, a.y_axis.y, a.z_axis.z);
-    let s = DVec3::select(
-        diag.cmpne(DVec3::ZERO),
-        diag.abs().powf(-0.5),
-        DVec3::ONE,
-    );
+    let s = DVec3::select(diag.cmpne(DVec3::ZERO), diag.abs().powf(-0.5), DVec3::ONE);
     let sm = DMat3::from_diagonal(s);
     let a = sm * a * sm;
     let b = s * b;
