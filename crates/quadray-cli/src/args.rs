@@ -19,6 +19,9 @@ pub enum Command {
     Render(RenderArgs),
     /// Validate a scene without rendering it.
     Check(CheckArgs),
+    /// Benchmarks: speed against error of the quadric intersector.
+    #[command(subcommand)]
+    Bench(crate::bench::BenchCommand),
 }
 
 /// Arguments of `quadray render`.

@@ -2,6 +2,7 @@
 //! [`run_args`] to exercise the same code in process.
 
 pub mod args;
+pub mod bench;
 mod check;
 pub mod output;
 mod progress;
@@ -14,6 +15,7 @@ pub fn run(cli: args::Cli) -> anyhow::Result<()> {
     match cli.command {
         args::Command::Render(a) => render_cmd::run(&a),
         args::Command::Check(a) => check::run(&a),
+        args::Command::Bench(b) => bench::run(&b),
     }
 }
 
