@@ -40,6 +40,21 @@ pub struct SceneSettings {
     pub max_depth: u32,
 }
 
+impl SceneSettings {
+    /// The renderer's settings for these values (the integrator's other limits at their defaults).
+    pub fn render_settings(&self) -> quadray::RenderSettings {
+        quadray::RenderSettings {
+            width: self.width,
+            height: self.height,
+            spp: self.spp,
+            whitted: quadray::Whitted {
+                max_depth: self.max_depth,
+                ..quadray::Whitted::default()
+            },
+        }
+    }
+}
+
 impl Default for SceneSettings {
     fn default() -> Self {
         SceneSettings {

@@ -7,7 +7,8 @@ use crate::plane::Plane;
 use crate::quadric::Quadric;
 use crate::shape::{PrimRef, SurfaceGeometry};
 use crate::sphere::Sphere;
-use crate::texture::VertexAttributes;
+use crate::texture::{TexturePoint, VertexAttributes};
+use glam::DVec3;
 
 /// The scene's primitives, grouped by kind.
 #[derive(Clone, Debug, Default)]
@@ -36,25 +37,34 @@ impl Geometry {
         }
     }
 
-    /// Phase two: surface geometry and material of the hit at `t` on `prim`.
-    pub fn surface(&self, prim: PrimRef, ray: &Ray, t: f64) -> (SurfaceGeometry, MaterialId) {
+    /// Phase two: surface geometry of the hit at `t` on `prim`.
+    pub fn surface(&self, prim: PrimRef, ray: &Ray, t: f64) -> SurfaceGeometry {
         match prim {
-            PrimRef::Sphere(i) => {
-                let s = &self.spheres[i as usize];
-                (s.surface(ray, t), s.material)
-            }
-            PrimRef::Quadric(i) => {
-                let q = &self.quadrics[i as usize];
-                (q.surface(ray, t), q.material())
-            }
-            PrimRef::Triangle { mesh, tri } => {
-                let m = &self.meshes[mesh as usize];
-                (m.surface(tri, ray, t), m.material())
-            }
-            PrimRef::Plane(i) => {
-                let p = &self.planes[i as usize];
-                (p.surface(ray, t), p.material)
-            }
+            PrimRef::Sphere(i) => self.spheres[i as usize].surface(ray, t),
+            PrimRef::Quadric(i) => self.quadrics[i as usize].surface(ray, t),
+            PrimRef::Triangle { mesh, tri } => self.meshes[mesh as usize].surface(tri, ray, t),
+            PrimRef::Plane(i) => self.planes[i as usize].surface(ray, t),
+        }
+    }
+
+    /// The material of `prim`.
+    #[inline]
+    pub fn material(&self, prim: PrimRef) -> MaterialId {
+        match prim {
+            PrimRef::Sphere(i) => self.spheres[i as usize].material,
+            PrimRef::Quadric(i) => self.quadrics[i as usize].material(),
+            PrimRef::Triangle { mesh, .. } => self.meshes[mesh as usize].material(),
+            PrimRef::Plane(i) => self.planes[i as usize].material,
+        }
+    }
+
+    /// Texture coordinates at a surface point of `prim`; only textured materials ask for them.
+    pub fn texture_point(&self, prim: PrimRef, point: DVec3) -> TexturePoint {
+        match prim {
+            PrimRef::Sphere(i) => self.spheres[i as usize].texture_point(point),
+            PrimRef::Quadric(i) => self.quadrics[i as usize].texture_point(point),
+            PrimRef::Triangle { mesh, .. } => self.meshes[mesh as usize].texture_point(point),
+            PrimRef::Plane(i) => self.planes[i as usize].texture_point(point),
         }
     }
 

@@ -63,14 +63,13 @@ impl Whitted {
         let (t, prim) = scene
             .accel()
             .closest(&scene.geometry, ray, f64::INFINITY, from)?;
-        let (geometry, material) = scene.geometry.surface(prim, ray, t);
-        let attributes = scene.geometry.attributes(prim, geometry.point);
+        let geometry = scene.geometry.surface(prim, ray, t);
+        let material = scene.geometry.material(prim);
         Some(SurfaceHit {
             t,
             prim,
             material,
             geometry,
-            attributes,
         })
     }
 
@@ -89,7 +88,13 @@ impl Whitted {
         };
         let m = &scene.materials[hit.material as usize];
         let g = &hit.geometry;
-        let base = m.base_color(&g.texture, &hit.attributes);
+        // Texture points and vertex attributes are computed only when the material and the
+        // primitive have a use for them.
+        let attributes = scene.geometry.attributes(hit.prim, g.point);
+        let base = m.base_color(
+            || scene.geometry.texture_point(hit.prim, g.point),
+            &attributes,
+        );
         let view = -ray.dir.normalize();
         // Two-sided shading: face both normals towards the viewer.
         let facing = if g.geometric_normal.dot(view) >= 0.0 {

@@ -44,10 +44,23 @@ pub struct Material {
 }
 
 impl Material {
-    /// The base colour (albedo) at a hit: the texture times the vertex colour.
+    /// The base colour (albedo) at a hit: the texture times the vertex colour. `point` is asked
+    /// for only by the procedural textures that read it.
     #[inline]
-    pub fn base_color(&self, p: &TexturePoint, attributes: &VertexAttributes) -> Vec3 {
-        self.texture.eval(p, attributes) * attributes.color.truncate()
+    pub fn base_color(
+        &self,
+        point: impl FnOnce() -> TexturePoint,
+        attributes: &VertexAttributes,
+    ) -> Vec3 {
+        let p = if self.texture.reads_point() {
+            point()
+        } else {
+            TexturePoint {
+                local: glam::DVec3::ZERO,
+                height: 0.0,
+            }
+        };
+        self.texture.eval(&p, attributes) * attributes.color.truncate()
     }
 
     /// The colour multiplying mirror reflections, given the base colour at the hit.
@@ -93,7 +106,7 @@ mod tests {
             color: Vec4::new(1.0, 0.5, 1.0, 1.0),
             ..VertexAttributes::default()
         };
-        let base = m.base_color(&p, &a);
+        let base = m.base_color(|| p, &a);
         assert_eq!(base, Vec3::new(0.5, 0.5, 1.0));
         assert_eq!(m.reflection_color(base), Vec3::new(0.25, 0.25, 0.5));
         let coating = Material {

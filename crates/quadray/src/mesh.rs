@@ -369,21 +369,25 @@ impl Mesh {
             }
             None => geometric_normal,
         };
+        SurfaceGeometry {
+            point,
+            geometric_normal,
+            shading_normal,
+            error,
+        }
+    }
+
+    /// Texture coordinates of a surface point: the point itself, height over the mesh's z extent.
+    pub fn texture_point(&self, point: DVec3) -> TexturePoint {
         let (lo, hi) = self.z_range;
         let height = if hi > lo {
             ((point.z - lo) / (hi - lo)) as f32
         } else {
             0.5
         };
-        SurfaceGeometry {
-            point,
-            geometric_normal,
-            shading_normal,
-            error,
-            texture: TexturePoint {
-                local: point,
-                height,
-            },
+        TexturePoint {
+            local: point,
+            height,
         }
     }
 }

@@ -36,17 +36,22 @@ impl Plane {
         let offset = p - self.point;
         let local3 = offset - self.normal * offset.dot(self.normal);
         let point = self.point + local3;
-        let (u, v) = orthonormal_basis(self.normal);
         let error = gamma(8) * (self.point.abs().max_element() + local3.abs().max_element()) * 2.0;
         SurfaceGeometry {
             point,
             geometric_normal: self.normal,
             shading_normal: self.normal,
             error,
-            texture: TexturePoint {
-                local: DVec3::new(local3.dot(u), local3.dot(v), 0.0),
-                height: 0.0,
-            },
+        }
+    }
+
+    /// Texture coordinates of a point on the plane: its 2-D frame around `point` (z = 0); height 0.
+    pub fn texture_point(&self, point: DVec3) -> TexturePoint {
+        let offset = point - self.point;
+        let (u, v) = orthonormal_basis(self.normal);
+        TexturePoint {
+            local: DVec3::new(offset.dot(u), offset.dot(v), 0.0),
+            height: 0.0,
         }
     }
 }
@@ -94,7 +99,7 @@ mod tests {
         let r = Ray::new(DVec3::new(5.0, 0.0, 7.0), DVec3::new(-1.0, 0.0, 0.0));
         let t = p.intersect(&r, f64::INFINITY, false).unwrap();
         let s = p.surface(&r, t);
-        assert_eq!(s.texture.local.z, 0.0);
+        assert_eq!(p.texture_point(s.point).local.z, 0.0);
         assert!((s.point - p.point).dot(p.normal).abs() < 1e-14);
     }
 }

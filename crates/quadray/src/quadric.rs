@@ -16,7 +16,7 @@
 //! everywhere the surface is smooth, including where it is not a graph z = f(x, y).
 
 use crate::material::MaterialId;
-use crate::math::{Ray, Transform, gamma, slab_interval, solve_quadratic};
+use crate::math::{Ray, Transform, discriminant, gamma, slab_interval, solve_quadratic};
 use crate::shape::{SurfaceGeometry, normal_or};
 use crate::texture::TexturePoint;
 use glam::{DAffine3, DMat3, DVec3};
@@ -297,6 +297,11 @@ pub struct Quadric {
     class: QuadricClass,
     /// Local frame (clip box = [-1, 1]³) to world.
     local: Transform,
+    /// The placement's translation (the object frame's origin in the world), exactly as given.
+    world_origin: DVec3,
+    /// The clip box centre in local units (centre / half extent), so world points map to the local
+    /// frame as M⁻¹(p − world_origin) − centre_local without rounding the two offsets together.
+    centre_local: DVec3,
     /// Normalised local coefficients: f(u) = uᵀAu + 2bᵀu + c.
     a: DMat3,
     b: DVec3,
@@ -379,6 +384,8 @@ impl Quadric {
             class,
             stretch: local.max_stretch(),
             local,
+            world_origin: transform.to_world.translation,
+            centre_local: centre / half,
             a,
             b,
             c,
@@ -420,6 +427,37 @@ impl Quadric {
         self.visible_height_range().is_some()
     }
 
+    /// The normalised local frame (clip box = [-1, 1]³) and its map to the world, for benchmark
+    /// variants and oracles that must work in the same frame as [`Quadric::intersect`].
+    pub fn local_frame(&self) -> &Transform {
+        &self.local
+    }
+
+    /// The normalised local coefficients (A, b, c) of f(u) = uᵀAu + 2bᵀu + c, largest magnitude one.
+    pub fn local_coefficients(&self) -> (DMat3, DVec3, f64) {
+        (self.a, self.b, self.c)
+    }
+
+    /// The ray in the local frame, computed exactly as [`Quadric::intersect`] computes it (the ray
+    /// parameter t is unchanged by the map).
+    #[inline]
+    pub fn local_ray(&self, ray: &Ray) -> Ray {
+        Ray::new(
+            self.to_local_point(ray.origin),
+            self.local.from_world.matrix3 * ray.dir,
+        )
+    }
+
+    /// World point to local frame as L·(p − T) − c/h, with L the local-from-world linear map, T the
+    /// placement's own translation and c/h the box centre in local units. Subtracting T first keeps
+    /// the error relative to |p − T| (the distance from the object), where the affine form L·p + t
+    /// would leave an error relative to |p| (the distance from the world origin), and keeping c/h apart
+    /// avoids rounding the object's position to the ulp of a far-away world translation.
+    #[inline]
+    fn to_local_point(&self, p: DVec3) -> DVec3 {
+        self.local.from_world.matrix3 * (p - self.world_origin) - self.centre_local
+    }
+
     /// The implicit function in the normalised local frame.
     #[inline]
     fn eval_local(&self, u: DVec3) -> f64 {
@@ -430,15 +468,20 @@ impl Quadric {
     ///
     /// `from_self` marks a ray spawned on this quadric: its origin is on the surface, so γ = 0 and
     /// the roots are 0 and −2β/a; the second is a genuine re-hit (a concave mirror) and is kept.
+    ///
+    /// The slab test against the box comes first, so rays that miss the box never reach the
+    /// quadratic, and the accepted roots are exactly those in the closed interval [t_in, t_out]. The
+    /// origin then moves to the box entry, so a far origin leaves no cancellation in γ, and near
+    /// tangency (β² ≈ aγ) once more to the vertex s = −β/a of g, where β ≈ 0 and f is as small as it
+    /// gets along the line, so Δ ≈ −aγ carries no cancellation (quadric-numerics.md §2, Wald).
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
-        let to_local = &self.local.from_world;
-        let o = to_local.transform_point3(ray.origin);
-        let d = to_local.transform_vector3(ray.dir);
+        let Ray { origin: o, dir: d } = self.local_ray(ray);
         let (t_in, t_out) = slab_interval(o, d, -DVec3::ONE, DVec3::ONE);
         let lo = t_in.max(0.0);
         let hi = t_out.min(t_max);
-        if !(lo <= hi) {
+        // Also rejects NaN bounds (a zero direction).
+        if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
             return None;
         }
         let ad = self.a * d;
@@ -449,59 +492,87 @@ impl Quadric {
             return (t > 0.0 && t >= lo && t <= hi).then_some(t);
         }
         // Re-origin at the box entry (or keep the origin when it is inside the box).
-        let o = o + d * lo;
-        let beta = ad.dot(o) + self.b.dot(d);
-        let gamma_ = self.eval_local(o);
-        let roots = solve_quadratic(a, beta, gamma_);
-        roots
-            .as_slice()
-            .iter()
-            .map(|&s| (s, lo + s))
-            .find(|&(s, t)| s >= 0.0 && t > 0.0 && t <= hi)
-            .map(|(_, t)| t)
+        let mut base = lo;
+        let mut o = o + d * lo;
+        let mut beta = ad.dot(o) + self.b.dot(d);
+        let mut gamma_ = self.eval_local(o);
+        let (bb, ag) = (beta * beta, a * gamma_);
+        if (bb - ag).abs() * 1024.0 < bb + ag.abs() {
+            let s = (-beta / a).clamp(0.0, hi - lo);
+            if s > 0.0 {
+                o += d * s;
+                base += s;
+                beta = ad.dot(o) + self.b.dot(d);
+                gamma_ = self.eval_local(o);
+            }
+        }
+        // solve_quadratic's sign-aware roots, inlined without its bookkeeping: a non-finite root
+        // (a = 0 gives q/a = ±∞, a double zero gives NaN) fails the interval test by itself.
+        let disc = discriminant(a, beta, gamma_);
+        // Negative or NaN: no real root.
+        if disc.is_nan() || disc < 0.0 {
+            return None;
+        }
+        let q = -(beta + disc.sqrt().copysign(beta));
+        let (r0, r1) = (base + q / a, base + gamma_ / q);
+        let (near, far) = if r0 <= r1 { (r0, r1) } else { (r1, r0) };
+        if near >= lo && near > 0.0 && near <= hi {
+            Some(near)
+        } else if far >= lo && far > 0.0 && far <= hi {
+            Some(far)
+        } else {
+            None
+        }
     }
 
     /// Surface geometry at parameter `t` of `ray`.
     pub fn surface(&self, ray: &Ray, t: f64) -> SurfaceGeometry {
         let point = ray.at(t);
-        let u = self.local.from_world.transform_point3(point);
+        let u = self.to_local_point(point);
         let half_grad = self.a * u + self.b;
         let geometric_normal = normal_or(self.local.normal_to_world * half_grad, -ray.dir);
         let error = self.point_error(point, u, half_grad);
-        let object = self.transform.from_world.transform_point3(point);
+        SurfaceGeometry {
+            point,
+            geometric_normal,
+            shading_normal: geometric_normal,
+            error,
+        }
+    }
+
+    /// Texture coordinates of a surface point: the point in the object frame, and its height
+    /// within the visible part of the surface (the texture ramp's extent).
+    pub fn texture_point(&self, point: DVec3) -> TexturePoint {
+        let u = self.local.from_world.transform_point3(point);
         let (lo, hi) = self.height;
         let height = if hi > lo {
             ((u.z - lo) / (hi - lo)) as f32
         } else {
             0.5
         };
-        SurfaceGeometry {
-            point,
-            geometric_normal,
-            shading_normal: geometric_normal,
-            error,
-            texture: TexturePoint {
-                local: object,
-                height,
-            },
+        TexturePoint {
+            local: self.transform.from_world.transform_point3(point),
+            height,
         }
     }
 
     /// Bound on the world distance from the computed hit `point` (local `u`) to the true surface.
     ///
-    /// First-order distance |f(u)|/|∇f(u)| (Taubin), with f's rounding error γ₁₂·(|u|ᵀ|A||u| + 2|b|·|u| + |c|)
-    /// added to |f|; near a singular point (cone apex) the second-order bound √|f| takes over. The
-    /// local distance is mapped to the world by the frame's stretch, and the rounding of the world
-    /// point and of the frame map is added. Doubled for safety.
+    /// First-order distance |f(u)|/|∇f| (Taubin), with f's rounding error γ₁₂·(|u|ᵀ|A||u| + 2|b|·|u| + |c|)
+    /// added to |f| and the gradient taken in the *world* (Lᵀ∇ᵤf), so an anisotropic placement (a
+    /// thin ellipsoid) is not charged its largest stretch along its thin normal; near a singular point
+    /// (cone apex, ∇f → 0) the second-order bound √|f| (local units, times the frame's stretch) takes
+    /// over. The rounding of the world point and of the frame map is added. Doubled for safety.
     fn point_error(&self, point: DVec3, u: DVec3, half_grad: DVec3) -> f64 {
         let au = u.abs();
         let magnitude = au.dot(self.abs_a * au) + 2.0 * self.abs_b.dot(au) + self.c.abs();
         let residual = self.eval_local(u).abs() + gamma(12) * magnitude;
-        let grad_len = 2.0 * half_grad.length();
-        let local = (residual / grad_len).min(residual.sqrt());
+        let grad_world = 2.0 * (self.local.normal_to_world * half_grad).length();
+        let first_order = residual / grad_world;
+        let second_order = residual.sqrt() * self.stretch;
         let world_rounding = gamma(8)
             * (point.abs().max_element() + self.local.to_world.translation.abs().max_element());
-        2.0 * (local * self.stretch + world_rounding)
+        2.0 * (first_order.min(second_order) + world_rounding)
     }
 
     /// World-space bounds: the transformed clip box.
@@ -623,25 +694,41 @@ impl Quadric {
 
 /// Classifies f(u) = uᵀAu + 2bᵀu + c (coefficients normalised to magnitude ≤ 1) by diagonalising A,
 /// completing the square on its nonzero eigen-directions, and reading rank, signs and constant.
+///
+/// Every threshold is relative, so a shape's class does not depend on its size against its clip box:
+/// A is first equilibrated to a unit diagonal by the congruence S·A·S with S = diag(1/√|Aᵢᵢ|), which
+/// keeps the signature (Sylvester's law of inertia) but makes the eigenvalues of graded matrices such
+/// as an ellipsoid with axes 1e-4 : 1 : 1e4 (A = diag(1, 1e-8, 1e-16)) well separated from zero; an
+/// eigenvalue is zero below 1e-10 of the largest, a linear term below 1e-10 of the largest coefficient,
+/// and the completed constant k = c − Σ bᵢ²/λᵢ is zero when it cancels to below 1e-10 of its terms.
 pub fn classify(a: DMat3, b: DVec3, c: f64) -> QuadricClass {
     const TOL: f64 = 1e-10;
+    let diag = DVec3::new(a.x_axis.x, a.y_axis.y, a.z_axis.z);
+    let s = DVec3::select(diag.cmpne(DVec3::ZERO), diag.abs().powf(-0.5), DVec3::ONE);
+    let sm = DMat3::from_diagonal(s);
+    let a = sm * a * sm;
+    let b = s * b;
     let (values, vectors) = symmetric_eigen(a);
     let largest = values.abs().max_element();
+    let scale = largest.max(b.abs().max_element()).max(c.abs());
     let b_rot = vectors.transpose() * b;
     let mut positive = 0;
     let mut negative = 0;
     let mut constant = c;
+    let mut completed = c.abs();
     let mut linear = false;
     for i in 0..3 {
         let l = values[i];
-        if l.abs() > TOL * largest.max(1e-300) && l.abs() > TOL {
+        if l.abs() > TOL * largest {
             if l > 0.0 {
                 positive += 1
             } else {
                 negative += 1
             }
-            constant -= b_rot[i] * b_rot[i] / l;
-        } else if b_rot[i].abs() > TOL {
+            let term = b_rot[i] * b_rot[i] / l;
+            constant -= term;
+            completed += term.abs();
+        } else if b_rot[i].abs() > TOL * scale {
             linear = true;
         }
     }
@@ -650,7 +737,11 @@ pub fn classify(a: DMat3, b: DVec3, c: f64) -> QuadricClass {
         std::mem::swap(&mut positive, &mut negative);
         constant = -constant;
     }
-    let k = if constant.abs() <= TOL { 0.0 } else { constant };
+    let k = if constant.abs() <= TOL * completed {
+        0.0
+    } else {
+        constant
+    };
     use QuadricKind as K;
     match (positive, negative, linear) {
         (3, 0, _) if k < 0.0 => QuadricClass::Proper(K::Ellipsoid),

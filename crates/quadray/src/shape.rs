@@ -4,7 +4,6 @@
 //! [`SurfaceGeometry`] once, for the nearest hit (pbrt-v4's `BasicIntersect` / `InteractionFromIntersection`).
 
 use crate::material::MaterialId;
-use crate::texture::{TexturePoint, VertexAttributes};
 use glam::DVec3;
 
 /// One primitive of a scene: what the BVH leaves and the plane list refer to.
@@ -36,8 +35,6 @@ pub struct SurfaceGeometry {
     pub shading_normal: DVec3,
     /// Bound on the distance between `point` and the true surface: spawned rays start this far off it.
     pub error: f64,
-    /// Texture lookup coordinates.
-    pub texture: TexturePoint,
 }
 
 /// A complete hit: which primitive, where along the ray, and its surface geometry.
@@ -51,8 +48,6 @@ pub struct SurfaceHit {
     pub material: MaterialId,
     /// Surface geometry at the hit.
     pub geometry: SurfaceGeometry,
-    /// Interpolated vertex attributes (texture coordinates, colour); defaults off meshes.
-    pub attributes: VertexAttributes,
 }
 
 /// Unit normal from an unnormalised one, or `fallback` where it vanishes (a cone apex).

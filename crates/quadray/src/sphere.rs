@@ -60,13 +60,20 @@ impl Sphere {
         let point = self.center + local;
         let normal = local / self.radius;
         let error = gamma(6) * (self.center.abs().max_element() + self.radius) * 2.0;
-        let height = ((local.z / self.radius) * 0.5 + 0.5) as f32;
         SurfaceGeometry {
             point,
             geometric_normal: normal,
             shading_normal: normal,
             error,
-            texture: TexturePoint { local, height },
+        }
+    }
+
+    /// Texture coordinates of a surface point: offset from the centre, height over the sphere's z extent.
+    pub fn texture_point(&self, point: DVec3) -> TexturePoint {
+        let local = point - self.center;
+        TexturePoint {
+            local,
+            height: ((local.z / self.radius) * 0.5 + 0.5) as f32,
         }
     }
 

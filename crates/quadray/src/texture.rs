@@ -103,12 +103,25 @@ impl Texture {
                 height_ramp(if n == 1.0 { 0.5 } else { k / (n - 1.0) })
             }
             Texture::Checker { size, even, odd } => {
+                // Integer parity of the cell (the float fmod of rem_euclid showed up in profiles).
                 let q = (p.local / *size).floor();
-                let parity = (q.x + q.y + q.z).rem_euclid(2.0);
-                if parity < 0.5 { *even } else { *odd }
+                let parity = (q.x as i64)
+                    .wrapping_add(q.y as i64)
+                    .wrapping_add(q.z as i64)
+                    & 1;
+                if parity == 0 { *even } else { *odd }
             }
             Texture::Image(t) => t.map.sample(attributes).truncate() * t.factor,
         }
+    }
+
+    /// Whether the colour depends on the hit's [`TexturePoint`] (the procedural textures do;
+    /// constants and images do not).
+    pub fn reads_point(&self) -> bool {
+        matches!(
+            self,
+            Texture::HeightRamp | Texture::Bands { .. } | Texture::Checker { .. }
+        )
     }
 
     /// Whether the colour varies over the surface (a constant needs no texture point).

@@ -1,0 +1,86 @@
+//! Command-line arguments (clap derive), parsed first and validated where they are used.
+
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+/// quadray: a ray tracer with clipped quadric surfaces, spheres, planes and meshes.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene to PNG (sRGB, clamped) or EXR (linear, scene-referred).
+    Render(RenderArgs),
+    /// Validate a scene without rendering it.
+    Check(CheckArgs),
+    /// Benchmarks: speed against error of the quadric intersector.
+    #[command(subcommand)]
+    Bench(crate::bench::BenchCommand),
+}
+
+/// Arguments of `quadray render`.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Output image; the extension picks the format (.png or .exr).
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    /// Samples per pixel (overrides the scene).
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+    /// Resolution as WIDTHxHEIGHT (overrides the scene).
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    pub res: Option<(u32, u32)>,
+    /// Most rays in one reflection chain, camera ray included (overrides the scene).
+    #[arg(long, value_name = "N")]
+    pub max_depth: Option<u32>,
+    /// Worker threads (default: all cores).
+    #[arg(short = 't', long, value_name = "THREADS")]
+    pub threads: Option<usize>,
+    /// Print load and BVH build times besides the final stats line.
+    #[arg(long)]
+    pub stats: bool,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Arguments of `quadray check`.
+#[derive(Args, Debug)]
+pub struct CheckArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+}
+
+/// Parses `640x480`.
+pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got \"{s}\""))?;
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("\"{v}\" is not a pixel count"))
+    };
+    Ok((parse(w)?, parse(h)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolution_parses_and_rejects_garbage() {
+        assert_eq!(parse_resolution("1280x720"), Ok((1280, 720)));
+        assert!(parse_resolution("1280").is_err());
+        assert!(parse_resolution("ax2").is_err());
+        assert!(parse_resolution("-5x2").is_err());
+    }
+}

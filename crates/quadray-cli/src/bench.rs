@@ -1,0 +1,121 @@
+//! `quadray bench accuracy`: the speed-against-error report of the quadric intersector variants
+//! against the exact oracle (see docs/numerics.md), printed as markdown and plotted as SVG.
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Subcommand};
+use quadray_bench::hardcases::SuiteSize;
+use quadray_bench::report::{self, Settings};
+use std::path::PathBuf;
+
+/// The benchmarks.
+#[derive(Subcommand, Debug)]
+pub enum BenchCommand {
+    /// Every intersector variant on every hard-case family: ns/ray, relative t error, holes,
+    /// phantoms and acne against the exact oracle; writes accuracy.md and accuracy.svg.
+    Accuracy(AccuracyArgs),
+}
+
+/// Arguments of `quadray bench accuracy`.
+#[derive(Args, Debug)]
+pub struct AccuracyArgs {
+    /// Directory for accuracy.md (the table) and accuracy.svg (the plot); created if missing.
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    pub out: PathBuf,
+    /// Rays per hard-case family and quadric kind.
+    #[arg(long, value_name = "N", default_value_t = SuiteSize::REPORT.rays)]
+    pub rays: usize,
+    /// Timed runs per variant and family (the median is reported).
+    #[arg(long, value_name = "N", default_value_t = 7)]
+    pub runs: usize,
+    /// Rays spawned per hit point for the acne protocol (pbrt uses 10⁴).
+    #[arg(long, value_name = "N", default_value_t = 10_000)]
+    pub acne_rays: usize,
+    /// Random seed of the ray generators.
+    #[arg(long, default_value_t = SuiteSize::REPORT.seed)]
+    pub seed: u64,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Runs a bench subcommand.
+pub fn run(command: &BenchCommand) -> Result<()> {
+    match command {
+        BenchCommand::Accuracy(a) => accuracy(a),
+    }
+}
+
+fn accuracy(a: &AccuracyArgs) -> Result<()> {
+    if a.rays == 0 || a.runs == 0 || a.acne_rays == 0 {
+        bail!("--rays, --runs and --acne-rays must be at least 1");
+    }
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("cannot create output directory {}", a.out.display()))?;
+    let settings = Settings {
+        size: SuiteSize {
+            rays: a.rays,
+            seed: a.seed,
+        },
+        runs: a.runs,
+        acne_hits: 1,
+        acne_dirs: a.acne_rays,
+    };
+    let quiet = a.quiet;
+    let report = report::run(&settings, &mut |family| {
+        if !quiet {
+            eprintln!("bench accuracy: {family}");
+        }
+    });
+    let table = report.markdown();
+    if !quiet {
+        println!("{table}");
+    }
+    let md = a.out.join("accuracy.md");
+    let svg = a.out.join("accuracy.svg");
+    // Written to temporary names and renamed, so a reader never sees half a file.
+    let md_tmp = a.out.join(".accuracy.md.tmp");
+    std::fs::write(&md_tmp, &table)
+        .with_context(|| format!("cannot write {}", md_tmp.display()))?;
+    std::fs::rename(&md_tmp, &md).with_context(|| format!("cannot write {}", md.display()))?;
+    let svg_tmp = a.out.join(".accuracy.svg.tmp");
+    report
+        .write_svg(&svg_tmp)
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .with_context(|| format!("cannot write {}", svg_tmp.display()))?;
+    std::fs::rename(&svg_tmp, &svg).with_context(|| format!("cannot write {}", svg.display()))?;
+    if !quiet {
+        eprintln!("wrote {} and {}", md.display(), svg.display());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn small_accuracy_run_writes_table_and_plot() {
+        let dir = tempfile::tempdir().unwrap();
+        crate::run_args([
+            "bench",
+            "accuracy",
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--rays",
+            "4",
+            "--runs",
+            "1",
+            "--acne-rays",
+            "20",
+            "--quiet",
+        ])
+        .unwrap();
+        let md = std::fs::read_to_string(dir.path().join("accuracy.md")).unwrap();
+        assert!(md.contains("| all | production |"), "{md}");
+        let svg = std::fs::read_to_string(dir.path().join("accuracy.svg")).unwrap();
+        assert!(
+            svg.starts_with("<svg") && svg.contains("Pareto"),
+            "{}",
+            &svg[..200.min(svg.len())]
+        );
+        assert!(crate::run_args(["bench", "accuracy", "--rays", "0"]).is_err());
+    }
+}

@@ -1,0 +1,144 @@
+//! Writing films to PNG or EXR, atomically: into a temporary file beside the target, then renamed.
+
+use anyhow::{Context, Result, bail};
+use quadray::Film;
+use std::path::{Path, PathBuf};
+
+/// Image formats quadray writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// 8-bit sRGB-encoded, clamped.
+    Png,
+    /// Linear, scene-referred f32 RGBA, not clamped.
+    Exr,
+}
+
+impl Format {
+    /// The format named by `path`'s extension.
+    pub fn from_path(path: &Path) -> Result<Format> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("png") => Ok(Format::Png),
+            Some("exr") => Ok(Format::Exr),
+            _ => bail!("output {} must end in .png or .exr", path.display()),
+        }
+    }
+}
+
+/// Checks before rendering that `path` can be written: known format, existing folder.
+pub fn check_writable(path: &Path) -> Result<Format> {
+    let format = Format::from_path(path)?;
+    let dir = parent_dir(path);
+    if !dir.is_dir() {
+        bail!("output folder {} does not exist", dir.display());
+    }
+    Ok(format)
+}
+
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Writes `film` to `path`; an existing file is replaced only once the new one is complete.
+pub fn write_film(film: &Film, path: &Path) -> Result<()> {
+    let format = Format::from_path(path)?;
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("image");
+    let ext = if format == Format::Png { "png" } else { "exr" };
+    let tmp = parent_dir(path).join(format!(".{name}.{}.tmp.{ext}", std::process::id()));
+    let written = match format {
+        Format::Png => write_png(film, &tmp),
+        Format::Exr => write_exr(film, &tmp),
+    };
+    let result = written.and_then(|()| {
+        std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("writing {}", path.display()))
+}
+
+fn write_png(film: &Film, path: &Path) -> Result<()> {
+    let bytes = film.to_srgb8();
+    image::save_buffer_with_format(
+        path,
+        &bytes,
+        film.width(),
+        film.height(),
+        image::ColorType::Rgb8,
+        image::ImageFormat::Png,
+    )?;
+    Ok(())
+}
+
+fn write_exr(film: &Film, path: &Path) -> Result<()> {
+    let w = film.width() as usize;
+    exr::prelude::write_rgba_file(path, w, film.height() as usize, |x, y| {
+        let p = film.pixels()[y * w + x];
+        (p.x, p.y, p.z, 1.0f32)
+    })?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn film() -> Film {
+        let px = vec![Vec3::new(0.0, 0.5, 1.0), Vec3::new(2.5, 0.25, 0.0)];
+        Film::from_pixels(2, 1, px).unwrap()
+    }
+
+    #[test]
+    fn exr_keeps_linear_unclamped_values() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.exr");
+        write_film(&film(), &path).unwrap();
+        let img = exr::prelude::read_first_rgba_layer_from_file(
+            &path,
+            |res, _| vec![[0f32; 4]; res.width() * res.height()],
+            |px: &mut Vec<[f32; 4]>, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+                px[pos.y() * 2 + pos.x()] = [r, g, b, a]
+            },
+        )
+        .unwrap();
+        assert_eq!(img.layer_data.channel_data.pixels[1], [2.5, 0.25, 0.0, 1.0]);
+        // No temporary file is left behind.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn png_is_srgb_encoded_and_clamped() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.png");
+        write_film(&film(), &path).unwrap();
+        let img = image::open(&path).unwrap().to_rgb8();
+        assert_eq!(img.get_pixel(0, 0).0, [0, 188, 255]);
+        assert_eq!(img.get_pixel(1, 0).0[0], 255);
+    }
+
+    #[test]
+    fn failed_write_keeps_the_old_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.png");
+        std::fs::write(&path, b"old").unwrap();
+        let empty = Film::from_pixels(0, 0, vec![]).unwrap();
+        assert!(write_film(&empty, &path).is_err());
+        assert_eq!(std::fs::read(&path).unwrap(), b"old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn unknown_extension_is_refused() {
+        assert!(Format::from_path(Path::new("a.jpg")).is_err());
+        assert!(check_writable(Path::new("/no/such/dir/a.png")).is_err());
+    }
+}

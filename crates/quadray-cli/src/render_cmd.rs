@@ -1,0 +1,80 @@
+//! `quadray render`: load, validate, render in parallel, write, report.
+
+use crate::args::RenderArgs;
+use crate::output::{check_writable, write_film};
+use crate::progress::RowBar;
+use anyhow::{Context, Result};
+use quadray::Scene;
+use std::time::Instant;
+
+/// Runs the render subcommand.
+pub fn run(args: &RenderArgs) -> Result<()> {
+    check_writable(&args.output)?;
+    let start = Instant::now();
+    let loaded = quadray_loader::load_any(&args.scene)?;
+    for note in &loaded.notes {
+        if !args.quiet {
+            eprintln!("note: {note}");
+        }
+    }
+    let mut s = loaded.settings;
+    if let Some((w, h)) = args.res {
+        (s.width, s.height) = (w, h);
+    }
+    s.spp = args.spp.unwrap_or(s.spp);
+    s.max_depth = args.max_depth.unwrap_or(s.max_depth);
+    let settings = s.render_settings();
+    settings.validate()?;
+    let loaded_at = Instant::now();
+
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = args.threads {
+        anyhow::ensure!(
+            (1..=1024).contains(&t),
+            "thread count must be between 1 and 1024, got {t}"
+        );
+        pool = pool.num_threads(t);
+    }
+    let pool = pool.build().context("starting the thread pool")?;
+    let scene = pool
+        .install(|| Scene::new(loaded.description))
+        .with_context(|| format!("invalid scene {}", args.scene.display()))?;
+    let built_at = Instant::now();
+
+    let bar = RowBar::new(settings.height, args.quiet);
+    let cpu_start = cpu_time::ProcessTime::try_now().ok();
+    let rendered = pool.install(|| quadray::render(&scene, &settings, &bar))?;
+    bar.finish();
+    let render_time = built_at.elapsed();
+    let render_cpu = cpu_start.and_then(|t| t.try_elapsed().ok());
+    write_film(&rendered.film, &args.output)?;
+
+    if !args.quiet {
+        let c = rendered.counts;
+        let secs = render_time.as_secs_f64();
+        if args.stats {
+            let cpu =
+                render_cpu.map_or("unknown".to_string(), |d| format!("{:.3}", d.as_secs_f64()));
+            eprintln!(
+                "load {:.3} s, BVH build {:.3} s ({} bounded primitives), threads {}, render CPU {cpu} s",
+                (loaded_at - start).as_secs_f64(),
+                (built_at - loaded_at).as_secs_f64(),
+                scene.accel().bounded_count(),
+                pool.current_num_threads(),
+            );
+        }
+        eprintln!(
+            "{}x{}, {} spp: {} camera + {} shadow + {} reflection rays in {:.3} s ({:.2} Mrays/s) -> {}",
+            settings.width,
+            settings.height,
+            settings.spp,
+            c.camera,
+            c.shadow,
+            c.reflection,
+            secs,
+            c.total() as f64 / secs.max(1e-9) / 1e6,
+            args.output.display()
+        );
+    }
+    Ok(())
+}

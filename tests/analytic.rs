@@ -1,0 +1,264 @@
+//! Renders checked against analytic facts: areas, silhouettes, and rays that must not re-hit.
+
+use glam::{DVec3, Vec3};
+use quadray::math::offset_origin;
+use quadray::*;
+use quadray_tests::render_with_threads;
+
+fn white() -> Material {
+    Material {
+        texture: Texture::Constant(Vec3::ONE),
+        ambient: 1.0,
+        diffuse: 0.0,
+        ..Material::default()
+    }
+}
+
+fn scene(camera: Camera, geometry: Geometry) -> Scene {
+    Scene::new(SceneDescription {
+        camera,
+        background: Vec3::ZERO,
+        materials: vec![white()],
+        lights: vec![],
+        geometry,
+    })
+    .unwrap()
+}
+
+fn settings(width: u32, height: u32) -> RenderSettings {
+    RenderSettings {
+        width,
+        height,
+        spp: 1,
+        whitted: Whitted::default(),
+    }
+}
+
+fn lit_pixels(film: &Film) -> usize {
+    film.pixels().iter().filter(|p| p.x > 0.0).count()
+}
+
+#[test]
+fn orthographic_sphere_covers_pi_r_squared_pixels() {
+    // Area of the disc over the area of a pixel: π·r² / (2.5 / 400)² = 80 424.8 pixels.
+    let camera = Camera {
+        from: DVec3::new(0.3, -0.2, 10.0),
+        to: DVec3::new(0.3, -0.2, 0.0),
+        up: DVec3::Y,
+        projection: Projection::Orthographic { height: 2.5 },
+    };
+    let sphere = Sphere {
+        center: DVec3::new(0.3, -0.2, 0.0),
+        radius: 1.0,
+        material: 0,
+    };
+    let s = scene(
+        camera,
+        Geometry {
+            spheres: vec![sphere],
+            ..Geometry::default()
+        },
+    );
+    let film = render_with_threads(&s, &settings(400, 400), 2).film;
+    let expected = std::f64::consts::PI / (2.5f64 / 400.0).powi(2);
+    let got = lit_pixels(&film) as f64;
+    assert!(
+        (got - expected).abs() / expected < 0.01,
+        "{got} pixels, expected {expected:.1}"
+    );
+}
+
+#[test]
+fn unit_sphere_ten_thousand_units_away_is_a_full_disc() {
+    // The disc spans 100 pixels across. Every pixel whose ray passes the centre closer than the
+    // radius (computed here independently, in f64 point-line distance) must hit, every other miss.
+    let d: f64 = 1e4;
+    let vfov = (4.0 / d).to_degrees();
+    let camera = Camera {
+        from: DVec3::ZERO,
+        to: DVec3::new(0.0, d, 0.0),
+        up: DVec3::Z,
+        projection: Projection::Perspective { vfov_deg: vfov },
+    };
+    let centre = DVec3::new(0.0, d, 0.0);
+    let s = scene(
+        camera,
+        Geometry {
+            spheres: vec![Sphere {
+                center: centre,
+                radius: 1.0,
+                material: 0,
+            }],
+            ..Geometry::default()
+        },
+    );
+    let n = 200;
+    let film = render_with_threads(&s, &settings(n, n), 2).film;
+    let frame = camera.prepare(1.0).unwrap();
+    let (mut holes, mut phantoms, mut inside) = (0, 0, 0);
+    for y in 0..n {
+        for x in 0..n {
+            let ray = frame.ray((x as f64 + 0.5) / n as f64, (y as f64 + 0.5) / n as f64);
+            let miss_distance = centre.cross(ray.dir).length() / ray.dir.length();
+            let hit = film.get(x, y).x > 0.0;
+            if miss_distance < 1.0 - 1e-9 {
+                inside += 1;
+                holes += usize::from(!hit);
+            } else if miss_distance > 1.0 + 1e-9 {
+                phantoms += usize::from(hit);
+            }
+        }
+    }
+    assert!(
+        inside > 7000,
+        "the disc covers about π·50² pixels, got {inside}"
+    );
+    assert_eq!((holes, phantoms), (0, 0));
+}
+
+#[test]
+fn ray_exactly_along_a_paraboloid_axis_hits_and_the_cup_has_no_holes() {
+    // Odd resolution: the centre pixel's ray is exactly the axis x = y = 0 (a = 0 in the quadratic).
+    let camera = Camera {
+        from: DVec3::new(0.0, 0.0, 5.0),
+        to: DVec3::ZERO,
+        up: DVec3::Y,
+        projection: Projection::Orthographic { height: 2.4 },
+    };
+    let cup = Quadric::new(
+        QuadricSurface::Canonical {
+            kind: QuadricKind::EllipticParaboloid,
+            a: 1.0,
+            b: 1.0,
+            c: 1.0,
+        },
+        ClipBox {
+            min: DVec3::new(-1.5, -1.5, 0.0),
+            max: DVec3::new(1.5, 1.5, 1.0),
+        },
+        Transform::IDENTITY,
+        0,
+    )
+    .unwrap();
+    let s = scene(
+        camera,
+        Geometry {
+            quadrics: vec![cup],
+            ..Geometry::default()
+        },
+    );
+    let n = 101;
+    let film = render_with_threads(&s, &settings(n, n), 2).film;
+    assert!(film.get(50, 50).x > 0.0, "the axis ray hits the vertex");
+    let pixel = 2.4 / n as f64;
+    for y in 0..n {
+        for x in 0..n {
+            let r =
+                ((x as f64 + 0.5 - 50.5).powi(2) + (y as f64 + 0.5 - 50.5).powi(2)).sqrt() * pixel;
+            // Inside the rim z = 1 (radius 1) every pixel hits; outside it nothing does.
+            if r < 0.98 {
+                assert!(film.get(x, y).x > 0.0, "hole at pixel ({x}, {y})");
+            } else if r > 1.02 {
+                assert_eq!(film.get(x, y).x, 0.0, "phantom at ({x}, {y})");
+            }
+        }
+    }
+}
+
+/// Deterministic pseudo-random unit vectors (SplitMix64), so the test is repeatable.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn unit(&mut self) -> DVec3 {
+        let z = 1.0 - 2.0 * self.next();
+        let phi = std::f64::consts::TAU * self.next();
+        let s = (1.0 - z * z).sqrt();
+        DVec3::new(s * phi.cos(), s * phi.sin(), z)
+    }
+}
+
+#[test]
+fn no_acne_on_any_primitive_kind() {
+    // pbrt's re-intersection protocol: from each hit, rays leaving on the side the camera ray came
+    // from must not hit the same primitive again at that point (t below 1e-6 of the object size).
+    let rotate = Transform::from_srt(
+        DVec3::new(1.0, 1.3, 0.8),
+        DVec3::new(25.0, -40.0, 70.0),
+        DVec3::new(1e3, -2e3, 5e2),
+    )
+    .unwrap();
+    let mut quadrics: Vec<Quadric> = QuadricKind::ALL
+        .iter()
+        .map(|&kind| {
+            Quadric::new(
+                QuadricSurface::Canonical {
+                    kind,
+                    a: 0.7,
+                    b: 0.9,
+                    c: 0.6,
+                },
+                ClipBox::cube(1.0),
+                rotate,
+                0,
+            )
+            .unwrap()
+        })
+        .collect();
+    let mut rng = Rng(7);
+    let (mut hits, mut acne) = (0, 0);
+    for q in quadrics.drain(..) {
+        let kind = q.class();
+        let centre = rotate.to_world.translation;
+        let s = scene(
+            Camera::orbit(centre, 0.0, 0.0, 5.0, 40.0),
+            Geometry {
+                quadrics: vec![q],
+                spheres: vec![Sphere {
+                    center: centre + DVec3::new(0.0, 0.0, -4.0),
+                    radius: 1.5,
+                    material: 0,
+                }],
+                ..Geometry::default()
+            },
+        );
+        let integrator = Whitted::default();
+        let mut kind_hits = 0;
+        for _ in 0..300 {
+            let from = centre + rng.unit() * 6.0;
+            let ray = Ray::new(from, (centre + rng.unit() * 0.8 - from).normalize());
+            let Some(hit) = integrator.intersect(&s, &ray, None) else {
+                continue;
+            };
+            kind_hits += 1;
+            let g = hit.geometry;
+            let side = if g.geometric_normal.dot(ray.dir) < 0.0 {
+                g.geometric_normal
+            } else {
+                -g.geometric_normal
+            };
+            for _ in 0..50 {
+                let mut dir = rng.unit();
+                if dir.dot(side) < 0.0 {
+                    dir = -dir;
+                }
+                let spawned = Ray::new(offset_origin(g.point, side, g.error, dir), dir);
+                let again = s
+                    .accel()
+                    .closest(&s.geometry, &spawned, f64::INFINITY, Some(hit.prim));
+                if again.is_some_and(|(t, prim)| prim == hit.prim && t < 1e-6) {
+                    acne += 1;
+                }
+            }
+        }
+        assert!(kind_hits > 30, "{kind}: {kind_hits} hits");
+        hits += kind_hits;
+    }
+    assert!(hits > 1000);
+    assert_eq!(acne, 0);
+}
