@@ -156,7 +156,7 @@ fn node_transform(node: &Value) -> Result<DAffine3, String> {
     let s = numbers("scale", 3)?.map_or(DVec3::ONE, |v| DVec3::from_slice(&v));
     let q = numbers("rotation", 4)?.map_or(DQuat::IDENTITY, |v| DQuat::from_slice(&v));
     let len = q.length();
-    if !(len > 0.0) {
+    if len.is_nan() || len <= 0.0 {
         return Err("`rotation` is not a unit quaternion".into());
     }
     Ok(DAffine3::from_scale_rotation_translation(s, q / len, t))
