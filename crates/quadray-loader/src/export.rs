@@ -15,7 +15,8 @@
 //!   the original 8-bit codes, so nothing is lost.
 //! - Both extensions are listed in `extensionsUsed` only, never `extensionsRequired`.
 //!
-//! The background colour and the render settings have no place in glTF and are not written.
+//! The background colour and the render settings have no place in glTF; they are kept as
+//! application data in the scene's `extras.quadray`, which quadray reads back and others ignore.
 
 use crate::gltf_light::LUMENS_PER_WATT;
 use crate::import::geometry_bounds;
@@ -52,9 +53,9 @@ pub enum ExportError {
 }
 
 /// Grid cells along a quadric's clip box for its fallback mesh.
-const QUADRIC_CELLS: u32 = 40;
+const QUADRIC_CELLS: u32 = 24;
 /// Longitude segments of a sphere's fallback mesh (half as many latitude rings).
-const SPHERE_SEGMENTS: u32 = 48;
+const SPHERE_SEGMENTS: u32 = 32;
 
 /// glTF sampler and accessor enumerations used here.
 mod gl {
@@ -155,7 +156,12 @@ impl Document {
         let pos = self.floats(&flat(m.positions), m.positions.len(), "VEC3", true);
         attributes.insert("POSITION".into(), json!(pos));
         if let Some(n) = m.normals {
-            let a = self.floats(&flat(n), n.len(), "VEC3", false);
+            // glTF requires unit normals; a zero normal (a loader's degenerate input) becomes +z.
+            let unit: Vec<Vec3> = n
+                .iter()
+                .map(|v| v.try_normalize().unwrap_or(Vec3::Z))
+                .collect();
+            let a = self.floats(&flat(&unit), n.len(), "VEC3", false);
             attributes.insert("NORMAL".into(), json!(a));
         }
         for (set, uv) in m.texcoords.iter().enumerate() {
@@ -294,9 +300,12 @@ impl Document {
     }
 }
 
-/// A node matrix (column-major) from an affine map.
-fn matrix(a: &DAffine3) -> Value {
-    json!(glam::DMat4::from(*a).to_cols_array())
+/// Sets a node's matrix (column-major) from an affine map, leaving the identity unwritten as the
+/// spec asks.
+fn set_matrix(node: &mut Value, a: &DAffine3) {
+    if *a != DAffine3::IDENTITY {
+        node["matrix"] = json!(glam::DMat4::from(*a).to_cols_array());
+    }
 }
 
 /// An affine map whose local −z is `direction` and local +y the part of `up` orthogonal to it.
@@ -371,9 +380,9 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
         ));
         let mut node = json!({
             "name": name,
-            "matrix": matrix(&q.transform().to_world),
             "extensions": {quadrics_ext::EXTENSION: NodeExtension { shape: doc.shapes.len() - 1, extensions: None, extras: None }},
         });
+        set_matrix(&mut node, &q.transform().to_world);
         if let Some(mesh) = mesh {
             node["mesh"] = json!(mesh);
         }
@@ -424,9 +433,9 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
         let frame = DAffine3::from_mat3_translation(DMat3::from_cols(u, v, p.normal), p.point);
         let mut node = json!({
             "name": name,
-            "matrix": matrix(&frame),
             "extensions": {quadrics_ext::EXTENSION: NodeExtension { shape: doc.shapes.len() - 1, extensions: None, extras: None }},
         });
+        set_matrix(&mut node, &frame);
         if let Some(mesh) = mesh {
             node["mesh"] = json!(mesh);
         }
@@ -449,7 +458,9 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
     };
     doc.cameras.push(camera);
     let view = looking(cam.from, cam.to - cam.from, cam.up);
-    children.push(doc.node(json!({"name": "camera", "camera": 0, "matrix": matrix(&view)})));
+    let mut camera_node = json!({"name": "camera", "camera": 0});
+    set_matrix(&mut camera_node, &view);
+    children.push(doc.node(camera_node));
 
     let scale = (LUMENS_PER_WATT * std::f64::consts::PI) as f32;
     let colour_and_intensity = |c: Vec3| {
@@ -509,11 +520,12 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
             }
         };
         doc.lights.push(light);
-        children.push(doc.node(json!({
+        let mut node = json!({
             "name": name,
-            "matrix": matrix(&node_matrix),
             "extensions": {"KHR_lights_punctual": {"light": doc.lights.len() - 1}},
-        })));
+        });
+        set_matrix(&mut node, &node_matrix);
+        children.push(doc.node(node));
     }
 
     // quadray (x, y, z) → glTF (x, z, −y): columns are the images of x, y and z.
@@ -522,10 +534,13 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
         "matrix": [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
         "children": children,
     }));
-    notes.push(
-        "the background colour and render settings are not part of glTF and were not written"
-            .into(),
-    );
+    // Not glTF content: quadray's own settings, as application data other tools ignore.
+    let hints = quadrics_ext::RenderHints {
+        background: Some(d.background.to_array()),
+        resolution: Some([scene.settings.width, scene.settings.height]),
+        spp: Some(scene.settings.spp),
+        max_depth: Some(scene.settings.max_depth),
+    };
 
     let mut used = vec![quadrics_ext::EXTENSION];
     if !doc.lights.is_empty() {
@@ -554,7 +569,7 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
         "extensionsUsed": used,
         "extensions": extensions,
         "scene": 0,
-        "scenes": [{"name": "quadray scene", "nodes": [root]}],
+        "scenes": [{"name": "quadray scene", "nodes": [root], "extras": {"quadray": hints}}],
         "nodes": doc.nodes,
         "meshes": doc.meshes,
         "materials": doc.materials,
@@ -724,8 +739,15 @@ intensity = 0.8
         for name in ["round trip.gltf", "round-trip.glb"] {
             let out = temp(name);
             let notes = export_gltf(&scene, &out).unwrap();
-            assert!(notes.iter().any(|n| n.contains("background")), "{notes:?}");
+            assert!(!notes.is_empty());
             let back = crate::gltf::import_gltf(&out, &ImportOptions::default()).unwrap();
+            // Render settings and background come back through the scene's extras.
+            let hints = &back.hints;
+            assert_eq!(hints.resolution, Some([320, 180]));
+            assert_eq!(
+                hints.background,
+                Some(scene.description.background.to_array())
+            );
             let (a, b) = (&scene.description.geometry, &back.geometry);
             assert_eq!(b.quadrics.len(), 2);
             for (qa, qb) in a.quadrics.iter().zip(&b.quadrics) {

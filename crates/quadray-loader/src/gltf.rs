@@ -69,6 +69,15 @@ pub fn convert(
         ),
         None => doc.default_scene().or_else(|| doc.scenes().next()),
     };
+    let mut hints = crate::quadrics_ext::RenderHints::default();
+    if let Some(extras) = scene
+        .as_ref()
+        .and_then(|s| file.scene_extras.get(s.index()))
+        .and_then(Option::as_ref)
+    {
+        hints = serde_json::from_value(extras.clone())
+            .map_err(|e| invalid("scenes[].extras.quadray".into(), e.to_string()))?;
+    }
     let roots: Vec<gltf::Node<'_>> = match &scene {
         Some(s) => {
             if scene_count > 1 {
@@ -296,6 +305,7 @@ pub fn convert(
         notes.push(n);
     }
     out.nodes = instances;
+    out.hints = hints;
     out.materials = materials.list;
     if out.materials.is_empty() && !options.skip_materials {
         out.materials

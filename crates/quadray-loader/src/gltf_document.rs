@@ -34,6 +34,8 @@ pub struct GltfFile {
     /// Each node's local transform, read from the JSON in f64 (the gltf crate keeps f32, which
     /// would blur quadric placements written by quadray); an error says what is wrong with it.
     pub node_transforms: Vec<Result<DAffine3, String>>,
+    /// Each scene's `extras.quadray` object, if any (kept here: the gltf crate drops extras).
+    pub scene_extras: Vec<Option<Value>>,
 }
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -68,6 +70,16 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
         .get("nodes")
         .and_then(Value::as_array)
         .map(|nodes| nodes.iter().map(node_transform).collect())
+        .unwrap_or_default();
+    let scene_extras = value
+        .get("scenes")
+        .and_then(Value::as_array)
+        .map(|scenes| {
+            scenes
+                .iter()
+                .map(|s| s.get("extras").and_then(|e| e.get("quadray")).cloned())
+                .collect()
+        })
         .unwrap_or_default();
     let root: gltf::json::Root = serde_json::from_value(value).map_err(|e| {
         LoadError::new(
@@ -125,6 +137,7 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
         buffers,
         base,
         node_transforms,
+        scene_extras,
     })
 }
 

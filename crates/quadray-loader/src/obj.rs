@@ -121,7 +121,7 @@ pub fn import_obj_bytes(
         let material = match mesh.material_id {
             Some(i) if i < materials.len() && !options.skip_materials => i as u32,
             _ => {
-                if !materials.is_empty() {
+                if !materials.is_empty() && !options.skip_materials {
                     unmatched += 1;
                 }
                 default_id

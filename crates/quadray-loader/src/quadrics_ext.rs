@@ -173,6 +173,25 @@ pub enum TextureDef {
     },
 }
 
+/// quadray's own render settings, kept in a scene's `extras.quadray` (glTF application data, not
+/// part of the extension) so that a converted scene renders as it did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct RenderHints {
+    /// Linear RGB background.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub background: Option<[f32; 3]>,
+    /// Width and height in pixels.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resolution: Option<[u32; 2]>,
+    /// Samples per pixel.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spp: Option<u32>,
+    /// Most rays in one chain.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_depth: Option<u32>,
+}
+
 /// Places shape definition `def` in the world by `to_world`, with material index `material`.
 pub fn place(def: &ShapeDef, to_world: DAffine3, material: u32) -> Result<PlacedShape, String> {
     let only = |field: bool, name: &str| {

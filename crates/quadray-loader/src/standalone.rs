@@ -64,11 +64,20 @@ pub fn scene_from_import(
         );
         lights.push(default_key_light(&camera));
     }
+    let hints = &imported.hints;
+    if let Some([w, h]) = hints.resolution {
+        (settings.width, settings.height) = (w, h);
+    }
+    settings.spp = hints.spp.unwrap_or(settings.spp);
+    settings.max_depth = hints.max_depth.unwrap_or(settings.max_depth);
+    let background = hints
+        .background
+        .map_or(DEFAULT_BACKGROUND, Vec3::from_array);
     let (material_names, materials) = imported.materials.into_iter().unzip();
     Ok(LoadedScene {
         description: SceneDescription {
             camera,
-            background: DEFAULT_BACKGROUND,
+            background,
             materials,
             lights,
             geometry: imported.geometry,

@@ -165,7 +165,29 @@ pub fn quadric(k: &Coefficients, clip: ClipBox, cells: u32) -> TriMesh {
             }
         }
     }
+    fill_vanishing_normals(&mut mesh);
     mesh
+}
+
+/// Where the gradient vanishes (a cone's apex) a vertex has no normal of its own; it gets the
+/// normalised sum of its triangles' normals instead, so every normal written is unit length.
+fn fill_vanishing_normals(mesh: &mut TriMesh) {
+    if mesh.normals.iter().all(|n| n.length_squared() > 0.0) {
+        return;
+    }
+    let mut sums = vec![DVec3::ZERO; mesh.positions.len()];
+    for t in &mesh.indices {
+        let p = t.map(|i| mesh.positions[i as usize].as_dvec3());
+        let face = (p[1] - p[0]).cross(p[2] - p[0]);
+        for &i in t {
+            sums[i as usize] += face;
+        }
+    }
+    for (n, sum) in mesh.normals.iter_mut().zip(sums) {
+        if n.length_squared() == 0.0 {
+            *n = sum.try_normalize().unwrap_or(DVec3::Z).as_vec3();
+        }
+    }
 }
 
 /// Adds triangle `t`, turned so that its winding agrees with ∇f. A triangle of zero area (the
