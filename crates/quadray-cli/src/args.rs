@@ -19,6 +19,8 @@ pub enum Command {
     Render(RenderArgs),
     /// Validate a scene without rendering it.
     Check(CheckArgs),
+    /// Write a scene as glTF 2.0 (.gltf + .bin, or .glb), quadrics through the QUADRAY_quadrics extension.
+    Convert(ConvertArgs),
     /// Benchmarks: speed against error of the quadric intersector.
     #[command(subcommand)]
     Bench(crate::bench::BenchCommand),
@@ -47,6 +49,19 @@ pub struct RenderArgs {
     /// Print load and BVH build times besides the final stats line.
     #[arg(long)]
     pub stats: bool,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Arguments of `quadray convert`.
+#[derive(Args, Debug)]
+pub struct ConvertArgs {
+    /// The scene file (.toml, .obj, .gltf or .glb).
+    pub scene: PathBuf,
+    /// Output file: .gltf (with a .bin beside it) or .glb.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,

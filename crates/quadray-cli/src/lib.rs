@@ -4,6 +4,7 @@
 pub mod args;
 pub mod bench;
 mod check;
+mod convert;
 pub mod output;
 mod progress;
 mod render_cmd;
@@ -15,6 +16,7 @@ pub fn run(cli: args::Cli) -> anyhow::Result<()> {
     match cli.command {
         args::Command::Render(a) => render_cmd::run(&a),
         args::Command::Check(a) => check::run(&a),
+        args::Command::Convert(a) => convert::run(&a),
         args::Command::Bench(b) => bench::run(&b),
     }
 }

@@ -1,0 +1,37 @@
+//! `quadray convert`: write a scene (native, OBJ or glTF) as glTF 2.0 with the `QUADRAY_quadrics`
+//! extension and tessellated fallbacks, so it opens in other tools and reads back into quadray.
+
+use crate::args::ConvertArgs;
+use anyhow::{Context, Result};
+
+/// Runs the convert subcommand.
+pub fn run(args: &ConvertArgs) -> Result<()> {
+    let loaded = quadray_loader::load_any(&args.scene)?;
+    for note in &loaded.notes {
+        if !args.quiet {
+            eprintln!("note: {note}");
+        }
+    }
+    // Validate first: a scene quadray would refuse to render is not worth exporting.
+    quadray::Scene::new(loaded.description.clone())
+        .with_context(|| format!("invalid scene {}", args.scene.display()))?;
+    let notes = quadray_loader::export::export_gltf(&loaded, &args.output)
+        .with_context(|| format!("writing {}", args.output.display()))?;
+    if !args.quiet {
+        for note in notes {
+            eprintln!("note: {note}");
+        }
+        let g = &loaded.description.geometry;
+        eprintln!(
+            "wrote {}: {} meshes, {} quadrics, {} spheres, {} planes, {} lights, {} materials",
+            args.output.display(),
+            g.meshes.len(),
+            g.quadrics.len(),
+            g.spheres.len(),
+            g.planes.len(),
+            loaded.description.lights.len(),
+            loaded.description.materials.len()
+        );
+    }
+    Ok(())
+}

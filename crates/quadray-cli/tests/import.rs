@@ -1,0 +1,212 @@
+//! The real `quadray` binary on OBJ and glTF files: `render` straight from them, `convert` to glTF
+//! and back, and clean refusals.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn quadray(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_quadray"))
+        .args(args)
+        .output()
+        .expect("the quadray binary runs")
+}
+
+fn repo(path: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(path)
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn shared_asset(path: &str) -> Option<PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/assets")
+        .join(path);
+    if p.is_file() {
+        Some(p)
+    } else {
+        eprintln!("skipping: {} not found (../shared is absent)", p.display());
+        None
+    }
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Decoded RGB bytes of a PNG.
+fn png(path: &Path) -> (u32, u32, Vec<u8>) {
+    let img = image::open(path).expect("a PNG was written").into_rgb8();
+    (img.width(), img.height(), img.into_raw())
+}
+
+#[test]
+fn renders_obj_gltf_and_glb_files_directly() {
+    let dir = tempfile::tempdir().unwrap();
+    // The project's own OBJ + MTL (no camera, no lights: both assumed, and said).
+    let out = dir.path().join("pedestal.png");
+    let o = quadray(&[
+        "render",
+        &repo("scenes/obj-mtl/pedestal.obj"),
+        "-o",
+        out.to_str().unwrap(),
+        "--res",
+        "64x48",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("note: no camera in the file"), "{e}");
+    assert!(e.contains("note: no lights in the file"), "{e}");
+    let (w, h, rgb) = png(&out);
+    assert_eq!((w, h), (64, 48));
+    // The framing camera puts the model in the middle of the frame: the centre pixel is not the
+    // background (0.05 grey, sRGB code 63).
+    let centre = ((h / 2 * w + w / 2) * 3) as usize;
+    assert_ne!(&rgb[centre..centre + 3], &[63, 63, 63]);
+
+    // The project's own glTF with the extension, and a GLB written by convert.
+    let out = dir.path().join("quadrics.png");
+    let o = quadray(&[
+        "render",
+        &repo("scenes/gltf-quadrics.gltf"),
+        "-o",
+        out.to_str().unwrap(),
+        "--res",
+        "64x40",
+        "--spp",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("64x40, 1 spp: 2560 camera"),
+        "{}",
+        stderr(&o)
+    );
+
+    if let Some(duck) = shared_asset("gltf/khronos/Duck/glTF-Binary/Duck.glb") {
+        let out = dir.path().join("duck.png");
+        let o = quadray(&[
+            "render",
+            duck.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--res",
+            "48x48",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        // The duck has a camera: only the light is assumed.
+        assert!(!stderr(&o).contains("no camera"), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("no lights in the file"),
+            "{}",
+            stderr(&o)
+        );
+    }
+}
+
+#[test]
+fn convert_writes_gltf_and_glb_that_render_like_the_native_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let native = dir.path().join("native.png");
+    let o = quadray(&[
+        "render",
+        &repo("scenes/defense.toml"),
+        "-o",
+        native.to_str().unwrap(),
+        "--res",
+        "96x54",
+        "--spp",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for name in ["defense.gltf", "defense.glb"] {
+        let converted = dir.path().join(name);
+        let o = quadray(&[
+            "convert",
+            &repo("scenes/defense.toml"),
+            "-o",
+            converted.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("4 quadrics, 2 spheres, 1 planes"),
+            "{}",
+            stderr(&o)
+        );
+        if name.ends_with(".gltf") {
+            assert!(dir.path().join("defense.bin").is_file());
+        }
+        let out = dir.path().join(format!("{name}.png"));
+        let o = quadray(&[
+            "render",
+            converted.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--res",
+            "96x54",
+            "--spp",
+            "1",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        // Same geometry, materials, lights and background: the images agree but for pixels where
+        // glTF's f32 camera angle moves a silhouette by a hair.
+        let (a, b) = (png(&native).2, png(&out).2);
+        let differing = a
+            .chunks(3)
+            .zip(b.chunks(3))
+            .filter(|(p, q)| p.iter().zip(q.iter()).any(|(x, y)| x.abs_diff(*y) > 2))
+            .count();
+        assert!(
+            differing <= 96 * 54 / 200,
+            "{name}: {differing} pixels differ"
+        );
+    }
+}
+
+#[test]
+fn refusals_exit_nonzero_and_name_the_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = quadray(&[
+        "convert",
+        &repo("scenes/defense.toml"),
+        "-o",
+        dir.path().join("x.obj").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("must end in .gltf or .glb"),
+        "{}",
+        stderr(&o)
+    );
+    let bad = dir.path().join("bad.obj");
+    std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nf 1 2 3\n").unwrap();
+    let o = quadray(&[
+        "render",
+        bad.to_str().unwrap(),
+        "-o",
+        dir.path().join("o.png").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("bad.obj:3:1: face index 3 is out of range"),
+        "{e}"
+    );
+    assert!(!e.contains("panicked"), "{e}");
+    if let Some(draco) = shared_asset("gltf/draco/pmndrs_bunny.glb") {
+        let o = quadray(&[
+            "render",
+            draco.to_str().unwrap(),
+            "-o",
+            dir.path().join("d.png").to_str().unwrap(),
+        ]);
+        assert!(!o.status.success());
+        assert!(
+            stderr(&o).contains("KHR_draco_mesh_compression"),
+            "{}",
+            stderr(&o)
+        );
+        assert!(!dir.path().join("d.png").exists());
+    }
+}
