@@ -2,7 +2,7 @@
 //!
 //! Whitted shading has a diffuse term, a Phong/Blinn highlight and a perfect mirror; PBR has a
 //! base colour, a metalness and a microfacet roughness. The mapping (also in
-//! `docs/scene-format-import.md`):
+//! `docs/import.md`):
 //!
 //! | glTF | quadray |
 //! |---|---|

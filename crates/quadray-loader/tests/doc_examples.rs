@@ -31,6 +31,8 @@ fn every_documented_example_loads() {
         .cloned()
         .collect();
     let default_camera = "[camera]\nfrom = [0, -5, 2]\nto = [0, 0, 0]\n";
+    // Examples that read files (`[[mesh]] path`, `[[include]]`) name files in scenes/.
+    let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/doc.toml");
     let mut checked = 0;
     for block in &blocks {
         if block.starts_with("transform") {
@@ -38,7 +40,7 @@ fn every_documented_example_loads() {
             let scene = format!(
                 "version = 1\n{default_camera}{materials}[[quadric]]\nkind = \"cone\"\nclip = 1\nmaterial = \"ramp\"\n{block}"
             );
-            quadray_loader::parse_scene(&scene, Path::new("doc.toml"))
+            quadray_loader::parse_scene(&scene, &scene_path)
                 .unwrap_or_else(|e| panic!("{e}\n{block}"));
         } else {
             let body = block.replace("version = 1\n", "");
@@ -50,7 +52,7 @@ fn every_documented_example_loads() {
                 scene.push_str(&materials);
             }
             scene.push_str(&body);
-            let loaded = quadray_loader::parse_scene(&scene, Path::new("doc.toml"))
+            let loaded = quadray_loader::parse_scene(&scene, &scene_path)
                 .unwrap_or_else(|e| panic!("{e}\n{scene}"));
             quadray::Scene::new(loaded.description).unwrap_or_else(|e| panic!("{e}\n{scene}"));
         }
