@@ -113,6 +113,20 @@ impl Accel {
         }
     }
 
+    /// Bytes the acceleration structure keeps allocated: obvhs' nodes and index lists, and the
+    /// primitive list in leaf order (memory reports; the build's transient buffers are not counted).
+    pub fn memory_bytes(&self) -> usize {
+        let bvh = self.bvh.as_ref().map_or(0, |b| {
+            b.nodes.capacity() * std::mem::size_of::<obvhs::bvh2::node::Bvh2Node>()
+                + (b.primitive_indices.capacity()
+                    + b.primitive_indices_freelist.capacity()
+                    + b.primitives_to_nodes.capacity()
+                    + b.parents.capacity())
+                    * std::mem::size_of::<u32>()
+        });
+        bvh + self.prims.capacity() * std::mem::size_of::<PrimRef>()
+    }
+
     /// Number of primitives in the BVH (triangles counted one by one).
     pub fn bounded_count(&self) -> usize {
         self.prims.len()
