@@ -49,6 +49,12 @@ pub struct RenderArgs {
     /// Print load and BVH build times besides the final stats line.
     #[arg(long)]
     pub stats: bool,
+    /// For a glTF file: the scene to render, by index or name (default: the file's default scene).
+    #[arg(long, value_name = "INDEX|NAME", value_parser = parse_selector)]
+    pub gltf_scene: Option<quadray_loader::Selector>,
+    /// For an OBJ or glTF file: the file's camera to use, by index or name (default: its first).
+    #[arg(long, value_name = "INDEX|NAME", value_parser = parse_selector)]
+    pub camera: Option<quadray_loader::Selector>,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -72,6 +78,14 @@ pub struct ConvertArgs {
 pub struct CheckArgs {
     /// The scene file.
     pub scene: PathBuf,
+}
+
+/// Parses a scene or camera choice: a number is an index, anything else a name.
+pub fn parse_selector(s: &str) -> Result<quadray_loader::Selector, String> {
+    Ok(match s.parse::<usize>() {
+        Ok(i) => quadray_loader::Selector::Index(i),
+        Err(_) => quadray_loader::Selector::Name(s.to_string()),
+    })
 }
 
 /// Parses `640x480`.

@@ -11,7 +11,11 @@ use std::time::Instant;
 pub fn run(args: &RenderArgs) -> Result<()> {
     check_writable(&args.output)?;
     let start = Instant::now();
-    let loaded = quadray_loader::load_any(&args.scene)?;
+    let options = quadray_loader::ImportOptions {
+        scene: args.gltf_scene.clone(),
+        ..Default::default()
+    };
+    let loaded = quadray_loader::load_any_with(&args.scene, &options, args.camera.as_ref())?;
     for note in &loaded.notes {
         if !args.quiet {
             eprintln!("note: {note}");

@@ -194,6 +194,50 @@ fn refusals_exit_nonzero_and_name_the_problem() {
         "{e}"
     );
     assert!(!e.contains("panicked"), "{e}");
+    // Choosing a camera or a glTF scene that the file does not have.
+    let gltf = repo("scenes/gltf-quadrics.gltf");
+    let out = dir.path().join("c.png");
+    let o = quadray(&[
+        "render",
+        &gltf,
+        "-o",
+        out.to_str().unwrap(),
+        "--camera",
+        "5",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("no camera #5 (the file has 1: #0 \"camera\")"),
+        "{}",
+        stderr(&o)
+    );
+    let o = quadray(&[
+        "render",
+        &gltf,
+        "-o",
+        out.to_str().unwrap(),
+        "--gltf-scene",
+        "3",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("scene #3 does not exist (the file has 1)"),
+        "{}",
+        stderr(&o)
+    );
+    let o = quadray(&[
+        "render",
+        &gltf,
+        "-o",
+        out.to_str().unwrap(),
+        "--res",
+        "32x20",
+        "--camera",
+        "camera",
+        "--gltf-scene",
+        "0",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
     if let Some(draco) = shared_asset("gltf/draco/pmndrs_bunny.glb") {
         let o = quadray(&[
             "render",

@@ -37,7 +37,10 @@ fn rss() -> Option<usize> {
 fn main() {
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets/meshes");
     if !assets.is_dir() {
-        eprintln!("skipping: {} not found (../shared is absent)", assets.display());
+        eprintln!(
+            "skipping: {} not found (../shared is absent)",
+            assets.display()
+        );
         return;
     }
     let meshes: [(&str, PathBuf); 2] = [
@@ -45,7 +48,9 @@ fn main() {
         ("kitchen", assets.join("obvhs_kitchen/kitchen.obj.zst")),
     ];
     println!("median of {RUNS} runs, milliseconds");
-    println!("| mesh | triangles | tobj parse | quadray import | conversion share | BVH build, 1 thread | BVH build, 2 threads | load + BVH, 1 thread | load + BVH, 2 threads | mesh bytes/tri | BVH bytes/tri | peak RSS growth of the build, bytes/tri |");
+    println!(
+        "| mesh | triangles | tobj parse | quadray import | conversion share | BVH build, 1 thread | BVH build, 2 threads | load + BVH, 1 thread | load + BVH, 2 threads | mesh bytes/tri | BVH bytes/tri | peak RSS growth of the build, bytes/tri |"
+    );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for (name, path) in meshes {
         let bytes = zstd::decode_all(std::fs::File::open(&path).expect("asset")).expect("zstd");
@@ -62,8 +67,10 @@ fn main() {
         let mut imported = None;
         for _ in 0..RUNS {
             let t = Instant::now();
-            let r = tobj::load_obj_buf(&mut &bytes[..], &options, |p| tobj::load_mtl(folder.join(p)))
-                .expect("tobj parses");
+            let r = tobj::load_obj_buf(&mut &bytes[..], &options, |p| {
+                tobj::load_mtl(folder.join(p))
+            })
+            .expect("tobj parses");
             std::hint::black_box(&r);
             tobj_times.push(t.elapsed());
             drop(r);
@@ -74,19 +81,29 @@ fn main() {
         }
         let imported = imported.unwrap();
         let triangles = imported.triangle_count();
-        let mesh_bytes: usize = imported.geometry.meshes.iter().map(|m| m.memory_bytes()).sum();
+        let mesh_bytes: usize = imported
+            .geometry
+            .meshes
+            .iter()
+            .map(|m| m.memory_bytes())
+            .sum();
         let scene = quadray_loader::standalone::scene_from_import(imported, &plain, None).unwrap();
         let mut build = [0.0; 2];
         let mut rss_growth = 0usize;
         let mut accel_bytes = 0usize;
         for (k, threads) in [1usize, 2].into_iter().enumerate() {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
             let times: Vec<Duration> = (0..RUNS)
                 .map(|_| {
                     let description = scene.description.clone();
                     let before = rss();
                     let t = Instant::now();
-                    let s = pool.install(|| Scene::new(description)).expect("valid scene");
+                    let s = pool
+                        .install(|| Scene::new(description))
+                        .expect("valid scene");
                     let e = t.elapsed();
                     if let (Some(b), Some(a)) = (before, rss()) {
                         rss_growth = rss_growth.max(a.saturating_sub(b));
