@@ -34,7 +34,10 @@ pub struct CompareArgs {
 
 /// Runs the compare subcommand: the measures on stdout, an error (exit 1) over the thresholds.
 pub fn run(args: &CompareArgs) -> Result<()> {
-    for (name, v) in [("--threshold", args.threshold), ("--max-diff", args.max_diff)] {
+    for (name, v) in [
+        ("--threshold", args.threshold),
+        ("--max-diff", args.max_diff),
+    ] {
         ensure!(
             v.is_finite() && v >= 0.0,
             "{name} must be a non-negative number of 8-bit steps, got {v}"

@@ -100,13 +100,7 @@ pub fn render_sheet(args: &GalleryArgs) -> Result<(u32, u32, Vec<u8>)> {
         canvas.text_centred(cx, cap_y + 2 * scale as i64, &name, scale, NAME_COLOUR);
         // The equation at the name's size when it fits, else the largest size that does.
         let eq = caption_equation(show);
-        canvas.text_centred(
-            cx,
-            cap_y + 16 * scale as i64,
-            eq,
-            eq_scale,
-            EQUATION_COLOUR,
-        );
+        canvas.text_centred(cx, cap_y + 16 * scale as i64, eq, eq_scale, EQUATION_COLOUR);
         if !args.quiet {
             eprintln!("rendered {} ({}/{})", show.name(), i + 1, shows.len());
         }

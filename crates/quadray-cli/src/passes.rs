@@ -173,7 +173,9 @@ pub fn pass_rgb8(pass: Pass, film: &Film, aovs: Option<&Aovs>) -> Result<Vec<u8>
                 if p.normal == glam::Vec3::ZERO {
                     [0; 3]
                 } else {
-                    p.normal.to_array().map(|c| ((c + 1.0) * 127.5).round() as u8)
+                    p.normal
+                        .to_array()
+                        .map(|c| ((c + 1.0) * 127.5).round() as u8)
                 }
             })
             .collect(),

@@ -5,8 +5,8 @@
 use anyhow::{Result, anyhow};
 use glam::{DVec3, Vec3};
 use quadray::{
-    Camera, ClipBox, Coefficients, Geometry, Light, Material, Quadric, QuadricKind,
-    QuadricSurface, SceneDescription, SpecularModel, Texture, Transform,
+    Camera, ClipBox, Coefficients, Geometry, Light, Material, Quadric, QuadricKind, QuadricSurface,
+    SceneDescription, SpecularModel, Texture, Transform,
 };
 
 /// A quadric as shown on its own: its surface, the seed's clip cube, and an orbit view.
@@ -251,7 +251,14 @@ mod tests {
         };
         assert!(s.quadric().unwrap_err().to_string().contains("ellipsoid"));
         // A sphere of radius 10 around the clip cube never enters it: nothing would show.
-        let g = Showcase::general(Coefficients([1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -100.0]));
-        assert!(g.quadric().unwrap_err().to_string().contains("does not reach"));
+        let g = Showcase::general(Coefficients([
+            1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -100.0,
+        ]));
+        assert!(
+            g.quadric()
+                .unwrap_err()
+                .to_string()
+                .contains("does not reach")
+        );
     }
 }

@@ -115,6 +115,10 @@ impl Scene {
                     position,
                     intensity,
                 } => position.is_finite() && non_negative(*intensity),
+                Light::PointNoFalloff {
+                    position,
+                    irradiance,
+                } => position.is_finite() && non_negative(*irradiance),
                 Light::Directional {
                     direction,
                     irradiance,
