@@ -278,7 +278,7 @@ impl Comparison {
     /// One line of every measure, for logs and reports.
     pub fn summary(&self, t: &Thresholds) -> String {
         format!(
-            "{}x{}: RMSE {:.5} (linear), max |diff| {:.4} linear / {:.1}/255 display, {} pixels ({:.3}%) over {}/255, FLIP mean {:.4} max {:.4}",
+            "{}x{}: RMSE {:.2e} (linear), max |diff| {:.4} linear / {:.1}/255 display, {} pixels ({:.3}%) over {}/255, FLIP mean {:.4} max {:.4}",
             self.width,
             self.height,
             self.rmse_linear,
