@@ -47,13 +47,13 @@ pub struct QuadricArgs {
     #[arg(long)]
     pub list: bool,
     /// Parameter a (default: the kind's textbook value).
-    #[arg(short = 'a', value_name = "A")]
+    #[arg(short = 'a', value_name = "A", allow_negative_numbers = true)]
     pub a: Option<f64>,
     /// Parameter b.
-    #[arg(short = 'b', value_name = "B")]
+    #[arg(short = 'b', value_name = "B", allow_negative_numbers = true)]
     pub b: Option<f64>,
     /// Parameter c.
-    #[arg(short = 'c', value_name = "C")]
+    #[arg(short = 'c', value_name = "C", allow_negative_numbers = true)]
     pub c: Option<f64>,
     /// The ten coefficients A..J of a general quadric (POV-Ray's order), comma-separated.
     #[arg(
