@@ -164,7 +164,9 @@ fn oiiotool(args: &[&str]) -> Option<String> {
             Some(String::from_utf8_lossy(&o.stdout).into_owned())
         }
         Err(e) => {
-            println!("skipped: oiiotool is not available ({e}); `apt-get install openimageio-tools`");
+            println!(
+                "skipped: oiiotool is not available ({e}); `apt-get install openimageio-tools`"
+            );
             None
         }
     }
@@ -188,7 +190,10 @@ fn exr_passes_read_back_in_an_independent_reader() {
     let Some(info) = oiiotool(&["--info", "-v", out.to_str().unwrap()]) else {
         return;
     };
-    assert!(info.contains("9 x    9, 12 channel, float openexr"), "{info}");
+    assert!(
+        info.contains("9 x    9, 12 channel, float openexr"),
+        "{info}"
+    );
     for name in [
         "ViewLayer.Combined.R",
         "ViewLayer.Combined.G",
@@ -210,7 +215,10 @@ fn exr_passes_read_back_in_an_independent_reader() {
     let dump = oiiotool(&["--dumpdata", out.to_str().unwrap()]).unwrap();
     let pixel = |x: u32, y: u32| -> Vec<f64> {
         let tag = format!("Pixel ({x}, {y}):");
-        let line = dump.lines().find(|l| l.contains(&tag)).expect("pixel listed");
+        let line = dump
+            .lines()
+            .find(|l| l.contains(&tag))
+            .expect("pixel listed");
         line.split(':')
             .nth(1)
             .unwrap()
@@ -264,31 +272,63 @@ fn png_shows_one_pass_and_bad_pass_options_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let scene = pass_scene(&dir);
     let out = tmp(&dir, "normal.png");
-    let o = quadray(&["render", &scene, "-o", out.to_str().unwrap(), "--pass", "normal", "-q"]);
+    let o = quadray(&[
+        "render",
+        &scene,
+        "-o",
+        out.to_str().unwrap(),
+        "--pass",
+        "normal",
+        "-q",
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let img = image::open(&out).unwrap().to_rgb8();
     // +z as (n + 1)/2 colours: (128, 128, 255).
     assert_eq!(img.get_pixel(4, 4).0, [128, 128, 255]);
     let ids = tmp(&dir, "ids.png");
-    let o = quadray(&["render", &scene, "-o", ids.to_str().unwrap(), "--pass", "object-id", "-q"]);
+    let o = quadray(&[
+        "render",
+        &scene,
+        "-o",
+        ids.to_str().unwrap(),
+        "--pass",
+        "object-id",
+        "-q",
+    ]);
     assert!(o.status.success());
     let img = image::open(&ids).unwrap().to_rgb8();
     assert_ne!(img.get_pixel(4, 4), img.get_pixel(0, 0));
 
     for (args, message) in [
-        (vec!["-o", "x.png", "--aov", "depth"], "--aov needs an .exr output"),
-        (vec!["-o", "x.exr", "--pass", "depth"], "--pass is for PNG output"),
+        (
+            vec!["-o", "x.png", "--aov", "depth"],
+            "--aov needs an .exr output",
+        ),
+        (
+            vec!["-o", "x.exr", "--pass", "depth"],
+            "--pass is for PNG output",
+        ),
         (vec!["-o", "x.png", "--half"], "--half is for EXR output"),
-        (vec!["-o", "x.exr", "--aov", "combined"], "the beauty image is always written"),
+        (
+            vec!["-o", "x.exr", "--aov", "combined"],
+            "the beauty image is always written",
+        ),
     ] {
         let mut all = vec!["render", scene.as_str()];
         all.extend(args);
         let o = quadray(&all);
         assert_eq!(o.status.code(), Some(1));
-        assert!(String::from_utf8_lossy(&o.stderr).contains(message), "{message}");
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains(message),
+            "{message}"
+        );
     }
     let o = quadray(&["render", &scene, "-o", "x.exr", "--aov", "speed"]);
-    assert_eq!(o.status.code(), Some(2), "unknown pass names are usage errors");
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "unknown pass names are usage errors"
+    );
 }
 
 #[test]
@@ -297,14 +337,34 @@ fn quadric_explorer_lists_renders_and_refuses_bad_input() {
     assert!(o.status.success());
     let list = String::from_utf8_lossy(&o.stdout);
     assert_eq!(list.lines().count(), 10);
-    assert!(list.contains("hyperboloid2           x²/a² + y²/b² − z²/c² = −1"), "{list}");
+    assert!(
+        list.contains("hyperboloid2           x²/a² + y²/b² − z²/c² = −1"),
+        "{list}"
+    );
     assert!(list.contains("general"));
 
     let dir = tempfile::tempdir().unwrap();
     let out = tmp(&dir, "cone.png");
     let o = quadray(&[
-        "quadric", "cone", "-a", "0.5", "-b", "0.8", "--clip", "1.5", "--texture", "checker",
-        "--yaw", "-30", "--pitch", "10", "--res", "64x48", "--spp", "1", "-o",
+        "quadric",
+        "cone",
+        "-a",
+        "0.5",
+        "-b",
+        "0.8",
+        "--clip",
+        "1.5",
+        "--texture",
+        "checker",
+        "--yaw",
+        "-30",
+        "--pitch",
+        "10",
+        "--res",
+        "64x48",
+        "--spp",
+        "1",
+        "-o",
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -317,21 +377,58 @@ fn quadric_explorer_lists_renders_and_refuses_bad_input() {
     // Without lighting the texture's flat colours show: the ramp's pure stops appear.
     let flat = tmp(&dir, "flat.png");
     let o = quadray(&[
-        "quadric", "general", "--coeffs", "1,1,-1,0,0,0,0,0,0,-0.25", "--no-lighting",
-        "--res", "48x48", "--spp", "1", "-o", flat.to_str().unwrap(),
+        "quadric",
+        "general",
+        "--coeffs",
+        "1,1,-1,0,0,0,0,0,0,-0.25",
+        "--no-lighting",
+        "--res",
+        "48x48",
+        "--spp",
+        "1",
+        "-o",
+        flat.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 
     for (args, message) in [
-        (vec!["quadric", "sphere", "-o", "x.png"], "unknown quadric kind \"sphere\""),
-        (vec!["quadric", "general", "-o", "x.png"], "exactly 10 numbers"),
-        (vec!["quadric", "cone", "--coeffs", "1,2", "-o", "x.png"], "--coeffs is for `general`"),
-        (vec!["quadric", "ellipsoid", "-a", "-1", "-o", "x.png"], "a must be"),
-        (vec!["quadric", "ellipsoid", "--clip", "0", "-o", "x.png"], "--clip must be a positive"),
-        (vec!["quadric", "ellipsoid", "--pitch", "100", "-o", "x.png"], "--pitch must be in"),
-        (vec!["quadric", "ellipsoid", "-o", "x.jpg"], "must end in .png or .exr"),
         (
-            vec!["quadric", "general", "--coeffs", "1,1,1,0,0,0,0,0,0,1", "-o", "x.png"],
+            vec!["quadric", "sphere", "-o", "x.png"],
+            "unknown quadric kind \"sphere\"",
+        ),
+        (
+            vec!["quadric", "general", "-o", "x.png"],
+            "exactly 10 numbers",
+        ),
+        (
+            vec!["quadric", "cone", "--coeffs", "1,2", "-o", "x.png"],
+            "--coeffs is for `general`",
+        ),
+        (
+            vec!["quadric", "ellipsoid", "-a", "-1", "-o", "x.png"],
+            "a must be",
+        ),
+        (
+            vec!["quadric", "ellipsoid", "--clip", "0", "-o", "x.png"],
+            "--clip must be a positive",
+        ),
+        (
+            vec!["quadric", "ellipsoid", "--pitch", "100", "-o", "x.png"],
+            "--pitch must be in",
+        ),
+        (
+            vec!["quadric", "ellipsoid", "-o", "x.jpg"],
+            "must end in .png or .exr",
+        ),
+        (
+            vec![
+                "quadric",
+                "general",
+                "--coeffs",
+                "1,1,1,0,0,0,0,0,0,1",
+                "-o",
+                "x.png",
+            ],
             "empty",
         ),
     ] {
@@ -347,7 +444,14 @@ fn gallery_is_a_labelled_sheet_of_every_kind() {
     let dir = tempfile::tempdir().unwrap();
     let out = tmp(&dir, "gallery.png");
     let o = quadray(&[
-        "gallery", "-o", out.to_str().unwrap(), "--tile", "120x110", "--spp", "1", "-q",
+        "gallery",
+        "-o",
+        out.to_str().unwrap(),
+        "--tile",
+        "120x110",
+        "--spp",
+        "1",
+        "-q",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let img = image::open(&out).unwrap().to_rgb8();
@@ -356,8 +460,8 @@ fn gallery_is_a_labelled_sheet_of_every_kind() {
     // The labels' warm white appears in every tile's caption band.
     for i in 0..10u32 {
         let (x0, y0) = ((i % 5) * 120, 22 + (i / 5) * 110 + 80);
-        let has_label = (x0..x0 + 120)
-            .any(|x| (y0..y0 + 30).any(|y| img.get_pixel(x, y).0 == [240, 236, 226]));
+        let has_label =
+            (x0..x0 + 120).any(|x| (y0..y0 + 30).any(|y| img.get_pixel(x, y).0 == [240, 236, 226]));
         assert!(has_label, "tile {i} has its name drawn in");
     }
     let o = quadray(&["gallery", "-o", out.to_str().unwrap(), "--tile", "10x10"]);
@@ -375,11 +479,25 @@ fn compare_measures_and_fails_over_the_thresholds() {
     let scene = pass_scene(&dir);
     for (out, extra) in [(&a, "1"), (&e, "1"), (&b, "2")] {
         // b differs: a second sample per pixel moves the sphere's edge pixels.
-        let o = quadray(&["render", &scene, "-o", out.to_str().unwrap(), "--spp", extra, "--res", "40x40", "-q"]);
+        let o = quadray(&[
+            "render",
+            &scene,
+            "-o",
+            out.to_str().unwrap(),
+            "--spp",
+            extra,
+            "--res",
+            "40x40",
+            "-q",
+        ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
     let same = quadray(&["compare", a.to_str().unwrap(), e.to_str().unwrap()]);
-    assert!(same.status.success(), "{}", String::from_utf8_lossy(&same.stderr));
+    assert!(
+        same.status.success(),
+        "{}",
+        String::from_utf8_lossy(&same.stderr)
+    );
     let text = String::from_utf8_lossy(&same.stdout);
     assert!(text.contains("0 pixels (0.000%) over 2/255"), "{text}");
 
@@ -391,17 +509,36 @@ fn compare_measures_and_fails_over_the_thresholds() {
         "--diff",
         diff.to_str().unwrap(),
     ]);
-    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stdout));
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
     assert!(String::from_utf8_lossy(&o.stderr).contains("differ:"));
     assert_eq!(image::open(&diff).unwrap().to_rgb8().dimensions(), (40, 40));
     // Loose enough thresholds accept the same pair.
     let o = quadray(&[
-        "compare", a.to_str().unwrap(), b.to_str().unwrap(), "--max-percent", "100", "--max-diff", "255",
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--max-percent",
+        "100",
+        "--max-diff",
+        "255",
     ]);
     assert!(o.status.success());
 
     let small = tmp(&dir, "small.png");
-    quadray(&["render", &scene, "-o", small.to_str().unwrap(), "--res", "8x8", "-q"]);
+    quadray(&[
+        "render",
+        &scene,
+        "-o",
+        small.to_str().unwrap(),
+        "--res",
+        "8x8",
+        "-q",
+    ]);
     let o = quadray(&["compare", a.to_str().unwrap(), small.to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("differ in size"));
     let o = quadray(&["compare", a.to_str().unwrap(), "/no/such.png"]);
