@@ -11,7 +11,7 @@
 
 use anyhow::{Context, Result, bail};
 use quadray::Film;
-use quadray::film::{decode_srgb8, encode_srgb8};
+use quadray::film::{decode_srgb8, encode_srgb, encode_srgb8};
 use std::path::Path;
 
 /// A linear RGB image read for comparison.
@@ -63,17 +63,7 @@ impl LinearImage {
 
 /// A linear value as a display value in 8-bit steps: clamped to [0, 1], sRGB-encoded, × 255.
 fn display_step(linear: f32) -> f32 {
-    let v = if linear.is_nan() {
-        0.0
-    } else {
-        linear.clamp(0.0, 1.0)
-    };
-    let e = if v <= 0.003_130_8 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
-    e * 255.0
+    encode_srgb(linear) * 255.0
 }
 
 /// Reads a PNG (sRGB, decoded to linear) or an EXR (linear: its `ViewLayer.Combined` or
