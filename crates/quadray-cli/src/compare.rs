@@ -120,6 +120,10 @@ fn read_exr(path: &Path) -> Result<LinearImage> {
             .collect()
     };
     let (r, g, b) = (channel(rgb[0]), channel(rgb[1]), channel(rgb[2]));
+    // Subsampled channels (chroma images) hold fewer samples than pixels.
+    if [&r, &g, &b].iter().any(|c| c.len() != w * h) {
+        bail!("subsampled colour channels are not supported");
+    }
     let pixels = (0..w * h).map(|i| [r[i], g[i], b[i]]).collect();
     Ok(LinearImage {
         width: w as u32,

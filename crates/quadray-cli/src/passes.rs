@@ -2,7 +2,7 @@
 //! names in a single part, which compositors key on), or one pass at a time as an 8-bit PNG.
 
 use crate::output::{write_atomically, write_rgb8_png};
-use anyhow::{Result, bail};
+use anyhow::{Result, anyhow, bail};
 use exr::prelude::*;
 use quadray::{AovSelection, Aovs, Film, film::encode_srgb8};
 use std::path::Path;
@@ -154,20 +154,17 @@ pub fn write_exr(film: &Film, aovs: Option<&Aovs>, half: bool, path: &Path) -> R
 /// encoding (the usual normal-map colours; misses black); object ids as distinct colours
 /// (background black).
 pub fn pass_rgb8(pass: Pass, film: &Film, aovs: Option<&Aovs>) -> Result<Vec<u8>> {
-    if pass == Pass::Combined {
-        return Ok(film.to_srgb8());
-    }
-    let Some(a) = aovs else {
-        bail!("the {pass:?} pass was not rendered");
+    let samples = || match aovs {
+        Some(a) => Ok(a.samples()),
+        None => Err(anyhow!("the {pass:?} pass was not rendered")),
     };
-    let s = a.samples();
     let bytes = match pass {
-        Pass::Combined => unreachable!("handled above"),
-        Pass::Albedo => s
+        Pass::Combined => film.to_srgb8(),
+        Pass::Albedo => samples()?
             .iter()
             .flat_map(|p| p.albedo.to_array().map(encode_srgb8))
             .collect(),
-        Pass::Normal => s
+        Pass::Normal => samples()?
             .iter()
             .flat_map(|p| {
                 if p.normal == glam::Vec3::ZERO {
@@ -180,6 +177,7 @@ pub fn pass_rgb8(pass: Pass, film: &Film, aovs: Option<&Aovs>) -> Result<Vec<u8>
             })
             .collect(),
         Pass::Depth => {
+            let s = samples()?;
             let hits = s.iter().filter(|p| p.depth < quadray::aov::NO_HIT_DEPTH);
             let (lo, hi) = hits.fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), p| {
                 (l.min(p.depth), h.max(p.depth))
@@ -196,7 +194,10 @@ pub fn pass_rgb8(pass: Pass, film: &Film, aovs: Option<&Aovs>) -> Result<Vec<u8>
                 })
                 .collect()
         }
-        Pass::ObjectId => s.iter().flat_map(|p| id_colour(p.object_id)).collect(),
+        Pass::ObjectId => samples()?
+            .iter()
+            .flat_map(|p| id_colour(p.object_id))
+            .collect(),
     };
     Ok(bytes)
 }
