@@ -4,7 +4,6 @@ use crate::material::SpecularModel;
 use crate::math::{Ray, offset_origin};
 use crate::scene::Scene;
 use crate::shape::{PrimRef, SurfaceHit};
-use crate::texture::Texture;
 use glam::{DVec3, Vec3};
 use std::ops::AddAssign;
 
@@ -59,6 +58,23 @@ impl Whitted {
         self.radiance(scene, ray, None, 1, 1.0, counts)
     }
 
+    /// Radiance arriving along a camera ray, and the ray's first hit (for the AOV passes, which
+    /// then cost no second intersection).
+    pub fn camera_ray_hit(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        counts: &mut RayCounts,
+    ) -> (Vec3, Option<SurfaceHit>) {
+        counts.camera += 1;
+        let hit = self.intersect(scene, ray, None);
+        let radiance = match &hit {
+            Some(h) => self.shade(scene, ray, h, 1, 1.0, counts),
+            None => scene.background,
+        };
+        (radiance, hit)
+    }
+
     /// The nearest hit of `ray` with its full surface record (phase two runs once, here).
     pub fn intersect(&self, scene: &Scene, ray: &Ray, from: Option<PrimRef>) -> Option<SurfaceHit> {
         let (t, prim) = scene
@@ -84,15 +100,25 @@ impl Whitted {
         throughput: f32,
         counts: &mut RayCounts,
     ) -> Vec3 {
-        let Some(hit) = self.intersect(scene, ray, from) else {
-            return scene.background;
-        };
+        match self.intersect(scene, ray, from) {
+            Some(hit) => self.shade(scene, ray, &hit, depth, throughput, counts),
+            None => scene.background,
+        }
+    }
+
+    /// Radiance leaving `hit` back along `ray`: local shading plus the mirror reflection.
+    fn shade(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        hit: &SurfaceHit,
+        depth: u32,
+        throughput: f32,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
         let m = &scene.materials[hit.material as usize];
         let g = &hit.geometry;
-        let base = match &m.texture {
-            Texture::Constant(c) => *c,
-            textured => textured.eval(&scene.geometry.texture_point(hit.prim, g.point)),
-        };
+        let base = scene.albedo(hit);
         let view = -ray.dir.normalize();
         // Two-sided shading: face both normals towards the viewer.
         let facing = if g.geometric_normal.dot(view) >= 0.0 {

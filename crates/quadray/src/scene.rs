@@ -5,6 +5,8 @@ use crate::camera::{Camera, CameraError, Projection};
 use crate::geometry::Geometry;
 use crate::light::Light;
 use crate::material::Material;
+use crate::shape::SurfaceHit;
+use crate::texture::Texture;
 use glam::Vec3;
 
 /// Everything a scene holds, before validation.
@@ -115,6 +117,10 @@ impl Scene {
                     position,
                     intensity,
                 } => position.is_finite() && non_negative(*intensity),
+                Light::PointNoFalloff {
+                    position,
+                    irradiance,
+                } => position.is_finite() && non_negative(*irradiance),
                 Light::Directional {
                     direction,
                     irradiance,
@@ -146,6 +152,16 @@ impl Scene {
             geometry: d.geometry,
             accel,
         })
+    }
+
+    /// The base colour (albedo) at a hit: its material's texture, evaluated only when it is not a
+    /// constant (a constant colour needs no texture coordinates).
+    #[inline]
+    pub fn albedo(&self, hit: &SurfaceHit) -> Vec3 {
+        match &self.materials[hit.material as usize].texture {
+            Texture::Constant(c) => *c,
+            textured => textured.eval(&self.geometry.texture_point(hit.prim, hit.geometry.point)),
+        }
     }
 
     /// The acceleration structure.
