@@ -24,6 +24,12 @@ pub enum Command {
     /// Benchmarks: speed against error of the quadric intersector.
     #[command(subcommand)]
     Bench(crate::bench::BenchCommand),
+    /// Render one quadric under the orbit camera (the seed's explorer).
+    Quadric(crate::quadric_cmd::QuadricArgs),
+    /// Render every quadric kind into one labelled contact sheet.
+    Gallery(crate::gallery::GalleryArgs),
+    /// Compare two images (PNG or EXR): RMSE, largest difference, share over a threshold, FLIP.
+    Compare(crate::compare_cmd::CompareArgs),
 }
 
 /// Arguments of `quadray render`.
@@ -49,6 +55,16 @@ pub struct RenderArgs {
     /// Print load and BVH build times besides the final stats line.
     #[arg(long)]
     pub stats: bool,
+    /// Passes written into an EXR output beside the beauty image, comma-separated (Blender
+    /// channel names; from the first hit of each pixel's first sample).
+    #[arg(long, value_name = "PASSES", value_delimiter = ',')]
+    pub aov: Vec<crate::passes::Pass>,
+    /// Write the EXR beauty pass as half floats (passes stay f32).
+    #[arg(long)]
+    pub half: bool,
+    /// The pass a PNG output shows.
+    #[arg(long, value_name = "PASS", default_value = "combined")]
+    pub pass: crate::passes::Pass,
     /// For a glTF file: the scene to render, by index or name (default: the file's default scene).
     #[arg(long, value_name = "INDEX|NAME", value_parser = parse_selector)]
     pub gltf_scene: Option<quadray_loader::Selector>,

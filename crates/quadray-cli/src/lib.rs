@@ -4,10 +4,17 @@
 pub mod args;
 pub mod bench;
 mod check;
+pub mod compare;
+pub mod compare_cmd;
 mod convert;
+pub mod gallery;
+mod label;
 pub mod output;
+pub mod passes;
 mod progress;
+pub mod quadric_cmd;
 mod render_cmd;
+pub mod showcase;
 
 use clap::Parser;
 
@@ -18,6 +25,9 @@ pub fn run(cli: args::Cli) -> anyhow::Result<()> {
         args::Command::Check(a) => check::run(&a),
         args::Command::Convert(a) => convert::run(&a),
         args::Command::Bench(b) => bench::run(&b),
+        args::Command::Quadric(a) => quadric_cmd::run(&a),
+        args::Command::Gallery(a) => gallery::run(&a),
+        args::Command::Compare(a) => compare_cmd::run(&a),
     }
 }
 

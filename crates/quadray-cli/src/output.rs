@@ -49,20 +49,41 @@ fn parent_dir(path: &Path) -> PathBuf {
 /// Writes `film` to `path`; an existing file is replaced only once the new one is complete.
 pub fn write_film(film: &Film, path: &Path) -> Result<()> {
     let format = Format::from_path(path)?;
+    write_atomically(path, |tmp| match format {
+        Format::Png => write_png(film, tmp),
+        Format::Exr => write_exr(film, tmp),
+    })
+}
+
+/// Writes through `write` into a temporary file beside `path`, then renames it to `path`; on any
+/// failure the temporary file is removed and an older `path` survives.
+pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let format = Format::from_path(path)?;
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("image");
     let ext = if format == Format::Png { "png" } else { "exr" };
     let tmp = parent_dir(path).join(format!(".{name}.{}.tmp.{ext}", std::process::id()));
-    let written = match format {
-        Format::Png => write_png(film, &tmp),
-        Format::Exr => write_exr(film, &tmp),
-    };
-    let result = written.and_then(|()| {
+    let result = write(&tmp).and_then(|()| {
         std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
     });
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
     result.with_context(|| format!("writing {}", path.display()))
+}
+
+/// Writes 8-bit RGB bytes (row-major) as a PNG, atomically.
+pub fn write_rgb8_png(width: u32, height: u32, bytes: &[u8], path: &Path) -> Result<()> {
+    write_atomically(path, |tmp| {
+        image::save_buffer_with_format(
+            tmp,
+            bytes,
+            width,
+            height,
+            image::ColorType::Rgb8,
+            image::ImageFormat::Png,
+        )?;
+        Ok(())
+    })
 }
 
 fn write_png(film: &Film, path: &Path) -> Result<()> {

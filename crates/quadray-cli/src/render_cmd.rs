@@ -1,7 +1,8 @@
 //! `quadray render`: load, validate, render in parallel, write, report.
 
 use crate::args::RenderArgs;
-use crate::output::{check_writable, write_film};
+use crate::output::{Format, check_writable, write_film};
+use crate::passes::{Pass, selection_of, write_exr, write_png_pass};
 use crate::progress::RowBar;
 use anyhow::{Context, Result};
 use quadray::Scene;
@@ -9,7 +10,8 @@ use std::time::Instant;
 
 /// Runs the render subcommand.
 pub fn run(args: &RenderArgs) -> Result<()> {
-    check_writable(&args.output)?;
+    let format = check_writable(&args.output)?;
+    let selection = pass_selection(args, format)?;
     let start = Instant::now();
     let options = quadray_loader::ImportOptions {
         scene: args.gltf_scene.clone(),
@@ -47,11 +49,20 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
     let bar = RowBar::new(settings.height, args.quiet);
     let cpu_start = cpu_time::ProcessTime::try_now().ok();
-    let rendered = pool.install(|| quadray::render(&scene, &settings, &bar))?;
+    let (rendered, aovs) =
+        pool.install(|| quadray::render_with_aovs(&scene, &settings, selection, &bar))?;
     bar.finish();
     let render_time = built_at.elapsed();
     let render_cpu = cpu_start.and_then(|t| t.try_elapsed().ok());
-    write_film(&rendered.film, &args.output)?;
+    match format {
+        Format::Exr if aovs.is_some() || args.half => {
+            write_exr(&rendered.film, aovs.as_ref(), args.half, &args.output)?
+        }
+        Format::Png if args.pass != Pass::Combined => {
+            write_png_pass(args.pass, &rendered.film, aovs.as_ref(), &args.output)?
+        }
+        _ => write_film(&rendered.film, &args.output)?,
+    }
 
     if !args.quiet {
         let c = rendered.counts;
@@ -81,4 +92,29 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The passes to compute, checked against the output format before any work is done.
+fn pass_selection(args: &RenderArgs, format: Format) -> Result<quadray::AovSelection> {
+    match format {
+        Format::Exr => {
+            anyhow::ensure!(
+                args.pass == Pass::Combined,
+                "--pass is for PNG output; an EXR takes its passes from --aov"
+            );
+            anyhow::ensure!(
+                !args.aov.contains(&Pass::Combined),
+                "--aov combined: the beauty image is always written; list only the extra passes"
+            );
+            Ok(selection_of(&args.aov))
+        }
+        Format::Png => {
+            anyhow::ensure!(
+                args.aov.is_empty(),
+                "--aov needs an .exr output; a PNG shows one pass, chosen with --pass"
+            );
+            anyhow::ensure!(!args.half, "--half is for EXR output");
+            Ok(args.pass.selection())
+        }
+    }
 }

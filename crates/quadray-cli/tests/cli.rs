@@ -118,3 +118,430 @@ fn check_validates_without_rendering() {
         "{text}"
     );
 }
+
+/// A unit sphere (material colour 0.2, 0.4, 0.6) over a plane at z = -2, seen straight down by an
+/// orthographic camera 10 units up: every pass value at the centre and corner follows by hand.
+const PASS_SCENE: &str = r#"version = 1
+[camera]
+projection = "orthographic"
+from = [0, 0, 10]
+to = [0, 0, 0]
+up = [0, 1, 0]
+height = 4.0
+[render]
+resolution = [9, 9]
+background = [0.5, 0.5, 0.5]
+[[material]]
+name = "ball"
+color = [0.2, 0.4, 0.6]
+[[material]]
+name = "ground"
+color = [0.7, 0.7, 0.7]
+[[sphere]]
+center = [0, 0, 0]
+radius = 1
+material = "ball"
+[[plane]]
+point = [0, 0, -2]
+normal = [0, 0, 1]
+material = "ground"
+[[light]]
+type = "directional"
+direction = [0, 0, -1]
+"#;
+
+fn pass_scene(dir: &tempfile::TempDir) -> String {
+    let path = tmp(dir, "passes.toml");
+    std::fs::write(&path, PASS_SCENE).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+/// Runs oiiotool, or says why the test cannot use it (it is installed by .ci/run).
+fn oiiotool(args: &[&str]) -> Option<String> {
+    match Command::new("oiiotool").args(args).output() {
+        Ok(o) => {
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            Some(String::from_utf8_lossy(&o.stdout).into_owned())
+        }
+        Err(e) => {
+            println!(
+                "skipped: oiiotool is not available ({e}); `apt-get install openimageio-tools`"
+            );
+            None
+        }
+    }
+}
+
+#[test]
+fn exr_passes_read_back_in_an_independent_reader() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = pass_scene(&dir);
+    let out = tmp(&dir, "passes.exr");
+    let o = quadray(&[
+        "render",
+        &scene,
+        "-o",
+        out.to_str().unwrap(),
+        "--aov",
+        "depth,normal,albedo,object-id",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let Some(info) = oiiotool(&["--info", "-v", out.to_str().unwrap()]) else {
+        return;
+    };
+    assert!(
+        info.contains("9 x    9, 12 channel, float openexr"),
+        "{info}"
+    );
+    for name in [
+        "ViewLayer.Combined.R",
+        "ViewLayer.Combined.G",
+        "ViewLayer.Combined.B",
+        "ViewLayer.Combined.A",
+        "ViewLayer.Depth.Z",
+        "ViewLayer.Normal.X",
+        "ViewLayer.Normal.Y",
+        "ViewLayer.Normal.Z",
+        "ViewLayer.Albedo.R",
+        "ViewLayer.Albedo.G",
+        "ViewLayer.Albedo.B",
+        "ViewLayer.IndexOB.X",
+    ] {
+        assert!(info.contains(name), "{name} missing from {info}");
+    }
+    // oiiotool lists channels alphabetically, as the file stores them: Albedo RGB, Combined RGBA,
+    // Depth, IndexOB, Normal XYZ.
+    let dump = oiiotool(&["--dumpdata", out.to_str().unwrap()]).unwrap();
+    let pixel = |x: u32, y: u32| -> Vec<f64> {
+        let tag = format!("Pixel ({x}, {y}):");
+        let line = dump
+            .lines()
+            .find(|l| l.contains(&tag))
+            .expect("pixel listed");
+        line.split(':')
+            .nth(1)
+            .unwrap()
+            .split_whitespace()
+            .map(|v| v.parse().unwrap())
+            .collect()
+    };
+    let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-5);
+    // Centre: the sphere's top, straight below the camera: depth 10 - 1, normal +z, object 1 (the
+    // first sphere), lit head-on by the unit directional light: (0.1 + 0.9) · albedo.
+    let c = pixel(4, 4);
+    assert!(
+        close(
+            &c,
+            &[0.2, 0.4, 0.6, 0.2, 0.4, 0.6, 1.0, 9.0, 1.0, 0.0, 0.0, 1.0]
+        ),
+        "{c:?}"
+    );
+    // Corner: the plane 12 units down, object 2 (spheres are numbered before planes).
+    let k = pixel(0, 0);
+    assert!(
+        close(
+            &k,
+            &[0.7, 0.7, 0.7, 0.7, 0.7, 0.7, 1.0, 12.0, 2.0, 0.0, 0.0, 1.0]
+        ),
+        "{k:?}"
+    );
+
+    // --half: the beauty pass in half floats, the passes still f32.
+    let half = tmp(&dir, "half.exr");
+    let o = quadray(&[
+        "render",
+        &scene,
+        "-o",
+        half.to_str().unwrap(),
+        "--aov",
+        "depth",
+        "--half",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let info = oiiotool(&["--info", "-v", half.to_str().unwrap()]).unwrap();
+    assert!(
+        info.contains("ViewLayer.Combined.R (half)") && info.contains("ViewLayer.Depth.Z (float)"),
+        "{info}"
+    );
+}
+
+#[test]
+fn png_shows_one_pass_and_bad_pass_options_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = pass_scene(&dir);
+    let out = tmp(&dir, "normal.png");
+    let o = quadray(&[
+        "render",
+        &scene,
+        "-o",
+        out.to_str().unwrap(),
+        "--pass",
+        "normal",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&out).unwrap().to_rgb8();
+    // +z as (n + 1)/2 colours: (128, 128, 255).
+    assert_eq!(img.get_pixel(4, 4).0, [128, 128, 255]);
+    let ids = tmp(&dir, "ids.png");
+    let o = quadray(&[
+        "render",
+        &scene,
+        "-o",
+        ids.to_str().unwrap(),
+        "--pass",
+        "object-id",
+        "-q",
+    ]);
+    assert!(o.status.success());
+    let img = image::open(&ids).unwrap().to_rgb8();
+    assert_ne!(img.get_pixel(4, 4), img.get_pixel(0, 0));
+
+    for (args, message) in [
+        (
+            vec!["-o", "x.png", "--aov", "depth"],
+            "--aov needs an .exr output",
+        ),
+        (
+            vec!["-o", "x.exr", "--pass", "depth"],
+            "--pass is for PNG output",
+        ),
+        (vec!["-o", "x.png", "--half"], "--half is for EXR output"),
+        (
+            vec!["-o", "x.exr", "--aov", "combined"],
+            "the beauty image is always written",
+        ),
+    ] {
+        let mut all = vec!["render", scene.as_str()];
+        all.extend(args);
+        let o = quadray(&all);
+        assert_eq!(o.status.code(), Some(1));
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains(message),
+            "{message}"
+        );
+    }
+    let o = quadray(&["render", &scene, "-o", "x.exr", "--aov", "speed"]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "unknown pass names are usage errors"
+    );
+}
+
+#[test]
+fn quadric_explorer_lists_renders_and_refuses_bad_input() {
+    let o = quadray(&["quadric", "--list"]);
+    assert!(o.status.success());
+    let list = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(list.lines().count(), 10);
+    assert!(
+        list.contains("hyperboloid2           x²/a² + y²/b² − z²/c² = −1"),
+        "{list}"
+    );
+    assert!(list.contains("general"));
+
+    let dir = tempfile::tempdir().unwrap();
+    let out = tmp(&dir, "cone.png");
+    let o = quadray(&[
+        "quadric",
+        "cone",
+        "-a",
+        "0.5",
+        "-b",
+        "0.8",
+        "--clip",
+        "1.5",
+        "--texture",
+        "checker",
+        "--yaw",
+        "-30",
+        "--pitch",
+        "10",
+        "--res",
+        "64x48",
+        "--spp",
+        "1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&out).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (64, 48));
+    // The cone shows: pixels other than the background's.
+    let bg = img.get_pixel(0, 0);
+    assert!(img.pixels().filter(|p| *p != bg).count() > 200);
+
+    // Without lighting the texture's flat colours show: the ramp's pure stops appear.
+    let flat = tmp(&dir, "flat.png");
+    let o = quadray(&[
+        "quadric",
+        "general",
+        "--coeffs",
+        "1,1,-1,0,0,0,0,0,0,-0.25",
+        "--no-lighting",
+        "--res",
+        "48x48",
+        "--spp",
+        "1",
+        "-o",
+        flat.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    for (args, message) in [
+        (
+            vec!["quadric", "sphere", "-o", "x.png"],
+            "unknown quadric kind \"sphere\"",
+        ),
+        (
+            vec!["quadric", "general", "-o", "x.png"],
+            "exactly 10 numbers",
+        ),
+        (
+            vec!["quadric", "cone", "--coeffs", "1,2", "-o", "x.png"],
+            "--coeffs is for `general`",
+        ),
+        (
+            vec!["quadric", "ellipsoid", "-a", "-1", "-o", "x.png"],
+            "a must be",
+        ),
+        (
+            vec!["quadric", "ellipsoid", "--clip", "0", "-o", "x.png"],
+            "--clip must be a positive",
+        ),
+        (
+            vec!["quadric", "ellipsoid", "--pitch", "100", "-o", "x.png"],
+            "--pitch must be in",
+        ),
+        (
+            vec!["quadric", "ellipsoid", "-o", "x.jpg"],
+            "must end in .png or .exr",
+        ),
+        (
+            vec![
+                "quadric",
+                "general",
+                "--coeffs",
+                "1,1,1,0,0,0,0,0,0,1",
+                "-o",
+                "x.png",
+            ],
+            "empty",
+        ),
+    ] {
+        let o = quadray(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn gallery_is_a_labelled_sheet_of_every_kind() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = tmp(&dir, "gallery.png");
+    let o = quadray(&[
+        "gallery",
+        "-o",
+        out.to_str().unwrap(),
+        "--tile",
+        "120x110",
+        "--spp",
+        "1",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&out).unwrap().to_rgb8();
+    // Five tiles a row, two rows, a 22-pixel title band at text scale 1.
+    assert_eq!(img.dimensions(), (600, 22 + 2 * 110));
+    // The labels' warm white appears in every tile's caption band.
+    for i in 0..10u32 {
+        let (x0, y0) = ((i % 5) * 120, 22 + (i / 5) * 110 + 80);
+        let has_label =
+            (x0..x0 + 120).any(|x| (y0..y0 + 30).any(|y| img.get_pixel(x, y).0 == [240, 236, 226]));
+        assert!(has_label, "tile {i} has its name drawn in");
+    }
+    let o = quadray(&["gallery", "-o", out.to_str().unwrap(), "--tile", "10x10"]);
+    assert_eq!(o.status.code(), Some(1));
+    let o = quadray(&["gallery", "-o", tmp(&dir, "g.exr").to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("must end in .png"));
+}
+
+#[test]
+fn compare_measures_and_fails_over_the_thresholds() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = tmp(&dir, "a.png");
+    let b = tmp(&dir, "b.png");
+    let e = tmp(&dir, "a.exr");
+    let scene = pass_scene(&dir);
+    for (out, extra) in [(&a, "1"), (&e, "1"), (&b, "2")] {
+        // b differs: a second sample per pixel moves the sphere's edge pixels.
+        let o = quadray(&[
+            "render",
+            &scene,
+            "-o",
+            out.to_str().unwrap(),
+            "--spp",
+            extra,
+            "--res",
+            "40x40",
+            "-q",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let same = quadray(&["compare", a.to_str().unwrap(), e.to_str().unwrap()]);
+    assert!(
+        same.status.success(),
+        "{}",
+        String::from_utf8_lossy(&same.stderr)
+    );
+    let text = String::from_utf8_lossy(&same.stdout);
+    assert!(text.contains("0 pixels (0.000%) over 2/255"), "{text}");
+
+    let diff = tmp(&dir, "diff.png");
+    let o = quadray(&[
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--diff",
+        diff.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("differ:"));
+    assert_eq!(image::open(&diff).unwrap().to_rgb8().dimensions(), (40, 40));
+    // Loose enough thresholds accept the same pair.
+    let o = quadray(&[
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--max-percent",
+        "100",
+        "--max-diff",
+        "255",
+    ]);
+    assert!(o.status.success());
+
+    let small = tmp(&dir, "small.png");
+    quadray(&[
+        "render",
+        &scene,
+        "-o",
+        small.to_str().unwrap(),
+        "--res",
+        "8x8",
+        "-q",
+    ]);
+    let o = quadray(&["compare", a.to_str().unwrap(), small.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("differ in size"));
+    let o = quadray(&["compare", a.to_str().unwrap(), "/no/such.png"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("/no/such.png"));
+}

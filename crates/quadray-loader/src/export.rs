@@ -484,6 +484,22 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
                     DAffine3::from_translation(position),
                 )
             }
+            Light::PointNoFalloff {
+                position,
+                irradiance,
+            } => {
+                // glTF point lights fall off with the inverse square: match the irradiance where
+                // the camera looks, and say that the falloff differs elsewhere.
+                let d2 = (cam.to - position).length_squared().max(1e-12) as f32;
+                notes.push(format!(
+                    "{name}: a light without falloff is written as a glTF point light matching its irradiance at the camera's target; it falls off elsewhere"
+                ));
+                let (color, intensity) = colour_and_intensity(irradiance * d2);
+                (
+                    json!({"name": name, "type": "point", "color": color, "intensity": intensity}),
+                    DAffine3::from_translation(position),
+                )
+            }
             Light::Directional {
                 direction,
                 irradiance,
@@ -827,12 +843,12 @@ intensity = 0.8
                 (ca.to - ca.from).normalize(),
                 (cb.camera.to - cb.camera.from).normalize()
             ));
-            // The gltf crate reads camera parameters as f32.
+            // Camera parameters are read in f64 from the JSON: they come back exactly.
             let Projection::Perspective { vfov_deg } = cb.camera.projection else {
                 panic!()
             };
-            assert!((vfov_deg - 35.0).abs() < 1e-5);
-            assert!((cb.aspect.unwrap() - 320.0 / 180.0).abs() < 1e-6);
+            assert!((vfov_deg - 35.0).abs() < 1e-12);
+            assert!((cb.aspect.unwrap() - 320.0 / 180.0).abs() < 1e-15);
             // Listed as used, never required.
             let doc = crate::gltf_document::open(&out).unwrap().document;
             assert!(doc.extensions_used().any(|e| e == quadrics_ext::EXTENSION));

@@ -245,6 +245,7 @@ struct LightSpec {
     intensity: Option<Spanned<f64>>,
     inner_angle: Option<Spanned<f64>>,
     outer_angle: Option<Spanned<f64>>,
+    falloff: Option<Spanned<bool>>,
 }
 
 /// Reads and validates the scene file at `path`.
@@ -1102,6 +1103,13 @@ impl Builder<'_> {
         }
         match kind {
             "spot" => {
+                if let Some(f) = l.falloff.as_ref().filter(|f| !*f.get_ref()) {
+                    return Err(self.err(
+                        f.span(),
+                        format!("{key}.falloff"),
+                        "a spot light always falls off with the inverse square of the distance",
+                    ));
+                }
                 let need = |name: &str| {
                     self.err(
                         l.kind.span(),
@@ -1155,13 +1163,28 @@ impl Builder<'_> {
                         "a point light needs `position`",
                     )
                 })?;
+                let position = self.vec3(p, &format!("{key}.position"))?;
+                // `falloff = false`: POV-Ray's classic light, the same irradiance at any distance.
+                if l.falloff.as_ref().is_some_and(|f| !*f.get_ref()) {
+                    return Ok(Light::PointNoFalloff {
+                        position,
+                        irradiance: color * intensity,
+                    });
+                }
                 Ok(Light::Point {
-                    position: self.vec3(p, &format!("{key}.position"))?,
+                    position,
                     intensity: color * intensity,
                 })
             }
             "directional" => {
                 unused(&l.position, "position", "directional")?;
+                if let Some(f) = &l.falloff {
+                    return Err(self.err(
+                        f.span(),
+                        format!("{key}.falloff"),
+                        "a directional light has no falloff",
+                    ));
+                }
                 let d = l.direction.as_ref().ok_or_else(|| {
                     self.err(
                         l.kind.span(),
@@ -1338,6 +1361,27 @@ direction = [0, 0, -1]
             error("[[quadric]]\nkind = \"torus\"\nclip = 1\nmaterial = \"red\"\n")
                 .contains("unknown kind \"torus\"")
         );
+    }
+
+    #[test]
+    fn point_lights_can_drop_their_falloff() {
+        let s = parse(
+            "[[light]]\ntype = \"point\"\nposition = [0, 0, 5]\nfalloff = false\nintensity = 0.5\n",
+        )
+        .unwrap();
+        assert_eq!(
+            s.description.lights[0],
+            Light::PointNoFalloff {
+                position: DVec3::new(0.0, 0.0, 5.0),
+                irradiance: Vec3::splat(0.5),
+            }
+        );
+        let s =
+            parse("[[light]]\ntype = \"point\"\nposition = [0, 0, 5]\nfalloff = true\n").unwrap();
+        assert!(matches!(s.description.lights[0], Light::Point { .. }));
+        let e =
+            error("[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\nfalloff = false\n");
+        assert!(e.contains("a directional light has no falloff"), "{e}");
     }
 
     #[test]

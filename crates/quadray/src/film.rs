@@ -65,17 +65,21 @@ impl Film {
 
 /// The sRGB transfer function (IEC 61966-2-1) applied to a clamped linear value, as an 8-bit code.
 pub fn encode_srgb8(linear: f32) -> u8 {
+    (encode_srgb(linear) * 255.0 + 0.5) as u8
+}
+
+/// The sRGB transfer function applied to a linear value clamped to [0, 1] (NaN as 0), unquantised.
+pub fn encode_srgb(linear: f32) -> f32 {
     let v = if linear.is_nan() {
         0.0
     } else {
         linear.clamp(0.0, 1.0)
     };
-    let e = if v <= 0.0031308 {
+    if v <= 0.0031308 {
         12.92 * v
     } else {
         1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
-    (e * 255.0 + 0.5) as u8
+    }
 }
 
 /// The inverse of [`encode_srgb8`]: an 8-bit sRGB code to linear.

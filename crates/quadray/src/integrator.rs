@@ -58,6 +58,23 @@ impl Whitted {
         self.radiance(scene, ray, None, 1, 1.0, counts)
     }
 
+    /// Radiance arriving along a camera ray, and the ray's first hit (for the AOV passes, which
+    /// then cost no second intersection).
+    pub fn camera_ray_hit(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        counts: &mut RayCounts,
+    ) -> (Vec3, Option<SurfaceHit>) {
+        counts.camera += 1;
+        let hit = self.intersect(scene, ray, None);
+        let radiance = match &hit {
+            Some(h) => self.shade(scene, ray, h, 1, 1.0, counts),
+            None => scene.background,
+        };
+        (radiance, hit)
+    }
+
     /// The nearest hit of `ray` with its full surface record (phase two runs once, here).
     pub fn intersect(&self, scene: &Scene, ray: &Ray, from: Option<PrimRef>) -> Option<SurfaceHit> {
         let (t, prim) = scene
@@ -83,18 +100,25 @@ impl Whitted {
         throughput: f32,
         counts: &mut RayCounts,
     ) -> Vec3 {
-        let Some(hit) = self.intersect(scene, ray, from) else {
-            return scene.background;
-        };
+        match self.intersect(scene, ray, from) {
+            Some(hit) => self.shade(scene, ray, &hit, depth, throughput, counts),
+            None => scene.background,
+        }
+    }
+
+    /// Radiance leaving `hit` back along `ray`: local shading plus the mirror reflection.
+    fn shade(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        hit: &SurfaceHit,
+        depth: u32,
+        throughput: f32,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
         let m = &scene.materials[hit.material as usize];
         let g = &hit.geometry;
-        // Texture points and vertex attributes are computed only when the material and the
-        // primitive have a use for them.
-        let attributes = scene.geometry.attributes(hit.prim, g.point);
-        let base = m.base_color(
-            || scene.geometry.texture_point(hit.prim, g.point),
-            &attributes,
-        );
+        let base = scene.albedo(hit);
         let view = -ray.dir.normalize();
         // Two-sided shading: face both normals towards the viewer.
         let facing = if g.geometric_normal.dot(view) >= 0.0 {

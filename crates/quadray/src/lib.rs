@@ -43,6 +43,7 @@
 //! ```
 
 pub mod accel;
+pub mod aov;
 pub mod camera;
 pub mod film;
 pub mod geometry;
@@ -61,6 +62,7 @@ pub mod shape;
 pub mod sphere;
 pub mod texture;
 
+pub use aov::{AovSample, AovSelection, Aovs};
 pub use camera::{Camera, CameraError, CameraFrame, Projection};
 pub use film::Film;
 pub use geometry::Geometry;
@@ -74,7 +76,9 @@ pub use plane::Plane;
 pub use quadric::{
     ClipBox, Coefficients, Quadric, QuadricClass, QuadricError, QuadricKind, QuadricSurface,
 };
-pub use render::{NoProgress, Progress, RenderError, RenderSettings, Rendered, render};
+pub use render::{
+    NoProgress, Progress, RenderError, RenderSettings, Rendered, render, render_with_aovs,
+};
 pub use scene::{Scene, SceneDescription, SceneError};
 pub use shape::{PrimRef, SurfaceGeometry, SurfaceHit};
 pub use sphere::Sphere;

@@ -13,6 +13,14 @@ pub enum Light {
         /// Radiant intensity per colour channel (colour × intensity).
         intensity: Vec3,
     },
+    /// A point light whose irradiance does not fall off with distance: POV-Ray's classic light
+    /// (no `fade_power`), kept so POV-Ray scenes can be ported and compared pixel for pixel.
+    PointNoFalloff {
+        /// Position, world space.
+        position: DVec3,
+        /// Irradiance at normal incidence at any distance, per colour channel.
+        irradiance: Vec3,
+    },
     /// A light at infinity shining along `direction`.
     Directional {
         /// Direction the light travels (unit length).
@@ -75,6 +83,18 @@ impl Light {
                 inc.irradiance *= (s * s) as f32;
                 Some(inc)
             }
+            Light::PointNoFalloff {
+                position,
+                irradiance,
+            } => {
+                let v = *position - p;
+                let d = v.length();
+                (d > 0.0).then(|| Incident {
+                    to_light: v / d,
+                    distance: d,
+                    irradiance: *irradiance,
+                })
+            }
             Light::Directional {
                 direction,
                 irradiance,
@@ -96,6 +116,10 @@ impl Light {
                 position,
                 intensity,
             } => position.is_finite() && colour(intensity),
+            Light::PointNoFalloff {
+                position,
+                irradiance,
+            } => position.is_finite() && colour(irradiance),
             Light::Directional {
                 direction,
                 irradiance,
@@ -159,6 +183,18 @@ mod tests {
         assert_eq!(i.to_light, DVec3::Z);
         assert_eq!(i.distance, 2.0);
         assert!(l.incident(DVec3::new(0.0, 0.0, 2.0)).is_none());
+        let flat = Light::PointNoFalloff {
+            position: DVec3::new(0.0, 0.0, 2.0),
+            irradiance: Vec3::splat(8.0),
+        };
+        assert_eq!(
+            flat.incident(DVec3::ZERO).unwrap().irradiance,
+            Vec3::splat(8.0)
+        );
+        assert_eq!(
+            flat.incident(DVec3::new(0.0, 0.0, -98.0)).unwrap().distance,
+            100.0
+        );
     }
 
     #[test]

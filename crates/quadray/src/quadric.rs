@@ -543,7 +543,7 @@ impl Quadric {
     /// Texture coordinates of a surface point: the point in the object frame, and its height
     /// within the visible part of the surface (the texture ramp's extent).
     pub fn texture_point(&self, point: DVec3) -> TexturePoint {
-        let u = self.local.from_world.transform_point3(point);
+        let u = self.to_local_point(point);
         let (lo, hi) = self.height;
         let height = if hi > lo {
             ((u.z - lo) / (hi - lo)) as f32

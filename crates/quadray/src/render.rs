@@ -1,5 +1,6 @@
 //! Rendering a scene to a film in parallel over rows with rayon, deterministically.
 
+use crate::aov::{AovSample, AovSelection, Aovs};
 use crate::film::Film;
 use crate::integrator::{RayCounts, Whitted};
 use crate::sampler::{pixel_pattern, sample_2d};
@@ -123,27 +124,65 @@ pub fn render(
     settings: &RenderSettings,
     progress: &dyn Progress,
 ) -> Result<Rendered, RenderError> {
+    render_with_aovs(scene, settings, AovSelection::NONE, progress).map(|(rendered, _)| rendered)
+}
+
+/// Renders `scene` like [`render`], and also the selected AOV passes (`None` when none is
+/// selected); the passes come from the first hit of each pixel's first sample ([`crate::aov`]).
+pub fn render_with_aovs(
+    scene: &Scene,
+    settings: &RenderSettings,
+    selection: AovSelection,
+    progress: &dyn Progress,
+) -> Result<(Rendered, Option<Aovs>), RenderError> {
     settings.validate()?;
     let (w, h) = (settings.width, settings.height);
     let camera = scene.camera.prepare(w as f64 / h as f64)?;
+    let forward = (scene.camera.to - scene.camera.from).normalize();
     let mut film = Film::new(w, h);
+    // Pass samples are allocated and computed only when a pass is selected.
+    let mut aov_samples = if selection.any() {
+        vec![AovSample::MISS; w as usize * h as usize]
+    } else {
+        Vec::new()
+    };
+    let aov_rows: Vec<Option<&mut [AovSample]>> = if selection.any() {
+        aov_samples.chunks_mut(w as usize).map(Some).collect()
+    } else {
+        (0..h).map(|_| None).collect()
+    };
     let totals = Mutex::new(RayCounts::default());
     let spp = settings.spp;
     let inv_spp = 1.0 / spp as f32;
     film.pixels_mut()
         .par_chunks_mut(w as usize)
+        .zip(aov_rows)
         .enumerate()
-        .for_each(|(y, row)| {
+        .for_each(|(y, (row, mut aov_row))| {
             let y = y as u32;
             let mut counts = RayCounts::default();
             for (x, pixel) in row.iter_mut().enumerate() {
-                let x = x as u32;
-                let pattern = pixel_pattern(x, y);
+                let pattern = pixel_pattern(x as u32, y);
                 let mut sum = Vec3::ZERO;
                 for s in 0..spp {
                     let (dx, dy) = sample_2d(s, spp, pattern);
                     let ray = camera.ray((x as f64 + dx) / w as f64, (y as f64 + dy) / h as f64);
-                    sum += settings.whitted.camera_ray(scene, &ray, &mut counts);
+                    match aov_row.as_deref_mut() {
+                        Some(aovs) if s == 0 => {
+                            let (radiance, hit) =
+                                settings.whitted.camera_ray_hit(scene, &ray, &mut counts);
+                            aovs[x] = AovSample::from_hit(
+                                scene,
+                                selection,
+                                ray.origin,
+                                ray.dir,
+                                forward,
+                                hit.as_ref(),
+                            );
+                            sum += radiance;
+                        }
+                        _ => sum += settings.whitted.camera_ray(scene, &ray, &mut counts),
+                    }
                 }
                 *pixel = sum * inv_spp;
             }
@@ -151,5 +190,9 @@ pub fn render(
             progress.row_done();
         });
     let counts = totals.into_inner().unwrap_or_else(|e| e.into_inner());
-    Ok(Rendered { film, counts })
+    let aovs = selection
+        .any()
+        .then(|| Aovs::new(w, h, selection, aov_samples))
+        .flatten();
+    Ok((Rendered { film, counts }, aovs))
 }

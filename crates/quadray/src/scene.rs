@@ -5,6 +5,7 @@ use crate::camera::{Camera, CameraError, Projection};
 use crate::geometry::Geometry;
 use crate::light::Light;
 use crate::material::Material;
+use crate::shape::SurfaceHit;
 use glam::Vec3;
 
 /// Everything a scene holds, before validation.
@@ -127,6 +128,17 @@ impl Scene {
             geometry: d.geometry,
             accel,
         })
+    }
+
+    /// The base colour (albedo) at a hit: its material's texture times the hit's vertex colour.
+    #[inline]
+    pub fn albedo(&self, hit: &SurfaceHit) -> Vec3 {
+        // Vertex attributes are defaults off meshes (at once); the texture point is computed only
+        // for the procedural textures that read it.
+        let point = hit.geometry.point;
+        let attributes = self.geometry.attributes(hit.prim, point);
+        self.materials[hit.material as usize]
+            .base_color(|| self.geometry.texture_point(hit.prim, point), &attributes)
     }
 
     /// The acceleration structure.

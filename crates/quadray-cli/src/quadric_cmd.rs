@@ -1,0 +1,199 @@
+//! `quadray quadric KIND`: the seed's explorer on the command line. One quadric in the seed's clip
+//! cube under the orbit camera, every option with a sensible default; `--list` prints the kinds.
+
+use crate::output::{check_writable, write_film};
+use crate::showcase::{GENERAL_EQUATION, Showcase};
+use anyhow::{Context, Result, bail, ensure};
+use clap::{Args, ValueEnum};
+use quadray::{Coefficients, QuadricKind, QuadricSurface, RenderSettings, Scene, Texture, Whitted};
+use std::path::PathBuf;
+
+/// The explorer's textures (the seed's three, or a plain colour).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TextureChoice {
+    /// Blue → green → yellow over the clipped height range.
+    Ramp,
+    /// The ramp in eight flat contour bands.
+    Bands,
+    /// A 3-D checkerboard of 0.25-unit cubes.
+    Checker,
+    /// One plain colour.
+    None,
+}
+
+impl TextureChoice {
+    /// The core texture this choice stands for.
+    pub fn texture(self) -> Texture {
+        match self {
+            TextureChoice::Ramp => Texture::HeightRamp,
+            TextureChoice::Bands => Texture::Bands { steps: 8 },
+            TextureChoice::Checker => Texture::Checker {
+                size: 0.25,
+                even: glam::Vec3::new(0.85, 0.83, 0.78),
+                odd: glam::Vec3::new(0.55, 0.07, 0.06),
+            },
+            TextureChoice::None => Texture::Constant(glam::Vec3::new(0.75, 0.72, 0.66)),
+        }
+    }
+}
+
+/// Arguments of `quadray quadric`.
+#[derive(Args, Debug)]
+pub struct QuadricArgs {
+    /// The kind (see --list), or `general` with --coeffs.
+    #[arg(required_unless_present = "list")]
+    pub kind: Option<String>,
+    /// Print the kinds with their canonical equations and exit.
+    #[arg(long)]
+    pub list: bool,
+    /// Parameter a (default: the kind's textbook value).
+    #[arg(short = 'a', value_name = "A", allow_negative_numbers = true)]
+    pub a: Option<f64>,
+    /// Parameter b.
+    #[arg(short = 'b', value_name = "B", allow_negative_numbers = true)]
+    pub b: Option<f64>,
+    /// Parameter c.
+    #[arg(short = 'c', value_name = "C", allow_negative_numbers = true)]
+    pub c: Option<f64>,
+    /// The ten coefficients A..J of a general quadric (POV-Ray's order), comma-separated.
+    #[arg(
+        long,
+        value_name = "A,B,..,J",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    pub coeffs: Vec<f64>,
+    /// Half-size R of the clip cube [-R, R]³.
+    #[arg(long, value_name = "R", default_value_t = 1.0)]
+    pub clip: f64,
+    /// Surface texture.
+    #[arg(long, value_enum, default_value = "ramp")]
+    pub texture: TextureChoice,
+    /// Show flat texture colours, without lights or shading.
+    #[arg(long)]
+    pub no_lighting: bool,
+    /// Orbit azimuth about +z from +x, degrees (default: the kind's textbook view).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub yaw: Option<f64>,
+    /// Orbit elevation above the xy plane, degrees, in [-90, 90].
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub pitch: Option<f64>,
+    /// Orbit distance from the centre (default: 5 × the clip size).
+    #[arg(long, value_name = "D")]
+    pub distance: Option<f64>,
+    /// Resolution as WIDTHxHEIGHT.
+    #[arg(long, value_name = "WxH", value_parser = crate::args::parse_resolution, default_value = "640x480")]
+    pub res: (u32, u32),
+    /// Samples per pixel.
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    pub spp: u32,
+    /// Output image (.png or .exr).
+    #[arg(short, long, value_name = "OUT", required_unless_present = "list")]
+    pub output: Option<PathBuf>,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// The `--list` text: every kind's name and canonical equation, then the general form.
+pub fn list() -> String {
+    let mut out = String::new();
+    for k in QuadricKind::ALL {
+        out += &format!("{:<22} {}\n", k.name(), k.equation());
+    }
+    out += &format!(
+        "{:<22} {GENERAL_EQUATION}  (--coeffs A,B,C,D,E,F,G,H,I,J)\n",
+        "general"
+    );
+    out
+}
+
+/// The showcase the arguments describe: the kind's textbook one with the given overrides.
+pub fn showcase(args: &QuadricArgs) -> Result<Showcase> {
+    let name = args.kind.as_deref().unwrap_or_default();
+    let mut show = if name == "general" {
+        ensure!(
+            args.a.is_none() && args.b.is_none() && args.c.is_none(),
+            "-a, -b and -c belong to the named kinds; a general quadric takes only --coeffs"
+        );
+        ensure!(
+            args.coeffs.len() == 10,
+            "a general quadric needs --coeffs with exactly 10 numbers A..J, got {}",
+            args.coeffs.len()
+        );
+        let mut k = [0.0; 10];
+        k.copy_from_slice(&args.coeffs);
+        Showcase::general(Coefficients(k))
+    } else {
+        let Some(kind) = QuadricKind::from_name(name) else {
+            bail!(
+                "unknown quadric kind \"{name}\"; the kinds are {} and general",
+                QuadricKind::ALL.map(|k| k.name()).join(", ")
+            );
+        };
+        ensure!(
+            args.coeffs.is_empty(),
+            "--coeffs is for `general`; the {name} takes -a, -b, -c"
+        );
+        let mut show = Showcase::of(kind);
+        if let QuadricSurface::Canonical { a, b, c, .. } = &mut show.surface {
+            *a = args.a.unwrap_or(*a);
+            *b = args.b.unwrap_or(*b);
+            *c = args.c.unwrap_or(*c);
+        }
+        show
+    };
+    ensure!(
+        args.clip > 0.0 && args.clip.is_finite(),
+        "--clip must be a positive number, got {}",
+        args.clip
+    );
+    show.clip = args.clip;
+    show.yaw = args.yaw.unwrap_or(show.yaw);
+    show.pitch = args.pitch.unwrap_or(show.pitch);
+    show.distance = args.distance.unwrap_or(show.distance * args.clip);
+    ensure!(show.yaw.is_finite(), "--yaw must be a finite angle");
+    ensure!(
+        (-90.0..=90.0).contains(&show.pitch),
+        "--pitch must be in [-90, 90] degrees, got {}",
+        show.pitch
+    );
+    ensure!(
+        show.distance > 0.0 && show.distance.is_finite(),
+        "--distance must be a positive number, got {}",
+        show.distance
+    );
+    Ok(show)
+}
+
+/// Runs the explorer.
+pub fn run(args: &QuadricArgs) -> Result<()> {
+    if args.list {
+        print!("{}", list());
+        return Ok(());
+    }
+    let output = args.output.as_ref().context("-o OUT is required")?;
+    check_writable(output)?;
+    let show = showcase(args)?;
+    let scene = Scene::new(show.scene(args.texture.texture(), !args.no_lighting)?)?;
+    let settings = RenderSettings {
+        width: args.res.0,
+        height: args.res.1,
+        spp: args.spp,
+        whitted: Whitted::default(),
+    };
+    let rendered = quadray::render(&scene, &settings, &quadray::NoProgress)?;
+    write_film(&rendered.film, output)?;
+    if !args.quiet {
+        eprintln!(
+            "{} {}: {}x{}, {} spp -> {}",
+            show.name(),
+            show.equation(),
+            settings.width,
+            settings.height,
+            settings.spp,
+            output.display()
+        );
+    }
+    Ok(())
+}
