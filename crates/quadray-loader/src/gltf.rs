@@ -246,7 +246,7 @@ pub fn convert(
             }
         }
         if let Some(camera) = node.camera() {
-            let c = gltf_camera::convert(&camera, world)
+            let c = gltf_camera::convert(&camera, file.cameras.get(camera.index()), world)
                 .map_err(|m| invalid(format!("cameras[{}]", camera.index()), m))?;
             out.cameras.push(c);
         }

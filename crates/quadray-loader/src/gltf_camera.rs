@@ -10,18 +10,31 @@ use crate::import::ImportedCamera;
 use glam::{DAffine3, DVec3};
 use quadray::{Camera, Projection};
 
-/// The quadray camera for `camera` seen through a node placed by `to_world`.
-pub fn convert(camera: &gltf::Camera<'_>, to_world: DAffine3) -> Result<ImportedCamera, String> {
+/// The quadray camera for `camera` seen through a node placed by `to_world`; `json` is the
+/// camera's JSON, whose numbers are read in f64 when present.
+pub fn convert(
+    camera: &gltf::Camera<'_>,
+    json: Option<&serde_json::Value>,
+    to_world: DAffine3,
+) -> Result<ImportedCamera, String> {
+    let exact = |kind: &str, key: &str, single: f32| -> f64 {
+        json.and_then(|j| j.get(kind))
+            .and_then(|p| p.get(key))
+            .and_then(serde_json::Value::as_f64)
+            .unwrap_or(single as f64)
+    };
     let from = to_world.translation;
     let forward = to_world.matrix3 * DVec3::NEG_Z;
     let up_axis = to_world.matrix3 * DVec3::Y;
     let (projection, aspect) = match camera.projection() {
         gltf::camera::Projection::Perspective(p) => {
-            let yfov = p.yfov() as f64;
+            let yfov = exact("perspective", "yfov", p.yfov());
             if !(yfov > 0.0 && yfov < std::f64::consts::PI) {
                 return Err(format!("yfov must be in (0, π) radians, got {yfov}"));
             }
-            let aspect = p.aspect_ratio().map(f64::from);
+            let aspect = p
+                .aspect_ratio()
+                .map(|a| exact("perspective", "aspectRatio", a));
             (
                 Projection::Perspective {
                     vfov_deg: yfov.to_degrees(),
@@ -30,7 +43,10 @@ pub fn convert(camera: &gltf::Camera<'_>, to_world: DAffine3) -> Result<Imported
             )
         }
         gltf::camera::Projection::Orthographic(o) => {
-            let (xmag, ymag) = (o.xmag() as f64, o.ymag() as f64);
+            let (xmag, ymag) = (
+                exact("orthographic", "xmag", o.xmag()),
+                exact("orthographic", "ymag", o.ymag()),
+            );
             if !(ymag.is_finite() && ymag != 0.0 && xmag.is_finite() && xmag != 0.0) {
                 return Err(format!(
                     "xmag and ymag must be non-zero, got {xmag} and {ymag}"

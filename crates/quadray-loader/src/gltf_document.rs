@@ -36,6 +36,9 @@ pub struct GltfFile {
     pub node_transforms: Vec<Result<DAffine3, String>>,
     /// Each scene's `extras.quadray` object, if any (kept here: the gltf crate drops extras).
     pub scene_extras: Vec<Option<Value>>,
+    /// Each camera's JSON, for its parameters in f64 (the gltf crate keeps f32, which would move a
+    /// converted scene's silhouettes by a pixel here and there).
+    pub cameras: Vec<Value>,
 }
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -80,6 +83,11 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
                 .map(|s| s.get("extras").and_then(|e| e.get("quadray")).cloned())
                 .collect()
         })
+        .unwrap_or_default();
+    let cameras = value
+        .get("cameras")
+        .and_then(Value::as_array)
+        .cloned()
         .unwrap_or_default();
     let root: gltf::json::Root = serde_json::from_value(value).map_err(|e| {
         LoadError::new(
@@ -138,6 +146,7 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
         base,
         node_transforms,
         scene_extras,
+        cameras,
     })
 }
 
