@@ -47,6 +47,7 @@ impl SceneSettings {
                 max_depth: self.max_depth,
                 ..quadray::Whitted::default()
             },
+            ..quadray::RenderSettings::default()
         }
     }
 }
