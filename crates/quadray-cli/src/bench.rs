@@ -16,7 +16,8 @@ pub enum BenchCommand {
     /// phantoms and acne against the exact oracle; writes accuracy.md and accuracy.svg.
     Accuracy(AccuracyArgs),
     /// Render time against image error: a scene at several sample counts against a high-sample
-    /// reference (RMSE in linear space, FLIP); writes images.md, images.svg, images-reference.png.
+    /// reference (RMSE in linear space, FLIP); writes image-error.md, image-error.svg and
+    /// image-error-reference.png.
     Images(crate::bench_images::ImagesArgs),
     /// Hole maps: one primary ray per pixel of hard quadric scenes, every intersector variant
     /// against the exact oracle; writes holes.md and one PNG per scene and variant.

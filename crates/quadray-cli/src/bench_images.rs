@@ -33,7 +33,7 @@ pub struct ImagesArgs {
     /// The scene to render.
     #[arg(long, value_name = "FILE", default_value = "scenes/defense.toml")]
     pub scene: PathBuf,
-    /// Directory for images.md, images.svg and images-reference.png; created if missing.
+    /// Directory for image-error.md, image-error.svg and image-error-reference.png; created if missing.
     #[arg(long, value_name = "DIR", default_value = ".")]
     pub out: PathBuf,
     /// Resolution of every render (default: a quarter of 1280x720 per side, so the reference fits
@@ -456,9 +456,9 @@ pub fn run(a: &ImagesArgs) -> Result<()> {
     if !quiet {
         eprintln!(
             "wrote {}, {} and {}",
-            a.out.join("images.md").display(),
-            a.out.join("images.svg").display(),
-            a.out.join("images-reference.png").display()
+            a.out.join("image-error.md").display(),
+            a.out.join("image-error.svg").display(),
+            a.out.join("image-error-reference.png").display()
         );
     }
     Ok(())
@@ -466,14 +466,14 @@ pub fn run(a: &ImagesArgs) -> Result<()> {
 
 fn write_outputs(report: &ImageReport, out: &Path, table: &str) -> Result<()> {
     let svg = report.svg()?;
-    write_bytes_atomically(&out.join("images.md"), table.as_bytes())?;
-    write_bytes_atomically(&out.join("images.svg"), svg.as_bytes())?;
+    write_bytes_atomically(&out.join("image-error.md"), table.as_bytes())?;
+    write_bytes_atomically(&out.join("image-error.svg"), svg.as_bytes())?;
     let r = &report.reference;
     write_rgb8_png(
         r.width,
         r.height,
         &r.to_srgb8(),
-        &out.join("images-reference.png"),
+        &out.join("image-error-reference.png"),
     )?;
     Ok(())
 }
@@ -509,7 +509,7 @@ mod tests {
             "--quiet",
         ])
         .unwrap();
-        let md = std::fs::read_to_string(dir.path().join("images.md")).unwrap();
+        let md = std::fs::read_to_string(dir.path().join("image-error.md")).unwrap();
         let rows: Vec<Vec<String>> = md
             .lines()
             .filter(|l| l.starts_with("| ") && l.as_bytes()[2].is_ascii_digit())
@@ -530,9 +530,9 @@ mod tests {
             "FLIP must fall from 1 to 64 spp: {flip:?}"
         );
         assert!(md.contains("reference's own error"), "{md}");
-        let svg = std::fs::read_to_string(dir.path().join("images.svg")).unwrap();
+        let svg = std::fs::read_to_string(dir.path().join("image-error.svg")).unwrap();
         assert!(svg.starts_with("<svg") && svg.contains("64 spp") && svg.contains("FLIP mean"));
-        let png = image::open(dir.path().join("images-reference.png")).unwrap();
+        let png = image::open(dir.path().join("image-error-reference.png")).unwrap();
         assert_eq!((png.width(), png.height()), (64, 36));
         // Nothing but the three outputs (no temporary files left behind).
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
