@@ -55,6 +55,48 @@ impl Canvas<'_, '_> {
         ));
     }
 
+    /// Adds a legend entry right of the chart at pixel row `y`: a dot of `colour`, `name` beside
+    /// it and, if given, a smaller `note` below.
+    pub fn legend_dot(
+        &mut self,
+        y: i32,
+        colour: RGBAColor,
+        name: &str,
+        note: Option<&str>,
+    ) -> Result<(), Box<dyn Error>> {
+        let x = self.upper_right.0;
+        self.root
+            .draw(&Circle::new((x + 24, y - 4), 7, colour.filled()))?;
+        self.legend_text(y, name, note);
+        Ok(())
+    }
+
+    /// Adds a legend entry right of the chart at pixel row `y`: a short line in `style`, `name`
+    /// beside it and, if given, a smaller `note` below.
+    pub fn legend_line(
+        &mut self,
+        y: i32,
+        style: ShapeStyle,
+        name: &str,
+        note: Option<&str>,
+    ) -> Result<(), Box<dyn Error>> {
+        let x = self.upper_right.0;
+        self.root.draw(&PathElement::new(
+            vec![(x + 16, y - 4), (x + 34, y - 4)],
+            style,
+        ))?;
+        self.legend_text(y, name, note);
+        Ok(())
+    }
+
+    fn legend_text(&mut self, y: i32, name: &str, note: Option<&str>) {
+        let x = self.upper_right.0 + 38;
+        self.text(x, y, "start", 14, name);
+        if let Some(note) = note {
+            self.text(x, y + 17, "start", 11, note);
+        }
+    }
+
     /// Pixel position of a data point.
     pub fn pixel(&self, x: f64, y: f64) -> (i32, i32) {
         self.chart.backend_coord(&(x, y))
@@ -213,12 +255,14 @@ mod tests {
         let svg = log_log_svg(&spec, |c| {
             c.chart
                 .draw_series(std::iter::once(Circle::new((1.0, 1e-2), 4, RED.filled())))?;
-            c.text(1, 1, "start", 10, "legend");
+            c.legend_dot(60, RED.to_rgba(), "legend", Some("a note"))?;
+            c.legend_line(100, BLACK.stroke_width(2), "a line", None)?;
             Ok(())
         })
         .unwrap();
         assert!(svg.starts_with("<svg") && svg.ends_with("</svg>\n"));
         assert!(svg.contains("a &lt; b") && svg.contains(">legend<") && svg.contains("<circle"));
+        assert!(svg.contains(">a note<") && svg.contains(">a line<"));
         assert!(svg.contains(">0.01<") && svg.contains(">1e-3<"));
         let bad = LogLogSpec {
             x_range: (0.0, 1.0),

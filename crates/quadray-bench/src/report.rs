@@ -295,20 +295,15 @@ impl Report {
                     8,
                     colour(i).filled(),
                 )))?;
-                let ly = py1 + 20 + 44 * i as i32;
-                c.root
-                    .draw(&Circle::new((px1 + 24, ly - 4), 7, colour(i).filled()))?;
-                c.text(px1 + 38, ly, "start", 14, v.name());
-                c.text(
-                    px1 + 38,
-                    ly + 17,
-                    "start",
-                    11,
-                    &format!(
+                c.legend_dot(
+                    py1 + 20 + 44 * i as i32,
+                    colour(i),
+                    v.name(),
+                    Some(&format!(
                         "{:.1} ns, holes {}, phantoms {}, acne {}",
                         t.ns_per_ray, t.holes, t.phantoms, t.acne
-                    ),
-                );
+                    )),
+                )?;
             }
             let mut frontier: Vec<(f64, f64)> = self
                 .pareto()
@@ -322,18 +317,12 @@ impl Report {
             c.chart
                 .draw_series(LineSeries::new(frontier, BLACK.stroke_width(2)))?;
             let ly = py1 + 20 + 44 * Variant::ALL.len() as i32;
-            c.root.draw(&PathElement::new(
-                vec![(px1 + 16, ly - 4), (px1 + 34, ly - 4)],
+            c.legend_line(
+                ly,
                 BLACK.stroke_width(2),
-            ))?;
-            c.text(px1 + 38, ly, "start", 14, "Pareto frontier");
-            c.text(
-                px1 + 38,
-                ly + 17,
-                "start",
-                11,
-                "(time, p99 error, failures)",
-            );
+                "Pareto frontier",
+                Some("(time, p99 error, failures)"),
+            )?;
             c.text(
                 px1 + 16,
                 ly + 44,

@@ -4,7 +4,7 @@
 
 use crate::args::parse_resolution;
 use crate::output::{write_bytes_atomically, write_rgb8_png};
-use anyhow::{Context, Result, ensure};
+use anyhow::{Context, Result};
 use clap::Args;
 use quadray::Scene;
 use quadray_bench::holes::{self, HoleScene, SceneHoles};
@@ -145,15 +145,7 @@ pub fn run(a: &HolesArgs) -> Result<()> {
     }
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create output directory {}", a.out.display()))?;
-    let mut pool = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = a.threads {
-        ensure!(
-            (1..=1024).contains(&t),
-            "thread count must be between 1 and 1024, got {t}"
-        );
-        pool = pool.num_threads(t);
-    }
-    let pool = pool.build().context("starting the thread pool")?;
+    let pool = crate::args::thread_pool(a.threads)?;
     let mut mapped = Vec::new();
     for s in &scenes {
         if !a.quiet {

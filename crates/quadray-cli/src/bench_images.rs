@@ -350,10 +350,7 @@ impl ImageReport {
                     let (px, py) = c.pixel(t, e);
                     c.text(px + 8, py - 8, "start", 11, &format!("{} spp", r.spp));
                 }
-                let ly = py1 + 20 + 40 * i as i32;
-                c.root
-                    .draw(&Circle::new((px1 + 24, ly - 4), 6, colour.filled()))?;
-                c.text(px1 + 38, ly, "start", 14, name);
+                c.legend_dot(py1 + 20 + 40 * i as i32, *colour, name, None)?;
             }
             // Independent samples: error ∝ (samples)^−1/2 ∝ time^−1/2, drawn from the first RMSE.
             let first = &self.rows[0];
@@ -366,19 +363,12 @@ impl ImageReport {
                 3,
                 slope_colour.stroke_width(1),
             ))?;
-            let ly = py1 + 20 + 40 * series.len() as i32;
-            c.root.draw(&PathElement::new(
-                vec![(px1 + 16, ly - 4), (px1 + 34, ly - 4)],
+            c.legend_line(
+                py1 + 20 + 40 * series.len() as i32,
                 slope_colour.stroke_width(1),
-            ))?;
-            c.text(px1 + 38, ly, "start", 14, "time^−1/2 from 1 spp");
-            c.text(
-                px1 + 38,
-                ly + 17,
-                "start",
-                11,
-                "(independent samples' rate)",
-            );
+                "time^−1/2 from 1 spp",
+                Some("(independent samples' rate)"),
+            )?;
             if let Some(rmse) = self.reference_rmse() {
                 let (x0, x1) = spec.x_range;
                 let grey = RGBColor(120, 120, 120);
@@ -388,19 +378,12 @@ impl ImageReport {
                     4,
                     grey.stroke_width(1),
                 ))?;
-                let ly = py1 + 20 + 40 * (series.len() as i32 + 1);
-                c.root.draw(&PathElement::new(
-                    vec![(px1 + 16, ly - 4), (px1 + 34, ly - 4)],
+                c.legend_line(
+                    py1 + 20 + 40 * (series.len() as i32 + 1),
                     grey.stroke_width(1),
-                ))?;
-                c.text(px1 + 38, ly, "start", 14, "reference's own RMSE");
-                c.text(
-                    px1 + 38,
-                    ly + 17,
-                    "start",
-                    11,
-                    &format!("(estimated: {rmse:.1e})"),
-                );
+                    "reference's own RMSE",
+                    Some(&format!("(estimated: {rmse:.1e})")),
+                )?;
             }
             c.text(
                 px1 + 16,
@@ -431,15 +414,7 @@ pub fn run(a: &ImagesArgs) -> Result<()> {
     }
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create output directory {}", a.out.display()))?;
-    let mut pool = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = a.threads {
-        ensure!(
-            (1..=1024).contains(&t),
-            "thread count must be between 1 and 1024, got {t}"
-        );
-        pool = pool.num_threads(t);
-    }
-    let pool = pool.build().context("starting the thread pool")?;
+    let pool = crate::args::thread_pool(a.threads)?;
     let quiet = a.quiet;
     let report = pool.install(|| {
         measure(a, &mut |what| {
