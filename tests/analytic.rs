@@ -30,7 +30,7 @@ fn settings(width: u32, height: u32) -> RenderSettings {
         width,
         height,
         spp: 1,
-        whitted: Whitted::default(),
+        ..RenderSettings::default()
     }
 }
 

@@ -67,6 +67,7 @@ fn render(path: &Path) -> Result<LinearImage, String> {
             max_depth: s.max_depth,
             ..Whitted::default()
         },
+        ..RenderSettings::default()
     };
     let scene = Scene::new(loaded.description).map_err(|e| e.to_string())?;
     let rendered =

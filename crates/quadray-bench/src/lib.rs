@@ -6,11 +6,15 @@
 //! - [`hardcases`]: generators for every family of the hard-case catalogue.
 //! - [`metrics`]: relative t error, residual, holes, phantoms, wrong roots, acne, timing.
 //! - [`report`]: the speed-against-error table and its log–log plot.
+//! - [`plot`]: log–log SVG charts with hand-placed text, shared by the reports.
+//! - [`holes`]: hole maps: one primary ray per pixel of a quadric scene, each variant against the oracle.
 //!
 //! This crate is bench and test code; the renderer does not depend on it.
 
 pub mod hardcases;
+pub mod holes;
 pub mod metrics;
 pub mod oracle;
+pub mod plot;
 pub mod report;
 pub mod variants;

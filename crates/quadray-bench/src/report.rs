@@ -4,6 +4,7 @@
 use crate::hardcases::{self, Family, SuiteSize};
 use crate::metrics::{self, Tally, Tier};
 use crate::oracle::Reference;
+use crate::plot::{LogLogSpec, log_log_svg};
 use crate::variants::{Variant, VariantQuadric};
 use plotters::prelude::*;
 use std::fmt::Write as _;
@@ -255,14 +256,10 @@ impl Report {
             .collect()
     }
 
-    /// Writes the log–log plot of time per ray against p99 relative t error (SVG).
-    ///
-    /// plotters is built without a font backend (no system fonts needed), so it draws the marks and
-    /// this function writes the text (title, axis names, decade ticks, legend) as plain SVG `<text>`.
-    pub fn write_svg(&self, path: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    /// The log–log plot of time per ray against p99 relative t error, as SVG (texts placed by
+    /// hand, see [`crate::plot`]).
+    pub fn svg(&self) -> Result<String, Box<dyn std::error::Error>> {
         const FLOOR: f64 = 1e-18;
-        const W: u32 = 960;
-        const H: u32 = 660;
         let err = |r: &Row| r.p99().max(FLOOR);
         let all: Vec<&Row> = self.totals.iter().chain(&self.rows).collect();
         let (mut t0, mut t1) = (f64::INFINITY, 0f64);
@@ -273,105 +270,40 @@ impl Report {
             e0 = e0.min(err(r));
             e1 = e1.max(err(r));
         }
-        let (x0, x1) = (t0 * 0.8, t1 * 1.25);
-        let (y0, y1) = (e0 * 0.3, e1 * 3.0);
-        let mut svg = String::new();
-        let mut texts: Vec<String> = Vec::new();
-        let text = |x: i32, y: i32, anchor: &str, size: u32, body: &str| {
-            format!(
-                "<text x=\"{x}\" y=\"{y}\" font-family=\"sans-serif\" font-size=\"{size}\" text-anchor=\"{anchor}\">{body}</text>"
-            )
+        let spec = LogLogSpec {
+            width: 960,
+            height: 660,
+            title: "quadray quadric intersectors: time per ray against error (log–log)".into(),
+            x_label: "ns per ray (median of runs, same rays for every variant)".into(),
+            y_label: "p99 relative t error vs the exact oracle".into(),
+            x_range: (t0 * 0.8, t1 * 1.25),
+            y_range: (e0 * 0.3, e1 * 3.0),
+            legend_width: 300,
         };
-        {
-            let root = SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area();
-            root.fill(&WHITE)?;
-            let mut chart = ChartBuilder::on(&root)
-                .margin_top(50)
-                .margin_right(300)
-                .margin_left(90)
-                .margin_bottom(60)
-                .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
-            // Frame and decade grid lines, with their labels.
-            let (px0, py0) = chart.backend_coord(&(x0, y0));
-            let (px1, py1) = chart.backend_coord(&(x1, y1));
-            root.draw(&Rectangle::new(
-                [(px0, py1), (px1, py0)],
-                BLACK.stroke_width(1),
-            ))?;
-            let mut e = 10f64.powi(y0.log10().ceil() as i32);
-            while e <= y1 {
-                let (_, py) = chart.backend_coord(&(x0, e));
-                root.draw(&PathElement::new(
-                    vec![(px0, py), (px1, py)],
-                    BLACK.mix(0.12),
-                ))?;
-                texts.push(text(
-                    px0 - 6,
-                    py + 4,
-                    "end",
-                    12,
-                    &format!("1e{}", e.log10().round()),
-                ));
-                e *= 10.0;
-            }
-            for k in 1..=9 {
-                for decade in [1.0, 10.0, 100.0, 1000.0] {
-                    let t = k as f64 * decade;
-                    if t < x0 || t > x1 || !(k == 1 || k == 2 || k == 5) {
-                        continue;
-                    }
-                    let (px, _) = chart.backend_coord(&(t, y0));
-                    root.draw(&PathElement::new(
-                        vec![(px, py0), (px, py1)],
-                        BLACK.mix(0.12),
-                    ))?;
-                    texts.push(text(px, py0 + 18, "middle", 12, &format!("{t}")));
-                }
-            }
-            texts.push(text(
-                (px0 + px1) / 2,
-                py0 + 42,
-                "middle",
-                14,
-                "ns per ray (median of runs, same rays for every variant)",
-            ));
-            texts.push(format!(
-                "<text x=\"24\" y=\"{}\" font-family=\"sans-serif\" font-size=\"14\" text-anchor=\"middle\" transform=\"rotate(-90 24 {})\">p99 relative t error vs the exact oracle</text>",
-                (py0 + py1) / 2,
-                (py0 + py1) / 2
-            ));
-            texts.push(text(
-                (W / 2) as i32,
-                28,
-                "middle",
-                18,
-                "quadray quadric intersectors: time per ray against error (log–log)",
-            ));
+        let svg = log_log_svg(&spec, |c| {
+            let (px1, py1) = c.upper_right;
             let colour = |i: usize| Palette99::pick(i).to_rgba();
             for (i, &v) in Variant::ALL.iter().enumerate() {
                 // Families as small dots, the total over all families as a large one.
-                chart.draw_series(self.rows.iter().filter(|r| r.variant == v).map(|r| {
-                    Circle::new((r.ns_per_ray, err(r)), 3, colour(i).mix(0.45).filled())
-                }))?;
+                c.chart
+                    .draw_series(self.rows.iter().filter(|r| r.variant == v).map(|r| {
+                        Circle::new((r.ns_per_ray, err(r)), 3, colour(i).mix(0.45).filled())
+                    }))?;
                 let t = self.total(v);
-                chart.draw_series(std::iter::once(Circle::new(
+                c.chart.draw_series(std::iter::once(Circle::new(
                     (t.ns_per_ray, err(t)),
                     8,
                     colour(i).filled(),
                 )))?;
-                let ly = py1 + 20 + 44 * i as i32;
-                root.draw(&Circle::new((px1 + 24, ly - 4), 7, colour(i).filled()))?;
-                texts.push(text(px1 + 38, ly, "start", 14, v.name()));
-                texts.push(text(
-                    px1 + 38,
-                    ly + 17,
-                    "start",
-                    11,
-                    &format!(
+                c.legend_dot(
+                    py1 + 20 + 44 * i as i32,
+                    colour(i),
+                    v.name(),
+                    Some(&format!(
                         "{:.1} ns, holes {}, phantoms {}, acne {}",
                         t.ns_per_ray, t.holes, t.phantoms, t.acne
-                    ),
-                ));
+                    )),
+                )?;
             }
             let mut frontier: Vec<(f64, f64)> = self
                 .pareto()
@@ -382,32 +314,30 @@ impl Report {
                 })
                 .collect();
             frontier.sort_by(|a, b| a.0.total_cmp(&b.0));
-            chart.draw_series(LineSeries::new(frontier, BLACK.stroke_width(2)))?;
+            c.chart
+                .draw_series(LineSeries::new(frontier, BLACK.stroke_width(2)))?;
             let ly = py1 + 20 + 44 * Variant::ALL.len() as i32;
-            root.draw(&PathElement::new(
-                vec![(px1 + 16, ly - 4), (px1 + 34, ly - 4)],
+            c.legend_line(
+                ly,
                 BLACK.stroke_width(2),
-            ))?;
-            texts.push(text(px1 + 38, ly, "start", 14, "Pareto frontier"));
-            texts.push(text(
-                px1 + 38,
-                ly + 17,
-                "start",
-                11,
-                "(time, p99 error, failures)",
-            ));
-            texts.push(text(
+                "Pareto frontier",
+                Some("(time, p99 error, failures)"),
+            )?;
+            c.text(
                 px1 + 16,
                 ly + 44,
                 "start",
                 11,
                 "large dots: all families; small: each family",
-            ));
-            root.present()?;
-        }
-        let close = svg.rfind("</svg>").ok_or("plotters wrote no closing tag")?;
-        svg.insert_str(close, &(texts.join("\n") + "\n"));
-        std::fs::write(path, svg)?;
+            );
+            Ok(())
+        })?;
+        Ok(svg)
+    }
+
+    /// Writes [`Report::svg`] to `path`.
+    pub fn write_svg(&self, path: &Path) -> Result<(), Box<dyn std::error::Error>> {
+        std::fs::write(path, self.svg()?)?;
         Ok(())
     }
 }

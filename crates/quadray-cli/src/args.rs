@@ -104,6 +104,20 @@ pub fn parse_selector(s: &str) -> Result<quadray_loader::Selector, String> {
     })
 }
 
+/// The worker pool a `--threads` argument asks for (all cores when `None`), or why it cannot be made.
+pub fn thread_pool(threads: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {
+    use anyhow::Context;
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = threads {
+        anyhow::ensure!(
+            (1..=1024).contains(&t),
+            "thread count must be between 1 and 1024, got {t}"
+        );
+        pool = pool.num_threads(t);
+    }
+    pool.build().context("starting the thread pool")
+}
+
 /// Parses `640x480`.
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
@@ -127,5 +141,12 @@ mod tests {
         assert!(parse_resolution("1280").is_err());
         assert!(parse_resolution("ax2").is_err());
         assert!(parse_resolution("-5x2").is_err());
+    }
+
+    #[test]
+    fn thread_counts_are_checked() {
+        assert_eq!(thread_pool(Some(2)).unwrap().current_num_threads(), 2);
+        assert!(thread_pool(Some(0)).is_err());
+        assert!(thread_pool(Some(5000)).is_err());
     }
 }

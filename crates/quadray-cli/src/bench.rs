@@ -1,6 +1,8 @@
-//! `quadray bench accuracy`: the speed-against-error report of the quadric intersector variants
-//! against the exact oracle (see docs/numerics.md), printed as markdown and plotted as SVG.
+//! `quadray bench`: the speed-against-error reports (see docs/numerics.md). `accuracy` runs the
+//! quadric intersector variants against the exact oracle on the hard-case families; `images` and
+//! `holes` are its image-level companions ([`crate::bench_images`], [`crate::bench_holes`]).
 
+use crate::output::write_bytes_atomically;
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 use quadray_bench::hardcases::SuiteSize;
@@ -13,6 +15,13 @@ pub enum BenchCommand {
     /// Every intersector variant on every hard-case family: ns/ray, relative t error, holes,
     /// phantoms and acne against the exact oracle; writes accuracy.md and accuracy.svg.
     Accuracy(AccuracyArgs),
+    /// Render time against image error: a scene at several sample counts against a high-sample
+    /// reference (RMSE in linear space, FLIP); writes image-error.md, image-error.svg and
+    /// image-error-reference.png.
+    Images(crate::bench_images::ImagesArgs),
+    /// Hole maps: one primary ray per pixel of hard quadric scenes, every intersector variant
+    /// against the exact oracle; writes holes.md and one PNG per scene and variant.
+    Holes(crate::bench_holes::HolesArgs),
 }
 
 /// Arguments of `quadray bench accuracy`.
@@ -42,6 +51,8 @@ pub struct AccuracyArgs {
 pub fn run(command: &BenchCommand) -> Result<()> {
     match command {
         BenchCommand::Accuracy(a) => accuracy(a),
+        BenchCommand::Images(a) => crate::bench_images::run(a),
+        BenchCommand::Holes(a) => crate::bench_holes::run(a),
     }
 }
 
@@ -72,17 +83,12 @@ fn accuracy(a: &AccuracyArgs) -> Result<()> {
     }
     let md = a.out.join("accuracy.md");
     let svg = a.out.join("accuracy.svg");
-    // Written to temporary names and renamed, so a reader never sees half a file.
-    let md_tmp = a.out.join(".accuracy.md.tmp");
-    std::fs::write(&md_tmp, &table)
-        .with_context(|| format!("cannot write {}", md_tmp.display()))?;
-    std::fs::rename(&md_tmp, &md).with_context(|| format!("cannot write {}", md.display()))?;
-    let svg_tmp = a.out.join(".accuracy.svg.tmp");
-    report
-        .write_svg(&svg_tmp)
+    write_bytes_atomically(&md, table.as_bytes())?;
+    let plot = report
+        .svg()
         .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("cannot write {}", svg_tmp.display()))?;
-    std::fs::rename(&svg_tmp, &svg).with_context(|| format!("cannot write {}", svg.display()))?;
+        .context("drawing the plot")?;
+    write_bytes_atomically(&svg, plot.as_bytes())?;
     if !quiet {
         eprintln!("wrote {} and {}", md.display(), svg.display());
     }

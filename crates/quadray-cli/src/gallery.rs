@@ -8,7 +8,7 @@ use crate::showcase::{BACKGROUND, Showcase};
 use anyhow::{Result, ensure};
 use clap::Args;
 use quadray::film::encode_srgb8;
-use quadray::{RenderSettings, Scene, Whitted};
+use quadray::{RenderSettings, Scene};
 use std::path::PathBuf;
 
 /// Tiles per row of the sheet.
@@ -66,7 +66,7 @@ pub fn render_sheet(args: &GalleryArgs) -> Result<(u32, u32, Vec<u8>)> {
         width: tw,
         height: th - caption,
         spp: args.spp,
-        whitted: Whitted::default(),
+        ..RenderSettings::default()
     };
     settings.validate()?;
     // One size for every equation: the largest at which the longest fits with a margin.

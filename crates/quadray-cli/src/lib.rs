@@ -3,6 +3,8 @@
 
 pub mod args;
 pub mod bench;
+pub mod bench_holes;
+pub mod bench_images;
 mod check;
 pub mod compare;
 pub mod compare_cmd;

@@ -71,6 +71,25 @@ pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) ->
     result.with_context(|| format!("writing {}", path.display()))
 }
 
+/// Writes `contents` (a report, a table, an SVG) to `path` through a temporary file beside it,
+/// renamed once complete; on failure the temporary file is removed and an older `path` survives.
+pub fn write_bytes_atomically(path: &Path, contents: &[u8]) -> Result<()> {
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or("output");
+    let tmp = parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = std::fs::write(&tmp, contents)
+        .with_context(|| format!("writing {}", tmp.display()))
+        .and_then(|()| {
+            std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
+        });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("writing {}", path.display()))
+}
+
 /// Writes 8-bit RGB bytes (row-major) as a PNG, atomically.
 pub fn write_rgb8_png(width: u32, height: u32, bytes: &[u8], path: &Path) -> Result<()> {
     write_atomically(path, |tmp| {
@@ -155,6 +174,17 @@ mod tests {
         assert!(write_film(&empty, &path).is_err());
         assert_eq!(std::fs::read(&path).unwrap(), b"old");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn text_is_written_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("table.md");
+        write_bytes_atomically(&path, b"| a |").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"| a |");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        let missing = dir.path().join("no/such/dir/table.md");
+        assert!(write_bytes_atomically(&missing, b"x").is_err());
     }
 
     #[test]

@@ -5,7 +5,7 @@ use crate::output::{check_writable, write_film};
 use crate::showcase::{GENERAL_EQUATION, Showcase};
 use anyhow::{Context, Result, bail, ensure};
 use clap::{Args, ValueEnum};
-use quadray::{Coefficients, QuadricKind, QuadricSurface, RenderSettings, Scene, Texture, Whitted};
+use quadray::{Coefficients, QuadricKind, QuadricSurface, RenderSettings, Scene, Texture};
 use std::path::PathBuf;
 
 /// The explorer's textures (the seed's three, or a plain colour).
@@ -180,7 +180,7 @@ pub fn run(args: &QuadricArgs) -> Result<()> {
         width: args.res.0,
         height: args.res.1,
         spp: args.spp,
-        whitted: Whitted::default(),
+        ..RenderSettings::default()
     };
     let rendered = quadray::render(&scene, &settings, &quadray::NoProgress)?;
     write_film(&rendered.film, output)?;

@@ -33,15 +33,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     settings.validate()?;
     let loaded_at = Instant::now();
 
-    let mut pool = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = args.threads {
-        anyhow::ensure!(
-            (1..=1024).contains(&t),
-            "thread count must be between 1 and 1024, got {t}"
-        );
-        pool = pool.num_threads(t);
-    }
-    let pool = pool.build().context("starting the thread pool")?;
+    let pool = crate::args::thread_pool(args.threads)?;
     let scene = pool
         .install(|| Scene::new(loaded.description))
         .with_context(|| format!("invalid scene {}", args.scene.display()))?;

@@ -51,6 +51,7 @@ impl SceneSettings {
                 max_depth: self.max_depth,
                 ..quadray::Whitted::default()
             },
+            ..quadray::RenderSettings::default()
         }
     }
 }

@@ -29,6 +29,9 @@ pub struct RenderSettings {
     pub height: u32,
     /// Samples per pixel (1: the pixel centre; more: stratified jitter).
     pub spp: u32,
+    /// Sample set: 0 is the default; another value jitters every pixel with an unrelated pattern
+    /// (a statistically independent render, e.g. a reference to measure error against).
+    pub seed: u32,
     /// The integrator's recursion limits.
     pub whitted: Whitted,
 }
@@ -39,6 +42,7 @@ impl Default for RenderSettings {
             width: 640,
             height: 480,
             spp: 1,
+            seed: 0,
             whitted: Whitted::default(),
         }
     }
@@ -162,7 +166,7 @@ pub fn render_with_aovs(
             let y = y as u32;
             let mut counts = RayCounts::default();
             for (x, pixel) in row.iter_mut().enumerate() {
-                let pattern = pixel_pattern(x as u32, y);
+                let pattern = pixel_pattern(x as u32, y, settings.seed);
                 let mut sum = Vec3::ZERO;
                 for s in 0..spp {
                     let (dx, dy) = sample_2d(s, spp, pattern);

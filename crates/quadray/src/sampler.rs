@@ -53,9 +53,13 @@ fn rand_float(mut i: u32, pattern: u32) -> f64 {
     i as f64 / 4294967808.0
 }
 
-/// The pattern key of pixel (x, y): a 32-bit hash, distinct per pixel.
-pub fn pixel_pattern(x: u32, y: u32) -> u32 {
-    let mut h = (x as u64) << 32 | y as u64;
+/// The pattern key of pixel (x, y) in the sample set `seed`: a 32-bit hash, distinct per pixel.
+///
+/// Seed 0 is the renderer's default; another seed gives every pixel an unrelated pattern (a
+/// statistically independent render of the same image, e.g. a reference for error measurements).
+pub fn pixel_pattern(x: u32, y: u32, seed: u32) -> u32 {
+    // The seed moves the key by an odd multiple of a 64-bit constant; seed 0 leaves it unchanged.
+    let mut h = ((x as u64) << 32 | y as u64) ^ (seed as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
     // SplitMix64 finaliser.
     h = h.wrapping_add(0x9E3779B97F4A7C15);
     h = (h ^ (h >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
@@ -88,7 +92,7 @@ mod tests {
     #[test]
     fn samples_are_stratified_in_both_axes() {
         for count in [2u32, 4, 5, 16, 64] {
-            let pattern = pixel_pattern(17, 42);
+            let pattern = pixel_pattern(17, 42, 0);
             let pts: Vec<_> = (0..count).map(|s| sample_2d(s, count, pattern)).collect();
             for axis in 0..2 {
                 let mut strata: Vec<u32> = pts
@@ -104,6 +108,30 @@ mod tests {
                 pts.iter()
                     .all(|&(x, y)| (0.0..1.0).contains(&x) && (0.0..1.0).contains(&y))
             );
+        }
+    }
+
+    /// The low sample counts' points are not a subset of a higher count's with the same key (the
+    /// counts stratify at different resolutions), and another seed gives unrelated points.
+    #[test]
+    fn sample_sets_of_different_counts_and_seeds_do_not_share_points() {
+        for (x, y) in [(0, 0), (17, 42), (319, 179)] {
+            let points = |count: u32, seed: u32| -> Vec<(f64, f64)> {
+                let pattern = pixel_pattern(x, y, seed);
+                (0..count).map(|s| sample_2d(s, count, pattern)).collect()
+            };
+            let reference = points(1024, 0);
+            for count in [1, 4, 16, 64, 256] {
+                for p in points(count, 0) {
+                    assert!(
+                        !reference.contains(&p),
+                        "{count} spp shares {p:?} with 1024 spp"
+                    );
+                }
+            }
+            assert_ne!(pixel_pattern(x, y, 0), pixel_pattern(x, y, 1));
+            let other = points(1024, 1);
+            assert!(reference.iter().all(|p| !other.contains(p)));
         }
     }
 

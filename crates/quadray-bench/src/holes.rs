@@ -1,0 +1,611 @@
+//! Hole maps: one primary ray through every pixel centre of a scene made of quadrics, intersected
+//! by each variant and by the oracle; pixels where the variant's hit/miss or hit object differs
+//! from the oracle's are marked.
+//!
+//! The oracle's verdict for a pixel is the nearest valid root over all quadrics (each from
+//! [`oracle::checked`]). A pixel is **ambiguous** when a decision that could change which object it
+//! shows lies within the oracle's margin δ ([`Reference::ambiguous`]) for some quadric whose clip
+//! box the ray enters no later than the oracle's hit, or when the two nearest hits on different
+//! quadrics are closer than production's error bound (64·u·κ·t each, docs/numerics.md). Ambiguous
+//! pixels are shown and counted apart; a difference there is not a failure.
+//!
+//! The production row is the renderer's own path: [`Whitted::intersect`] through the scene's BVH.
+//! The other variants test every quadric of the scene ([`VariantQuadric::intersect`]) and keep
+//! the nearest hit.
+
+use crate::oracle::{self, Reference};
+use crate::variants::{Variant, VariantQuadric};
+use glam::DVec3;
+use quadray::math::slab_interval;
+use quadray::{
+    Camera, ClipBox, Geometry, Light, Material, Projection, Quadric, QuadricKind, QuadricSurface,
+    Ray, Scene, SceneDescription, Transform, Whitted,
+};
+use rayon::prelude::*;
+use std::fmt::Write as _;
+
+/// Why a hole map cannot be made.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum HoleError {
+    /// The oracle intersects quadrics only.
+    #[error(
+        "hole maps need a scene made of quadrics only (the oracle intersects quadrics), but it has {spheres} spheres, {planes} planes and {meshes} meshes"
+    )]
+    NotQuadricsOnly {
+        /// Spheres in the scene.
+        spheres: usize,
+        /// Planes in the scene.
+        planes: usize,
+        /// Meshes in the scene.
+        meshes: usize,
+    },
+    /// The scene has no quadric at all.
+    #[error("the scene has no quadric")]
+    Empty,
+    /// The resolution is outside the renderer's limits.
+    #[error("{0}")]
+    Render(#[from] quadray::RenderError),
+}
+
+/// A scene to map, with its name and resolution.
+#[derive(Clone, Debug)]
+pub struct HoleScene {
+    /// Short name, used in file names and tables.
+    pub name: String,
+    /// What makes the scene hard.
+    pub about: String,
+    /// The scene (quadrics only).
+    pub scene: Scene,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+/// The built-in scenes' row of quadrics in their own frame: an ellipsoid (a unit sphere), a
+/// hyperboloid of one sheet open at both ends, a double cone with its apex in view, and an
+/// elliptic paraboloid cup, 2.6 units apart along x and tilted 30° towards a camera on −y.
+fn row(offset: DVec3) -> Vec<Quadric> {
+    let tilt = DVec3::new(30.0, 0.0, 0.0);
+    let items = [
+        (
+            QuadricKind::Ellipsoid,
+            [1.0, 1.0, 1.0],
+            ClipBox::cube(1.0),
+            0.0,
+        ),
+        (
+            QuadricKind::Hyperboloid1,
+            [0.5, 0.5, 0.7],
+            ClipBox::cube(1.0),
+            0.0,
+        ),
+        (QuadricKind::Cone, [0.6, 0.6, 1.0], ClipBox::cube(1.0), 0.0),
+        // z = (x² + y²)/0.64 from its vertex up to z = 1.2, lowered to centre it.
+        (
+            QuadricKind::EllipticParaboloid,
+            [0.8, 0.8, 1.0],
+            ClipBox {
+                min: DVec3::new(-1.0, -1.0, 0.0),
+                max: DVec3::new(1.0, 1.0, 1.2),
+            },
+            -0.6,
+        ),
+    ];
+    items
+        .iter()
+        .enumerate()
+        .map(|(i, &(kind, [a, b, c], clip, lift))| {
+            let at = offset + DVec3::new(-3.9 + 2.6 * i as f64, 0.0, lift);
+            let transform = Transform::from_srt(DVec3::ONE, tilt, at)
+                .expect("the row's placements are invertible");
+            Quadric::new(
+                QuadricSurface::Canonical { kind, a, b, c },
+                clip,
+                transform,
+                i as u32,
+            )
+            .expect("the row's quadrics are valid")
+        })
+        .collect()
+}
+
+fn row_scene(quadrics: Vec<Quadric>, camera: Camera) -> Scene {
+    let materials = (0..quadrics.len()).map(|_| Material::default()).collect();
+    Scene::new(SceneDescription {
+        camera,
+        background: glam::Vec3::splat(0.05),
+        materials,
+        lights: vec![Light::Directional {
+            direction: DVec3::new(-0.4, 1.0, -0.6).normalize(),
+            irradiance: glam::Vec3::ONE,
+        }],
+        geometry: Geometry {
+            quadrics,
+            ..Geometry::default()
+        },
+    })
+    .expect("the built-in hole-map scenes are valid")
+}
+
+/// The row seen from 10⁷ units away through a 1.9·10⁻⁵ degree field of view (§4.1 of the
+/// catalogue): every variant that evaluates f at the far ray origin loses the discriminant to
+/// cancellation (β² and aγ are ~10¹⁴ times the object's own scale).
+pub fn far(width: u32, height: u32) -> HoleScene {
+    let distance = 1e7;
+    let target = DVec3::new(0.0, distance, 0.0);
+    let vfov = 2.0 * (1.7f64 / distance).atan().to_degrees();
+    let camera = Camera {
+        from: DVec3::ZERO,
+        to: target,
+        up: DVec3::Z,
+        projection: Projection::Perspective { vfov_deg: vfov },
+    };
+    HoleScene {
+        name: "far-1e7".into(),
+        about: "ellipsoid, hyperboloid, cone apex and paraboloid cup 10⁷ units from the camera"
+            .into(),
+        scene: row_scene(row(target), camera),
+        width,
+        height,
+    }
+}
+
+/// The row and its camera (12 units in front of it) moved 10⁶ units from the world origin along
+/// every axis (§4.17): nothing is far from the camera, but world coordinates carry only about
+/// 10⁻¹⁰ of their size in f64 and 6·10⁻⁸ in f32, so an intersector that maps the ray to the object
+/// in world coordinates (the f32 variant) shifts every edge.
+pub fn moved(width: u32, height: u32) -> HoleScene {
+    let shift = DVec3::splat(1e6);
+    let camera = Camera {
+        from: shift + DVec3::new(0.0, -12.0, 0.0),
+        to: shift,
+        up: DVec3::Z,
+        projection: Projection::Perspective { vfov_deg: 16.0 },
+    };
+    HoleScene {
+        name: "moved-1e6".into(),
+        about: "the same row and a camera 12 units away, all moved 10⁶ units along each axis"
+            .into(),
+        scene: row_scene(row(shift), camera),
+        width,
+        height,
+    }
+}
+
+/// What the oracle says one pixel shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OraclePixel {
+    /// Index into the scene's quadrics of the nearest hit, if any.
+    pub object: Option<u32>,
+    /// Ray parameter of that hit.
+    pub t: Option<f64>,
+    /// A decision that could change the answer lies within the oracle's margin.
+    pub ambiguous: bool,
+}
+
+/// One variant's per-pixel answers (quadric index of the nearest hit, if any), row-major.
+pub type VariantPixels = Vec<Option<u32>>;
+
+/// How one pixel of a variant compares with the oracle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PixelClass {
+    /// Same hit object, or both miss.
+    Agrees,
+    /// The oracle hits, the variant misses.
+    Hole,
+    /// The variant hits, the oracle misses.
+    Phantom,
+    /// Both hit, different objects.
+    WrongObject,
+}
+
+impl PixelClass {
+    /// Compares a variant's answer with the oracle's.
+    pub fn of(oracle: Option<u32>, got: Option<u32>) -> PixelClass {
+        match (oracle, got) {
+            (Some(a), Some(b)) if a != b => PixelClass::WrongObject,
+            (Some(_), None) => PixelClass::Hole,
+            (None, Some(_)) => PixelClass::Phantom,
+            _ => PixelClass::Agrees,
+        }
+    }
+}
+
+/// Checks that the scene is made of quadrics only and the resolution is renderable.
+pub fn check(scene: &Scene, width: u32, height: u32) -> Result<(), HoleError> {
+    let g = &scene.geometry;
+    if !(g.spheres.is_empty() && g.planes.is_empty() && g.meshes.is_empty()) {
+        return Err(HoleError::NotQuadricsOnly {
+            spheres: g.spheres.len(),
+            planes: g.planes.len(),
+            meshes: g.meshes.len(),
+        });
+    }
+    if g.quadrics.is_empty() {
+        return Err(HoleError::Empty);
+    }
+    quadray::RenderSettings {
+        width,
+        height,
+        ..quadray::RenderSettings::default()
+    }
+    .validate()?;
+    Ok(())
+}
+
+/// The primary ray through the centre of pixel (x, y), as the renderer's one-sample render casts it.
+fn pixel_rays(scene: &Scene, width: u32, height: u32) -> Result<Vec<Ray>, HoleError> {
+    let frame = scene
+        .camera
+        .prepare(width as f64 / height as f64)
+        .map_err(quadray::RenderError::from)?;
+    Ok((0..height)
+        .flat_map(|y| {
+            (0..width).map(move |x| {
+                frame.ray(
+                    (x as f64 + 0.5) / width as f64,
+                    (y as f64 + 0.5) / height as f64,
+                )
+            })
+        })
+        .collect())
+}
+
+/// The oracle's verdict for one ray against every quadric (see the module docs for ambiguity).
+fn oracle_pixel(quadrics: &[Quadric], ray: &Ray) -> OraclePixel {
+    let refs: Vec<Reference> = quadrics
+        .iter()
+        .map(|q| oracle::checked(q, ray, f64::INFINITY))
+        .collect();
+    let mut hits: Vec<(f64, usize)> = refs
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| r.t().map(|t| (t, i)))
+        .collect();
+    hits.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let nearest = hits.first().copied();
+    let reach = nearest.map_or(f64::INFINITY, |(t, _)| t * (1.0 + 1e-6));
+    // A quadric matters when the ray enters its clip box no later than the nearest hit.
+    let matters = |q: &Quadric| {
+        let local = q.local_ray(ray);
+        let (t_in, t_out) = slab_interval(local.origin, local.dir, -DVec3::ONE, DVec3::ONE);
+        !(t_in > t_out || t_out < 0.0 || t_in > reach)
+    };
+    let mut ambiguous = quadrics
+        .iter()
+        .zip(&refs)
+        .any(|(q, r)| r.ambiguous() && matters(q));
+    if let [(t0, i0), (t1, i1), ..] = hits[..] {
+        // Production's bound 64·u·κ·|t| on each root (docs/numerics.md): nearer than both, a tie.
+        let bound = |t: f64, i: usize| 64.0 * f64::EPSILON * 0.5 * refs[i].condition * t.abs();
+        ambiguous |= (t1 - t0) <= bound(t0, i0) + bound(t1, i1);
+    }
+    OraclePixel {
+        object: nearest.map(|(_, i)| i as u32),
+        t: nearest.map(|(t, _)| t),
+        ambiguous,
+    }
+}
+
+/// The oracle's verdict for every pixel, row-major (parallel over rows on the current rayon pool).
+pub fn oracle_pixels(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+) -> Result<Vec<OraclePixel>, HoleError> {
+    check(scene, width, height)?;
+    let rays = pixel_rays(scene, width, height)?;
+    let quadrics = &scene.geometry.quadrics;
+    Ok(rays
+        .par_chunks(width as usize)
+        .flat_map_iter(|row| row.iter().map(|ray| oracle_pixel(quadrics, ray)))
+        .collect())
+}
+
+/// The nearest hit object of every pixel by `variant`, row-major. [`Variant::Production`] goes
+/// through the renderer's own path ([`Whitted::intersect`], BVH included).
+pub fn variant_pixels(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    variant: Variant,
+) -> Result<VariantPixels, HoleError> {
+    check(scene, width, height)?;
+    let rays = pixel_rays(scene, width, height)?;
+    if variant == Variant::Production {
+        let whitted = Whitted::default();
+        return Ok(rays
+            .par_iter()
+            .map(|ray| {
+                // Object indices are 1-based and count quadrics last; `check` admitted quadrics only.
+                whitted
+                    .intersect(scene, ray, None)
+                    .map(|hit| scene.geometry.object_index(hit.prim) - 1)
+            })
+            .collect());
+    }
+    Ok(brute_force(scene, &rays, variant))
+}
+
+/// Every quadric tested by `variant`, nearest hit kept (no BVH).
+fn brute_force(scene: &Scene, rays: &[Ray], variant: Variant) -> VariantPixels {
+    let quadrics: Vec<VariantQuadric> = scene
+        .geometry
+        .quadrics
+        .iter()
+        .cloned()
+        .map(VariantQuadric::new)
+        .collect();
+    rays.par_iter()
+        .map(|ray| {
+            let mut best: Option<(f64, u32)> = None;
+            for (i, q) in quadrics.iter().enumerate() {
+                if let Some(t) = q.intersect(variant, ray, f64::INFINITY, false)
+                    && best.is_none_or(|(bt, _)| t < bt)
+                {
+                    best = Some((t, i as u32));
+                }
+            }
+            best.map(|(_, i)| i)
+        })
+        .collect()
+}
+
+/// Production's intersector tested on every quadric without the BVH, for checking that the BVH
+/// loses nothing (the result must equal [`variant_pixels`] for [`Variant::Production`]).
+pub fn production_without_bvh(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+) -> Result<VariantPixels, HoleError> {
+    check(scene, width, height)?;
+    let rays = pixel_rays(scene, width, height)?;
+    Ok(brute_force(scene, &rays, Variant::Production))
+}
+
+/// Pixel counts of one variant against the oracle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HoleCounts {
+    /// Pixels in the image.
+    pub pixels: usize,
+    /// Pixels where the oracle hits something.
+    pub oracle_hits: usize,
+    /// Ambiguous pixels (within the oracle's margin).
+    pub ambiguous: usize,
+    /// Unambiguous pixels the oracle hits and the variant misses.
+    pub holes: usize,
+    /// Unambiguous pixels the variant hits and the oracle misses.
+    pub phantoms: usize,
+    /// Unambiguous pixels where both hit, different objects.
+    pub wrong_object: usize,
+    /// Ambiguous pixels where the variant's answer differs (not failures).
+    pub ambiguous_differing: usize,
+}
+
+impl HoleCounts {
+    /// Compares a variant's answers with the oracle's, pixel by pixel.
+    pub fn of(oracle: &[OraclePixel], got: &[Option<u32>]) -> HoleCounts {
+        let mut c = HoleCounts {
+            pixels: oracle.len(),
+            ..HoleCounts::default()
+        };
+        for (o, &g) in oracle.iter().zip(got) {
+            c.oracle_hits += o.object.is_some() as usize;
+            let class = PixelClass::of(o.object, g);
+            if o.ambiguous {
+                c.ambiguous += 1;
+                c.ambiguous_differing += (class != PixelClass::Agrees) as usize;
+                continue;
+            }
+            match class {
+                PixelClass::Agrees => {}
+                PixelClass::Hole => c.holes += 1,
+                PixelClass::Phantom => c.phantoms += 1,
+                PixelClass::WrongObject => c.wrong_object += 1,
+            }
+        }
+        c
+    }
+
+    /// Unambiguous pixels whose hit/miss or object differs from the oracle's.
+    pub fn differing(&self) -> usize {
+        self.holes + self.phantoms + self.wrong_object
+    }
+}
+
+/// Colour of a miss that agrees with the oracle.
+pub const BACKGROUND: [u8; 3] = [28, 28, 34];
+/// Colour of a hole (the oracle hits, the variant misses).
+pub const HOLE: [u8; 3] = [235, 30, 30];
+/// Colour of a phantom (the variant hits, the oracle misses).
+pub const PHANTOM: [u8; 3] = [40, 110, 255];
+/// Colour of a wrong object (both hit, different objects).
+pub const WRONG_OBJECT: [u8; 3] = [255, 170, 0];
+/// Colour of an ambiguous pixel (within the oracle's margin), whatever the variant says.
+pub const AMBIGUOUS: [u8; 3] = [0, 230, 230];
+
+/// Muted grey-green tones for objects hit in agreement with the oracle, by quadric index.
+fn object_colour(i: u32) -> [u8; 3] {
+    const TONES: [[u8; 3]; 6] = [
+        [150, 150, 150],
+        [120, 135, 120],
+        [175, 170, 155],
+        [105, 115, 135],
+        [160, 140, 150],
+        [135, 160, 160],
+    ];
+    TONES[i as usize % TONES.len()]
+}
+
+/// The hole map as 8-bit RGB (row-major): agreeing pixels in their object's muted tone (dark where
+/// both miss), differing ones in [`HOLE`], [`PHANTOM`] or [`WRONG_OBJECT`], ambiguous ones in
+/// [`AMBIGUOUS`]. With `got` = `None`, the oracle's own map (objects and ambiguous pixels).
+pub fn hole_map_rgb8(oracle: &[OraclePixel], got: Option<&[Option<u32>]>) -> Vec<u8> {
+    oracle
+        .iter()
+        .enumerate()
+        .flat_map(|(i, o)| {
+            let answer = got.map_or(o.object, |g| g[i]);
+            if o.ambiguous {
+                return AMBIGUOUS;
+            }
+            match PixelClass::of(o.object, answer) {
+                PixelClass::Agrees => o.object.map_or(BACKGROUND, object_colour),
+                PixelClass::Hole => HOLE,
+                PixelClass::Phantom => PHANTOM,
+                PixelClass::WrongObject => WRONG_OBJECT,
+            }
+        })
+        .collect()
+}
+
+/// One scene's hole maps: the oracle's verdicts and every variant's answers and counts.
+#[derive(Clone, Debug)]
+pub struct SceneHoles {
+    /// Scene name.
+    pub name: String,
+    /// What makes the scene hard.
+    pub about: String,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// The oracle's verdicts, row-major.
+    pub oracle: Vec<OraclePixel>,
+    /// Each variant's answers and counts, in [`Variant::ALL`] order.
+    pub variants: Vec<(Variant, VariantPixels, HoleCounts)>,
+}
+
+/// Computes the oracle's verdicts and every variant's hole map for one scene.
+pub fn scene_holes(s: &HoleScene) -> Result<SceneHoles, HoleError> {
+    let oracle = oracle_pixels(&s.scene, s.width, s.height)?;
+    let variants = Variant::ALL
+        .iter()
+        .map(|&v| {
+            let got = variant_pixels(&s.scene, s.width, s.height, v)?;
+            let counts = HoleCounts::of(&oracle, &got);
+            Ok((v, got, counts))
+        })
+        .collect::<Result<Vec<_>, HoleError>>()?;
+    Ok(SceneHoles {
+        name: s.name.clone(),
+        about: s.about.clone(),
+        width: s.width,
+        height: s.height,
+        oracle,
+        variants,
+    })
+}
+
+impl SceneHoles {
+    /// The counts of `variant`.
+    pub fn counts(&self, variant: Variant) -> HoleCounts {
+        self.variants
+            .iter()
+            .find(|(v, _, _)| *v == variant)
+            .map(|(_, _, c)| *c)
+            .unwrap_or_default()
+    }
+}
+
+/// The counts of every scene and variant as a markdown table.
+pub fn markdown(scenes: &[SceneHoles]) -> String {
+    let mut s = String::new();
+    s.push_str("| scene | variant | pixels | oracle hits | differing | holes | phantoms | wrong object | ambiguous | ambiguous and differing |\n");
+    s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for sc in scenes {
+        for (v, _, c) in &sc.variants {
+            let _ = writeln!(
+                s,
+                "| {} ({}x{}) | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                sc.name,
+                sc.width,
+                sc.height,
+                v.name(),
+                c.pixels,
+                c.oracle_hits,
+                c.differing(),
+                c.holes,
+                c.phantoms,
+                c.wrong_object,
+                c.ambiguous,
+                c.ambiguous_differing
+            );
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pixel_classes() {
+        assert_eq!(PixelClass::of(None, None), PixelClass::Agrees);
+        assert_eq!(PixelClass::of(Some(1), Some(1)), PixelClass::Agrees);
+        assert_eq!(PixelClass::of(Some(1), None), PixelClass::Hole);
+        assert_eq!(PixelClass::of(None, Some(0)), PixelClass::Phantom);
+        assert_eq!(PixelClass::of(Some(0), Some(2)), PixelClass::WrongObject);
+    }
+
+    #[test]
+    fn counts_skip_ambiguous_pixels_and_the_map_marks_them() {
+        let px = |object, ambiguous| OraclePixel {
+            object,
+            t: object.map(|_| 1.0),
+            ambiguous,
+        };
+        let oracle = [
+            px(Some(0), false),
+            px(Some(0), false),
+            px(None, false),
+            px(Some(1), false),
+            px(Some(1), true),
+            px(None, false),
+        ];
+        let got = [Some(0), None, Some(1), Some(0), None, None];
+        let c = HoleCounts::of(&oracle, &got);
+        assert_eq!(
+            (c.holes, c.phantoms, c.wrong_object, c.ambiguous),
+            (1, 1, 1, 1)
+        );
+        assert_eq!(
+            (c.ambiguous_differing, c.differing(), c.oracle_hits),
+            (1, 3, 4)
+        );
+        let map = hole_map_rgb8(&oracle, Some(&got));
+        let colours: Vec<[u8; 3]> = map.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+        assert_eq!(
+            colours,
+            vec![
+                object_colour(0),
+                HOLE,
+                PHANTOM,
+                WRONG_OBJECT,
+                AMBIGUOUS,
+                BACKGROUND
+            ]
+        );
+    }
+
+    #[test]
+    fn scenes_with_other_primitives_are_refused() {
+        let mut s = far(8, 4);
+        s.scene.geometry.spheres.push(quadray::Sphere {
+            center: DVec3::ZERO,
+            radius: 1.0,
+            material: 0,
+        });
+        assert!(matches!(
+            oracle_pixels(&s.scene, 8, 4),
+            Err(HoleError::NotQuadricsOnly { spheres: 1, .. })
+        ));
+        let s = far(8, 4);
+        assert!(matches!(
+            variant_pixels(&s.scene, 0, 4, Variant::Production),
+            Err(HoleError::Render(_))
+        ));
+    }
+}
