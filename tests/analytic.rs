@@ -248,9 +248,9 @@ fn no_acne_on_any_primitive_kind() {
                     dir = -dir;
                 }
                 let spawned = Ray::new(offset_origin(g.point, side, g.error, dir), dir);
-                let again = s
-                    .accel()
-                    .closest(&s.geometry, &spawned, f64::INFINITY, Some(hit.prim));
+                let again =
+                    s.accel()
+                        .closest(s.geometry(), &spawned, f64::INFINITY, Some(hit.prim));
                 if again.is_some_and(|(t, prim)| prim == hit.prim && t < 1e-6) {
                     acne += 1;
                 }

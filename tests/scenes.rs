@@ -65,8 +65,9 @@ fn work_follows_the_scene_no_reflections_or_shadows_that_cannot_matter() {
     assert_eq!(r.counts.reflection, 0);
     assert!(r.counts.shadow > 0);
     // Without lights, no shadow ray is traced.
-    let mut dark = scene.clone();
-    dark.lights.clear();
+    let mut description = scene.clone().into_description();
+    description.lights.clear();
+    let dark = quadray::Scene::new(description).unwrap();
     let r = render_with_threads(&dark, &settings, 2);
     assert_eq!(r.counts.shadow, 0);
     // defense.toml has mirrors: reflections are traced, and at most max_depth - 1 per camera ray.
@@ -84,7 +85,7 @@ fn checked_pixels_of_the_defense_scene() {
     let (scene, mut settings) = load("defense.toml");
     (settings.width, settings.height, settings.spp) = (160, 90, 1);
     let film = render_with_threads(&scene, &settings, 2).film;
-    assert_eq!(film.get(80, 2), scene.background, "top row sees the sky");
+    assert_eq!(film.get(80, 2), scene.background(), "top row sees the sky");
     let floor_row = 85;
     let values: Vec<f32> = (0..160).map(|x| film.get(x, floor_row).x).collect();
     let (lo, hi) = values

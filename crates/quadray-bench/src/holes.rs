@@ -214,7 +214,7 @@ impl PixelClass {
 
 /// Checks that the scene is made of quadrics only and the resolution is renderable.
 pub fn check(scene: &Scene, width: u32, height: u32) -> Result<(), HoleError> {
-    let g = &scene.geometry;
+    let g = scene.geometry();
     if !(g.spheres.is_empty() && g.planes.is_empty() && g.meshes.is_empty()) {
         return Err(HoleError::NotQuadricsOnly {
             spheres: g.spheres.len(),
@@ -237,7 +237,7 @@ pub fn check(scene: &Scene, width: u32, height: u32) -> Result<(), HoleError> {
 /// The primary ray through the centre of pixel (x, y), as the renderer's one-sample render casts it.
 fn pixel_rays(scene: &Scene, width: u32, height: u32) -> Result<Vec<Ray>, HoleError> {
     let frame = scene
-        .camera
+        .camera()
         .prepare(width as f64 / height as f64)
         .map_err(quadray::RenderError::from)?;
     Ok((0..height)
@@ -296,7 +296,7 @@ pub fn oracle_pixels(
 ) -> Result<Vec<OraclePixel>, HoleError> {
     check(scene, width, height)?;
     let rays = pixel_rays(scene, width, height)?;
-    let quadrics = &scene.geometry.quadrics;
+    let quadrics = &scene.geometry().quadrics;
     Ok(rays
         .par_chunks(width as usize)
         .flat_map_iter(|row| row.iter().map(|ray| oracle_pixel(quadrics, ray)))
@@ -321,7 +321,7 @@ pub fn variant_pixels(
                 // Object indices are 1-based and count quadrics last; `check` admitted quadrics only.
                 whitted
                     .intersect(scene, ray, None)
-                    .map(|hit| scene.geometry.object_index(hit.prim) - 1)
+                    .map(|hit| scene.geometry().object_index(hit.prim) - 1)
             })
             .collect());
     }
@@ -331,7 +331,7 @@ pub fn variant_pixels(
 /// Every quadric tested by `variant`, nearest hit kept (no BVH).
 fn brute_force(scene: &Scene, rays: &[Ray], variant: Variant) -> VariantPixels {
     let quadrics: Vec<VariantQuadric> = scene
-        .geometry
+        .geometry()
         .quadrics
         .iter()
         .cloned()
@@ -592,14 +592,15 @@ mod tests {
 
     #[test]
     fn scenes_with_other_primitives_are_refused() {
-        let mut s = far(8, 4);
-        s.scene.geometry.spheres.push(quadray::Sphere {
+        let mut description = far(8, 4).scene.into_description();
+        description.geometry.spheres.push(quadray::Sphere {
             center: DVec3::ZERO,
             radius: 1.0,
             material: 0,
         });
+        let with_sphere = quadray::Scene::new(description).unwrap();
         assert!(matches!(
-            oracle_pixels(&s.scene, 8, 4),
+            oracle_pixels(&with_sphere, 8, 4),
             Err(HoleError::NotQuadricsOnly { spheres: 1, .. })
         ));
         let s = far(8, 4);

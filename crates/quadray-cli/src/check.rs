@@ -22,7 +22,7 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     }
     let scene = Scene::new(loaded.description)
         .with_context(|| format!("invalid scene {}", args.scene.display()))?;
-    let g = &scene.geometry;
+    let g = scene.geometry();
     let triangles: usize = g.meshes.iter().map(|m| m.triangle_count()).sum();
     println!(
         "{}: ok: {} spheres, {} planes, {} quadrics, {} meshes ({} triangles), {} lights, {} materials; {}x{}, {} spp, max depth {}",
@@ -32,8 +32,8 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         g.quadrics.len(),
         g.meshes.len(),
         triangles,
-        scene.lights.len(),
-        scene.materials.len(),
+        scene.lights().len(),
+        scene.materials().len(),
         settings.width,
         settings.height,
         settings.spp,

@@ -100,7 +100,7 @@ impl AovSample {
             out.albedo = scene.albedo(hit);
         }
         if selection.object_id {
-            out.object_id = scene.geometry.object_index(hit.prim);
+            out.object_id = scene.geometry().object_index(hit.prim);
         }
         out
     }

@@ -70,7 +70,7 @@ impl Whitted {
         let hit = self.intersect(scene, ray, None);
         let radiance = match &hit {
             Some(h) => self.shade(scene, ray, h, 1, 1.0, counts),
-            None => scene.background,
+            None => scene.background(),
         };
         (radiance, hit)
     }
@@ -79,9 +79,9 @@ impl Whitted {
     pub fn intersect(&self, scene: &Scene, ray: &Ray, from: Option<PrimRef>) -> Option<SurfaceHit> {
         let (t, prim) = scene
             .accel()
-            .closest(&scene.geometry, ray, f64::INFINITY, from)?;
-        let geometry = scene.geometry.surface(prim, ray, t);
-        let material = scene.geometry.material(prim);
+            .closest(scene.geometry(), ray, f64::INFINITY, from)?;
+        let geometry = scene.geometry().surface(prim, ray, t);
+        let material = scene.geometry().material(prim);
         Some(SurfaceHit {
             t,
             prim,
@@ -102,7 +102,7 @@ impl Whitted {
     ) -> Vec3 {
         match self.intersect(scene, ray, from) {
             Some(hit) => self.shade(scene, ray, &hit, depth, throughput, counts),
-            None => scene.background,
+            None => scene.background(),
         }
     }
 
@@ -116,7 +116,7 @@ impl Whitted {
         throughput: f32,
         counts: &mut RayCounts,
     ) -> Vec3 {
-        let m = &scene.materials[hit.material as usize];
+        let m = &scene.materials()[hit.material as usize];
         let g = &hit.geometry;
         let base = scene.albedo(hit);
         let view = -ray.dir.normalize();
@@ -131,7 +131,7 @@ impl Whitted {
         let matte = 1.0 - m.reflectivity;
         let mut color = base * (m.ambient * matte);
 
-        for light in &scene.lights {
+        for light in scene.lights() {
             let Some(inc) = light.incident(g.point) else {
                 continue;
             };
@@ -147,7 +147,7 @@ impl Whitted {
             );
             if scene
                 .accel()
-                .occluded(&scene.geometry, &shadow, inc.distance, Some(hit.prim))
+                .occluded(scene.geometry(), &shadow, inc.distance, Some(hit.prim))
             {
                 continue;
             }

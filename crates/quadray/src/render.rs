@@ -141,8 +141,8 @@ pub fn render_with_aovs(
 ) -> Result<(Rendered, Option<Aovs>), RenderError> {
     settings.validate()?;
     let (w, h) = (settings.width, settings.height);
-    let camera = scene.camera.prepare(w as f64 / h as f64)?;
-    let forward = (scene.camera.to - scene.camera.from).normalize();
+    let camera = scene.camera().prepare(w as f64 / h as f64)?;
+    let forward = (scene.camera().to - scene.camera().from).normalize();
     let mut film = Film::new(w, h);
     // Pass samples are allocated and computed only when a pass is selected.
     let mut aov_samples = if selection.any() {

@@ -51,17 +51,15 @@ pub enum SceneError {
 
 /// A scene ready to render.
 #[derive(Clone, Debug)]
+///
+/// Its parts are read-only: the BVH and the validation both depend on them, so a scene is changed
+/// by changing its description ([`Scene::into_description`]) and building it again.
 pub struct Scene {
-    /// The camera.
-    pub camera: Camera,
-    /// Radiance of rays that hit nothing.
-    pub background: Vec3,
-    /// Materials, by index.
-    pub materials: Vec<Material>,
-    /// Light sources.
-    pub lights: Vec<Light>,
-    /// The primitives.
-    pub geometry: Geometry,
+    camera: Camera,
+    background: Vec3,
+    materials: Vec<Material>,
+    lights: Vec<Light>,
+    geometry: Geometry,
     accel: Accel,
 }
 
@@ -128,6 +126,42 @@ impl Scene {
             geometry: d.geometry,
             accel,
         })
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Radiance of rays that hit nothing.
+    pub fn background(&self) -> Vec3 {
+        self.background
+    }
+
+    /// Materials, by index.
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// Light sources.
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// The primitives.
+    pub fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    /// The description this scene was built from, to change it and build a new scene.
+    pub fn into_description(self) -> SceneDescription {
+        SceneDescription {
+            camera: self.camera,
+            background: self.background,
+            materials: self.materials,
+            lights: self.lights,
+            geometry: self.geometry,
+        }
     }
 
     /// The base colour (albedo) at a hit: its material's texture times the hit's vertex colour.
