@@ -56,34 +56,40 @@ pub fn write_film(film: &Film, path: &Path) -> Result<()> {
 }
 
 /// Writes through `write` into a temporary file beside `path`, then renames it to `path`; on any
-/// failure the temporary file is removed and an older `path` survives.
+/// failure the temporary file is removed and an older `path` survives. The temporary name keeps
+/// the image extension, since image writers pick their format from it.
 pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let format = Format::from_path(path)?;
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("image");
-    let ext = if format == Format::Png { "png" } else { "exr" };
-    let tmp = parent_dir(path).join(format!(".{name}.{}.tmp.{ext}", std::process::id()));
-    let result = write(&tmp).and_then(|()| {
-        std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.with_context(|| format!("writing {}", path.display()))
+    let ext = if Format::from_path(path)? == Format::Png {
+        "png"
+    } else {
+        "exr"
+    };
+    replace_via_temp(path, &format!(".tmp.{ext}"), write)
 }
 
 /// Writes `contents` (a report, a table, an SVG) to `path` through a temporary file beside it,
 /// renamed once complete; on failure the temporary file is removed and an older `path` survives.
 pub fn write_bytes_atomically(path: &Path, contents: &[u8]) -> Result<()> {
+    replace_via_temp(path, ".tmp", |tmp| {
+        std::fs::write(tmp, contents).with_context(|| format!("writing {}", tmp.display()))
+    })
+}
+
+/// The one temp-file-and-rename mechanism behind both writers: `write` fills
+/// `.NAME.PID<suffix>` beside `path`, which then replaces `path`, or is removed on failure.
+fn replace_via_temp(
+    path: &Path,
+    suffix: &str,
+    write: impl FnOnce(&Path) -> Result<()>,
+) -> Result<()> {
     let name = path
         .file_name()
         .and_then(|n| n.to_str())
         .unwrap_or("output");
-    let tmp = parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = std::fs::write(&tmp, contents)
-        .with_context(|| format!("writing {}", tmp.display()))
-        .and_then(|()| {
-            std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
-        });
+    let tmp = parent_dir(path).join(format!(".{name}.{}{suffix}", std::process::id()));
+    let result = write(&tmp).and_then(|()| {
+        std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
+    });
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
