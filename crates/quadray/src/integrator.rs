@@ -119,7 +119,8 @@ impl Whitted {
         let m = &scene.materials()[hit.material as usize];
         let g = &hit.geometry;
         let base = scene.albedo(hit);
-        let view = -ray.dir.normalize();
+        let incoming = ray.dir.normalize();
+        let view = -incoming;
         // Two-sided shading: face both normals towards the viewer.
         let facing = if g.geometric_normal.dot(view) >= 0.0 {
             1.0
@@ -166,10 +167,10 @@ impl Whitted {
 
         let weight = throughput * m.reflectivity;
         if m.reflectivity > 0.0 && depth < self.max_depth && weight >= self.min_throughput {
-            let mut dir = reflect(ray.dir.normalize(), ns);
+            let mut dir = reflect(incoming, ns);
             // An interpolated normal can mirror the ray into the surface; fall back to the true normal.
             if dir.dot(ng) <= 0.0 {
-                dir = reflect(ray.dir.normalize(), ng);
+                dir = reflect(incoming, ng);
             }
             counts.reflection += 1;
             let reflected = Ray::new(offset_origin(g.point, ng, g.error, dir), dir);
