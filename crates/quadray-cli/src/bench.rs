@@ -1,6 +1,7 @@
 //! `quadray bench`: the speed-against-error reports (see docs/numerics.md). `accuracy` runs the
 //! quadric intersector variants against the exact oracle on the hard-case families; `images` and
-//! `holes` are its image-level companions ([`crate::bench_images`], [`crate::bench_holes`]).
+//! `holes` are its image-level companions ([`crate::bench_images`], [`crate::bench_holes`]); `rays`
+//! measures ray-casting throughput on the peers' ray sets ([`crate::bench_rays`]).
 
 use crate::output::write_bytes_atomically;
 use anyhow::{Context, Result, bail};
@@ -22,6 +23,10 @@ pub enum BenchCommand {
     /// Hole maps: one primary ray per pixel of hard quadric scenes, every intersector variant
     /// against the exact oracle; writes holes.md and one PNG per scene and variant.
     Holes(crate::bench_holes::HolesArgs),
+    /// Ray-casting throughput: casts ray files (the `RAYS` format of ../shared/peers/speed, the
+    /// same rays Embree and obvhs cast there) at a mesh through the core's intersect and occluded
+    /// queries; prints Mrays per CPU-second and per wall second, hits and a t checksum.
+    Rays(crate::bench_rays::RaysArgs),
 }
 
 /// Arguments of `quadray bench accuracy`.
@@ -53,6 +58,7 @@ pub fn run(command: &BenchCommand) -> Result<()> {
         BenchCommand::Accuracy(a) => accuracy(a),
         BenchCommand::Images(a) => crate::bench_images::run(a),
         BenchCommand::Holes(a) => crate::bench_holes::run(a),
+        BenchCommand::Rays(a) => crate::bench_rays::run(a),
     }
 }
 

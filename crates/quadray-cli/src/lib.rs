@@ -5,6 +5,7 @@ pub mod args;
 pub mod bench;
 pub mod bench_holes;
 pub mod bench_images;
+pub mod bench_rays;
 mod check;
 pub mod compare;
 pub mod compare_cmd;

@@ -63,10 +63,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             let cpu =
                 render_cpu.map_or("unknown".to_string(), |d| format!("{:.3}", d.as_secs_f64()));
             eprintln!(
-                "load {:.3} s, BVH build {:.3} s ({} bounded primitives), threads {}, render CPU {cpu} s",
+                "load {:.3} s, BVH build {:.3} s ({} bounded primitives, {:.1} MB), traversal {}, \
+                 threads {}, render CPU {cpu} s",
                 (loaded_at - start).as_secs_f64(),
                 (built_at - loaded_at).as_secs_f64(),
                 scene.accel().bounded_count(),
+                scene.accel().memory_bytes() as f64 / 1e6,
+                quadray::simd_path(),
                 pool.current_num_threads(),
             );
         }

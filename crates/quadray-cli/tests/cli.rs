@@ -545,3 +545,28 @@ fn compare_measures_and_fails_over_the_thresholds() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("/no/such.png"));
 }
+
+/// The AVX2+FMA traversal (chosen at run time where the CPU has it) and the baseline traversal
+/// render bit-identical images: the same arithmetic, only the instruction encoding differs. On a
+/// CPU without AVX2 both runs take the baseline path and the test still checks determinism.
+#[test]
+fn simd_paths_render_identical_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut outputs = Vec::new();
+    for (path, name) in [("baseline", "base.png"), ("auto", "auto.png")] {
+        let out = tmp(&dir, name);
+        let status = Command::new(env!("CARGO_BIN_EXE_quadray"))
+            .args(["render", &scene("defense.toml"), "-o"])
+            .arg(&out)
+            .args(["--res", "160x90", "--spp", "2", "-q"])
+            .env("QUADRAY_SIMD", path)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        outputs.push(std::fs::read(&out).unwrap());
+    }
+    assert!(
+        outputs[0] == outputs[1],
+        "the two traversal paths rendered different images"
+    );
+}

@@ -159,7 +159,8 @@ impl Aovs {
 
 impl Geometry {
     /// A primitive's 1-based object index: spheres, then planes, then quadrics, then meshes (a
-    /// whole mesh is one object), each in the order they were given; 0 is left for "no object".
+    /// whole mesh is one object), then mesh instances, each in the order they were given; 0 is left
+    /// for "no object".
     pub fn object_index(&self, prim: crate::shape::PrimRef) -> u32 {
         use crate::shape::PrimRef;
         let (s, p, q) = (
@@ -171,7 +172,7 @@ impl Geometry {
             PrimRef::Sphere(i) => i,
             PrimRef::Plane(i) => s + i,
             PrimRef::Quadric(i) => s + p + i,
-            PrimRef::Triangle { mesh, .. } => s + p + q + mesh,
+            PrimRef::Triangle { instance, .. } => s + p + q + instance,
         }
     }
 }

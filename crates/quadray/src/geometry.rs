@@ -1,5 +1,6 @@
 //! All primitives of a scene, with the one `match` that dispatches over [`PrimRef`].
 
+use crate::instance::MeshInstance;
 use crate::material::MaterialId;
 use crate::math::Ray;
 use crate::mesh::Mesh;
@@ -19,20 +20,46 @@ pub struct Geometry {
     pub planes: Vec<Plane>,
     /// Clipped quadrics.
     pub quadrics: Vec<Quadric>,
-    /// Triangle meshes.
+    /// Triangle meshes placed once, in world space.
     pub meshes: Vec<Mesh>,
+    /// Meshes in their own object space, stored once and placed only by [`Geometry::instances`].
+    pub prototypes: Vec<Mesh>,
+    /// Placements of prototypes, each with its own transform.
+    pub instances: Vec<MeshInstance>,
 }
 
 impl Geometry {
+    /// Mesh placement `instance` of [`PrimRef::Triangle`]: `meshes[instance]` (placed as it is) for
+    /// the first `meshes.len()`, then the prototypes placed by `instances`.
+    #[inline]
+    pub fn placement(&self, instance: u32) -> (&Mesh, Option<&MeshInstance>) {
+        let i = instance as usize;
+        match self.meshes.get(i) {
+            Some(mesh) => (mesh, None),
+            None => {
+                let inst = &self.instances[i - self.meshes.len()];
+                (&self.prototypes[inst.prototype as usize], Some(inst))
+            }
+        }
+    }
+
+    /// Number of mesh placements: meshes plus instances.
+    pub fn placement_count(&self) -> usize {
+        self.meshes.len() + self.instances.len()
+    }
+
     /// Phase one: the nearest t in (0, `t_max`) where the ray meets `prim`.
     #[inline]
     pub fn intersect(&self, prim: PrimRef, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
         match prim {
             PrimRef::Sphere(i) => self.spheres[i as usize].intersect(ray, t_max, from_self),
             PrimRef::Quadric(i) => self.quadrics[i as usize].intersect(ray, t_max, from_self),
-            PrimRef::Triangle { mesh, tri } => {
-                self.meshes[mesh as usize].intersect(tri, ray, t_max, from_self)
-            }
+            PrimRef::Triangle { instance, tri } => match self.placement(instance) {
+                (mesh, None) => mesh.intersect(tri, ray, t_max, from_self),
+                (mesh, Some(inst)) => {
+                    mesh.intersect(tri, &inst.ray_to_object(ray), t_max, from_self)
+                }
+            },
             PrimRef::Plane(i) => self.planes[i as usize].intersect(ray, t_max, from_self),
         }
     }
@@ -42,7 +69,12 @@ impl Geometry {
         match prim {
             PrimRef::Sphere(i) => self.spheres[i as usize].surface(ray, t),
             PrimRef::Quadric(i) => self.quadrics[i as usize].surface(ray, t),
-            PrimRef::Triangle { mesh, tri } => self.meshes[mesh as usize].surface(tri, ray, t),
+            PrimRef::Triangle { instance, tri } => match self.placement(instance) {
+                (mesh, None) => mesh.surface(tri, ray, t),
+                (mesh, Some(inst)) => {
+                    inst.surface_to_world(mesh.surface(tri, &inst.ray_to_object(ray), t))
+                }
+            },
             PrimRef::Plane(i) => self.planes[i as usize].surface(ray, t),
         }
     }
@@ -53,7 +85,10 @@ impl Geometry {
         match prim {
             PrimRef::Sphere(i) => self.spheres[i as usize].material,
             PrimRef::Quadric(i) => self.quadrics[i as usize].material(),
-            PrimRef::Triangle { mesh, .. } => self.meshes[mesh as usize].material(),
+            PrimRef::Triangle { instance, .. } => match self.placement(instance) {
+                (mesh, None) => mesh.material(),
+                (mesh, Some(inst)) => inst.material.unwrap_or(mesh.material()),
+            },
             PrimRef::Plane(i) => self.planes[i as usize].material,
         }
     }
@@ -63,7 +98,10 @@ impl Geometry {
         match prim {
             PrimRef::Sphere(i) => self.spheres[i as usize].texture_point(point),
             PrimRef::Quadric(i) => self.quadrics[i as usize].texture_point(point),
-            PrimRef::Triangle { mesh, .. } => self.meshes[mesh as usize].texture_point(point),
+            PrimRef::Triangle { instance, .. } => match self.placement(instance) {
+                (mesh, None) => mesh.texture_point(point),
+                (mesh, Some(inst)) => mesh.texture_point(inst.point_to_object(point)),
+            },
             PrimRef::Plane(i) => self.planes[i as usize].texture_point(point),
         }
     }
@@ -73,7 +111,10 @@ impl Geometry {
     #[inline]
     pub fn attributes(&self, prim: PrimRef, point: glam::DVec3) -> VertexAttributes {
         match prim {
-            PrimRef::Triangle { mesh, tri } => self.meshes[mesh as usize].attributes(tri, point),
+            PrimRef::Triangle { instance, tri } => match self.placement(instance) {
+                (mesh, None) => mesh.attributes(tri, point),
+                (mesh, Some(inst)) => mesh.attributes(tri, inst.point_to_object(point)),
+            },
             PrimRef::Sphere(_) | PrimRef::Quadric(_) | PrimRef::Plane(_) => {
                 VertexAttributes::default()
             }
@@ -102,6 +143,16 @@ impl Geometry {
             .iter()
             .enumerate()
             .map(|(i, m)| (format!("mesh {i}"), m.material()));
-        s.chain(p).chain(q).chain(m)
+        let proto = self
+            .prototypes
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (format!("prototype mesh {i}"), m.material()));
+        let inst = self
+            .instances
+            .iter()
+            .enumerate()
+            .filter_map(|(i, m)| Some((format!("mesh instance {i}"), m.material?)));
+        s.chain(p).chain(q).chain(m).chain(proto).chain(inst)
     }
 }

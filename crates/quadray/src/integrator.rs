@@ -77,17 +77,7 @@ impl Whitted {
 
     /// The nearest hit of `ray` with its full surface record (phase two runs once, here).
     pub fn intersect(&self, scene: &Scene, ray: &Ray, from: Option<PrimRef>) -> Option<SurfaceHit> {
-        let (t, prim) = scene
-            .accel()
-            .closest(scene.geometry(), ray, f64::INFINITY, from)?;
-        let geometry = scene.geometry().surface(prim, ray, t);
-        let material = scene.geometry().material(prim);
-        Some(SurfaceHit {
-            t,
-            prim,
-            material,
-            geometry,
-        })
+        scene.intersect_from(ray, from)
     }
 
     /// Radiance along `ray`, the `depth`-th ray of its chain, whose contribution is weighted by `throughput`.
@@ -159,7 +149,7 @@ impl Whitted {
                     SpecularModel::Blinn => (inc.to_light + view).normalize().dot(ns),
                 };
                 if alignment > 0.0 {
-                    response += Vec3::splat(m.specular * (alignment as f32).powf(m.shininess));
+                    response += Vec3::splat(m.specular * m.specular_lobe(alignment as f32));
                 }
             }
             color += inc.irradiance * response;

@@ -63,6 +63,19 @@ impl Material {
         self.texture.eval(&p, attributes) * attributes.color.truncate()
     }
 
+    /// The specular lobe `alignment^shininess` for an alignment in (0, 1]: by repeated
+    /// multiplication when the exponent is a whole number up to 1024 (as in every bundled scene),
+    /// which is exact to a few ulps and several times cheaper than `powf`; by `powf` otherwise.
+    #[inline]
+    pub fn specular_lobe(&self, alignment: f32) -> f32 {
+        let n = self.shininess;
+        if n.fract() == 0.0 && n <= 1024.0 {
+            alignment.powi(n as i32)
+        } else {
+            alignment.powf(n)
+        }
+    }
+
     /// The colour multiplying mirror reflections, given the base colour at the hit.
     #[inline]
     pub fn reflection_color(&self, base: Vec3) -> Vec3 {
@@ -89,6 +102,23 @@ impl Default for Material {
 mod tests {
     use super::*;
     use glam::{DVec3, Vec4};
+
+    #[test]
+    fn specular_lobe_matches_powf() {
+        for shininess in [0.0f32, 1.0, 7.0, 32.0, 100.0, 1024.0, 2.5, 2000.0] {
+            let m = Material {
+                shininess,
+                ..Material::default()
+            };
+            for a in [1.0f32, 0.999, 0.9, 0.5, 0.01] {
+                let (got, want) = (m.specular_lobe(a), a.powf(shininess));
+                assert!(
+                    (got - want).abs() <= want * 1e-5 + 1e-30,
+                    "{shininess} {a}: {got} {want}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn vertex_colour_multiplies_base_and_tint_blends_reflection() {

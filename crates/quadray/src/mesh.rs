@@ -9,6 +9,7 @@ use crate::material::MaterialId;
 use crate::math::{Ray, gamma};
 use crate::shape::{SurfaceGeometry, normal_or};
 use crate::texture::{TexturePoint, VertexAttributes};
+use crate::triangle::{ShearedRay, plane_t};
 use glam::{DVec3, Vec2, Vec3, Vec4};
 
 /// Why a mesh is invalid.
@@ -307,43 +308,44 @@ impl Mesh {
         (a.min(b).min(c), a.max(b).max(c))
     }
 
-    /// Möller–Trumbore in f64: parameter t in (0, `t_max`) where the ray meets triangle `tri`.
-    /// A ray spawned on a triangle cannot meet that (planar) triangle again.
-    #[inline]
+    /// The watertight test ([`crate::triangle`]) on the f32 rounding of `ray`, then refined in f64:
+    /// parameter t in (0, `t_max`) where the ray meets triangle `tri`. A ray spawned on a triangle
+    /// cannot meet that (planar) triangle again. The BVH traversal runs the same test.
     pub fn intersect(&self, tri: u32, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
         if from_self {
             return None;
         }
-        let [v0, v1, v2] = self.vertices(tri);
-        let e1 = v1 - v0;
-        let e2 = v2 - v0;
-        let pvec = ray.dir.cross(e2);
-        let det = e1.dot(pvec);
-        if det == 0.0 || !det.is_finite() {
+        let sheared = ShearedRay::from_f64(ray.origin, ray.dir);
+        let [a, b, c] = self.triangle_positions(tri);
+        let hit = sheared.intersect(a, b, c, f32::INFINITY)?;
+        if self.alpha_mask.is_some() && !self.covers(tri, hit.barycentrics) {
             return None;
         }
-        let inv = 1.0 / det;
-        let tvec = ray.origin - v0;
-        let u = tvec.dot(pvec) * inv;
-        if !(0.0..=1.0).contains(&u) {
-            return None;
+        let t = self.refine_t(tri, ray, hit.t as f64);
+        (t < t_max).then_some(t)
+    }
+
+    /// The f64 parameter where `ray` meets the plane of triangle `tri`, from the f32 test's `t`.
+    #[inline]
+    pub fn refine_t(&self, tri: u32, ray: &Ray, t: f64) -> f64 {
+        plane_t(ray.origin, ray.dir, self.vertices(tri), t)
+    }
+
+    /// The three vertex positions of triangle `tri`, as arrays for the watertight test.
+    #[inline(always)]
+    pub(crate) fn triangle_positions(&self, tri: u32) -> [&[f32; 3]; 3] {
+        let [a, b, c] = self.indices[tri as usize];
+        [a, b, c].map(|i| self.positions[i as usize].as_ref())
+    }
+
+    /// Whether the alpha cut-out keeps the point at barycentrics `b` of triangle `tri` (true
+    /// without a cut-out).
+    #[inline]
+    pub(crate) fn covers(&self, tri: u32, b: [f32; 3]) -> bool {
+        match &self.alpha_mask {
+            Some(mask) => self.covered(mask, tri, b),
+            None => true,
         }
-        let qvec = tvec.cross(e1);
-        let v = ray.dir.dot(qvec) * inv;
-        if v < 0.0 || u + v > 1.0 {
-            return None;
-        }
-        let t = e2.dot(qvec) * inv;
-        if !(t > 0.0 && t < t_max) {
-            return None;
-        }
-        if let Some(mask) = &self.alpha_mask {
-            let b = [(1.0 - u - v) as f32, u as f32, v as f32];
-            if !self.covered(mask, tri, b) {
-                return None;
-            }
-        }
-        Some(t)
     }
 
     /// Surface geometry where `ray` meets triangle `tri` at parameter `t`.

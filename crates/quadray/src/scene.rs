@@ -5,7 +5,8 @@ use crate::camera::{Camera, CameraError, Projection};
 use crate::geometry::Geometry;
 use crate::light::Light;
 use crate::material::Material;
-use crate::shape::SurfaceHit;
+use crate::math::Ray;
+use crate::shape::{PrimRef, SurfaceHit};
 use glam::Vec3;
 
 /// Everything a scene holds, before validation.
@@ -108,6 +109,24 @@ impl Scene {
                 ));
             }
         }
+        for (i, inst) in d.geometry.instances.iter().enumerate() {
+            if inst.prototype as usize >= d.geometry.prototypes.len() {
+                return Err(invalid(
+                    format!("mesh instance {i}"),
+                    format!(
+                        "places prototype mesh {}, but the scene has {}",
+                        inst.prototype,
+                        d.geometry.prototypes.len()
+                    ),
+                ));
+            }
+            if crate::math::Transform::new(inst.transform.to_world).is_none() {
+                return Err(invalid(
+                    format!("mesh instance {i}"),
+                    "transform must be finite and invertible",
+                ));
+            }
+        }
         for (i, l) in d.lights.iter().enumerate() {
             l.validate().map_err(|p| invalid(format!("light {i}"), p))?;
         }
@@ -178,6 +197,47 @@ impl Scene {
     /// The acceleration structure.
     pub fn accel(&self) -> &Accel {
         &self.accel
+    }
+
+    /// The nearest hit of `ray` in (0, ∞) with its full surface record: the ray-casting query,
+    /// usable without the renderer (phase one in the BVHs, phase two once, for the hit found).
+    pub fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
+        self.intersect_from(ray, None)
+    }
+
+    /// [`Scene::intersect`] for a ray spawned on primitive `from`, whose self-hits are skipped.
+    pub fn intersect_from(&self, ray: &Ray, from: Option<PrimRef>) -> Option<SurfaceHit> {
+        let (t, prim) = self
+            .accel
+            .closest(&self.geometry, ray, f64::INFINITY, from)?;
+        Some(SurfaceHit {
+            t,
+            prim,
+            material: self.geometry.material(prim),
+            geometry: self.geometry.surface(prim, ray, t),
+        })
+    }
+
+    /// Whether anything blocks `ray` in (0, `t_max`): the any-hit query of shadow rays.
+    pub fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
+        self.accel.occluded(&self.geometry, ray, t_max, None)
+    }
+
+    /// [`Scene::intersect`] for every ray of a slice, into `out` (one slot per ray), on the
+    /// calling thread; split the slice (for instance with rayon's `par_chunks`) to use more.
+    pub fn intersect_many(&self, rays: &[Ray], out: &mut [Option<SurfaceHit>]) {
+        assert_eq!(rays.len(), out.len(), "one result per ray");
+        for (ray, out) in rays.iter().zip(out) {
+            *out = self.intersect(ray);
+        }
+    }
+
+    /// [`Scene::occluded`] for every (ray, `t_max`) of a slice, into `out`, on the calling thread.
+    pub fn occluded_many(&self, rays: &[(Ray, f64)], out: &mut [bool]) {
+        assert_eq!(rays.len(), out.len(), "one result per ray");
+        for ((ray, t_max), out) in rays.iter().zip(out) {
+            *out = self.occluded(ray, *t_max);
+        }
     }
 }
 

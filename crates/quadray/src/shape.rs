@@ -13,10 +13,11 @@ pub enum PrimRef {
     Sphere(u32),
     /// Index into [`crate::Geometry::quadrics`].
     Quadric(u32),
-    /// Triangle `tri` of mesh `mesh` in [`crate::Geometry::meshes`].
+    /// Triangle `tri` of mesh placement `instance` ([`crate::Geometry::placement`]): a mesh of
+    /// [`crate::Geometry::meshes`], or an instance of a prototype after them.
     Triangle {
-        /// Mesh index.
-        mesh: u32,
+        /// Mesh placement index.
+        instance: u32,
         /// Triangle index within the mesh.
         tri: u32,
     },

