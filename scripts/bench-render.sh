@@ -1,57 +1,122 @@
 #!/usr/bin/env bash
-# Render benchmark: scenes/defense.toml at 1280x720, 1 and 4 spp, 1 and 2 threads, and the POV-Ray
-# `reflective` scene side by side with its quadray port (scenes/reflective.toml), interleaved in one
-# run. Reports medians over REPS runs of wall time, CPU-seconds and Mrays/s.
-#   scripts/bench-render.sh [REPS]      (POV-Ray: apt-get install povray; skipped if absent)
+# Render benchmark against POV-Ray 3.7 on the peer harness's scenes, interleaved in one run:
+#   - `reflective`: scenes/reflective.toml, the hand port checked against POV-Ray's image;
+#   - `grid` (ten clipped quadrics) and `mesh` (the 57k-triangle kitchen): converted at run time
+#     from the harness's renderer-neutral ../shared/peers/povray/scenes.json (into a temp dir);
+#   - scenes/defense.toml alone (quadray only; no POV-Ray file exists for it).
+# All at 1280x720, 1 sample per pixel, max trace level 8, on 1 and 2 threads. Reports medians over
+# REPS runs of render wall time, CPU-seconds and Mrays/s, and POV-Ray / quadray CPU-time ratios.
+#   scripts/bench-render.sh [REPS=5]      (POV-Ray: apt-get install povray; pairs skipped if absent)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 reps=${1:-5}
 cargo build --release -q -p quadray-cli
 bin=target/release/quadray
-pov_dir=../shared/peers/povray/pov
+harness=../shared/peers/povray
+pov_dir=$harness/pov
 out=$(mktemp -d)
 log=$out/log.txt
-for rep in $(seq "$reps"); do
-  for spp in 1 4; do
-    for t in 1 2; do
-      printf 'quadray defense spp=%s t=%s ' "$spp" "$t" >>"$log"
-      "$bin" render scenes/defense.toml -o "$out/d.png" --res 1280x720 --spp "$spp" -t "$t" --stats 2>&1 | tr '\n' ' ' >>"$log"
-      echo >>"$log"
-    done
-  done
-  for t in 1 2; do
-    printf 'quadray reflective spp=1 t=%s ' "$t" >>"$log"
-    "$bin" render scenes/reflective.toml -o "$out/r.png" -t "$t" --stats 2>&1 | tr '\n' ' ' >>"$log"
+
+# The kitchen mesh, and quadray ports of the harness's grid and mesh scenes.
+zstd -q -d -f ../shared/assets/meshes/obvhs_kitchen/kitchen.obj.zst -o "$out/kitchen.obj"
+python3 - "$harness/scenes.json" "$out" <<'PY'
+import json, sys
+scenes = json.load(open(sys.argv[1]))["scenes"]
+out = sys.argv[2]
+def header(s):
+    c = s["camera"]
+    lines = ["version = 1", "", "[camera]",
+             f"from = {c['position']}", f"to = {c['look_at']}", f"up = {c['up']}", f"vfov = {c['fov_y_deg']}", "",
+             "[render]", f"resolution = [{c['width']}, {c['height']}]", "spp = 1",
+             f"max_depth = {s['max_trace_level']}", f"background = {s['background']}", ""]
+    for l in s["lights"]:
+        assert l["type"] == "point"
+        lines += ["[[light]]", 'type = "point"', f"position = {l['position']}", f"color = {l['color']}", "falloff = false", ""]
+    return lines
+def material(name, o):
+    f, p = o["finish"], o["pigment"]
+    # POV-Ray adds reflection on top; quadray blends it in (see scenes/reflective.toml).
+    keep = 1.0 - f["reflection"]
+    lines = ["[[material]]", f'name = "{name}"']
+    if p["type"] == "height_ramp":
+        lines.append('texture = "ramp"')
+    elif p["type"] == "solid":
+        lines.append(f"color = {p['color']}")
+    else:
+        raise SystemExit(f"unsupported pigment {p['type']}")
+    lines += [f"ambient = {f['ambient'] / keep:.6f}", f"diffuse = {f['diffuse'] / keep:.6f}",
+              f"specular = {f['phong']}", f"shininess = {f['phong_size']}", f"reflectivity = {f['reflection']}", ""]
+    return lines
+grid = scenes["grid"]
+lines = header(grid)
+for o in grid["objects"]:
+    lines += material(o["name"], o)
+for o in grid["objects"]:
+    b = o["clip_box"]
+    lines += ["[[quadric]]", 'kind = "general"', f"coefficients = {o['coeffs']}",
+              f"clip = {{ min = {b['min']}, max = {b['max']} }}", f'material = "{o["name"]}"', ""]
+open(f"{out}/grid.toml", "w").write("\n".join(lines))
+mesh = scenes["mesh"]
+lines = header(mesh) + material("kitchen", mesh["objects"][0])
+lines += ["[[mesh]]", f'path = "{out}/kitchen.obj"', 'material = "kitchen"', ""]
+open(f"{out}/mesh.toml", "w").write("\n".join(lines))
+PY
+
+quadray_run() { # label, scene, threads
+  printf 'quadray %s t=%s ' "$1" "$3" >>"$log"
+  "$bin" render "$2" -o "$out/q.png" --res 1280x720 --spp 1 -t "$3" --stats 2>&1 | tr '\n' ' ' >>"$log"
+  echo >>"$log"
+}
+pov_run() { # label, pov file, threads
+  if command -v povray >/dev/null && [ -f "$pov_dir/$2" ]; then
+    printf 'povray %s t=%s ' "$1" "$3" >>"$log"
+    (cd "$pov_dir" && povray +I"$2" +O"$out/p.png" +W1280 +H720 -D -V +FN File_Gamma=sRGB -A +WT"$3" 2>&1) \
+      | grep -E "Trace Time|CPU-seconds total" | tail -2 | tr '\n' ' ' >>"$log"
     echo >>"$log"
-    if command -v povray >/dev/null && [ -f "$pov_dir/reflective.pov" ]; then
-      printf 'povray reflective spp=1 t=%s ' "$t" >>"$log"
-      (cd "$pov_dir" && povray +Ireflective.pov +O"$out/p.png" +W1280 +H720 -D -V +FN File_Gamma=sRGB -A +WT"$t" 2>&1) \
-        | grep -E "Trace Time|CPU-seconds total" | tail -2 | tr '\n' ' ' >>"$log"
-      echo >>"$log"
-    fi
+  fi
+}
+for rep in $(seq "$reps"); do
+  echo "round $rep (load $(cut -d' ' -f1 /proc/loadavg))" >&2
+  for t in 1 2; do
+    quadray_run defense scenes/defense.toml "$t"
+    quadray_run reflective scenes/reflective.toml "$t"
+    pov_run reflective reflective.pov "$t"
+    quadray_run grid "$out/grid.toml" "$t"
+    pov_run grid grid.pov "$t"
+    quadray_run mesh "$out/mesh.toml" "$t"
+    pov_run mesh mesh.pov "$t"
   done
 done
 python3 - "$log" <<'PY'
 import re, statistics, sys
 rows = {}
 for line in open(sys.argv[1]):
-    key = " ".join(line.split()[:4])
+    key = " ".join(line.split()[:3])
     if line.startswith("quadray"):
         wall = float(re.search(r"rays in ([\d.]+) s", line).group(1))
         cpu = float(re.search(r"render CPU ([\d.]+) s", line).group(1))
         mr = float(re.search(r"\(([\d.]+) Mrays/s\)", line).group(1))
+        simd = re.search(r"traversal (\S+),", line).group(1)
     else:
         wall = float(re.search(r"Trace Time:.*\(([\d.]+) seconds\)", line).group(1))
         cpu = float(re.search(r"with ([\d.]+) CPU-seconds", line).group(1))
-        mr = float("nan")
-    rows.setdefault(key, []).append((wall, cpu, mr))
-print("| run | wall s (median) | CPU s (median) | Mrays/s (median) | n |")
-print("|---|---|---|---|---|")
+        mr, simd = float("nan"), ""
+    rows.setdefault(key, []).append((wall, cpu, mr, simd))
+print("| run | wall s (median) | CPU s (median) | Mrays/s (median) | n | traversal |")
+print("|---|---|---|---|---|---|")
 for k, v in rows.items():
     med = lambda i: statistics.median(x[i] for x in v)
-    print(f"| {k} | {med(0):.3f} | {med(1):.3f} | {med(2):.2f} | {len(v)} |")
-q = [x[1] for x in rows.get("quadray reflective spp=1 t=1", [])]
-p = [x[1] for x in rows.get("povray reflective spp=1 t=1", [])]
-if q and p:
-    print(f"\nreflective, 1 thread: POV-Ray trace CPU-s / quadray render CPU-s = {statistics.median(p)/statistics.median(q):.2f}")
+    print(f"| {k} | {med(0):.3f} | {med(1):.3f} | {med(2):.2f} | {len(v)} | {v[0][3]} |")
+print()
+for scene in ("reflective", "grid", "mesh"):
+    for t in (1, 2):
+        q = [x[1] for x in rows.get(f"quadray {scene} t={t}", [])]
+        p = [x[1] for x in rows.get(f"povray {scene} t={t}", [])]
+        if q and p:
+            print(f"- {scene}, {t} thread(s): POV-Ray trace CPU-s / quadray render CPU-s = {statistics.median(p) / statistics.median(q):.2f}")
+for scene in ("defense", "reflective", "grid", "mesh"):
+    one = [x[0] for x in rows.get(f"quadray {scene} t=1", [])]
+    two = [x[0] for x in rows.get(f"quadray {scene} t=2", [])]
+    if one and two:
+        print(f"- quadray {scene}: 2-thread wall-time scaling {statistics.median(one) / statistics.median(two):.2f}x")
 PY

@@ -3,8 +3,12 @@
 //!
 //! # Brief overview
 //! - [`Scene`] is built from a [`SceneDescription`]: a [`Camera`], [`Material`]s, [`Light`]s and the
-//!   [`Geometry`] ([`Sphere`], [`Plane`], [`Mesh`], [`Quadric`]). Building validates every value and
-//!   builds one obvhs BVH over all bounded primitives ([`accel`]).
+//!   [`Geometry`] ([`Sphere`], [`Plane`], [`Mesh`], [`Quadric`], and prototype meshes placed by
+//!   [`MeshInstance`]s). Building validates every value and builds the two-level acceleration
+//!   structure ([`accel`]): 4-wide BVHs over meshes and a BVH over the analytic shapes, under a
+//!   top-level BVH over instances.
+//! - [`Scene::intersect`] and [`Scene::occluded`] (and their slice forms) cast rays without the
+//!   renderer.
 //! - [`render()`] traces the scene with the [`Whitted`] integrator into a linear [`Film`], in parallel
 //!   over rows, bit-identically for any thread count.
 //! - Intersection is two-phase (pbrt-v4): inside BVH traversal each primitive returns only a ray
