@@ -141,14 +141,14 @@ pub fn run(a: &RaysArgs) -> Result<()> {
             .and_then(|s| s.rsplit('.').next())
             .unwrap_or("rays")
             .to_string();
-        for api in ["intersect1", "occluded1", "intersect-packets8"] {
+        for api in ["intersect1", "occluded1"] {
             let mut wall = Vec::new();
             let mut cpu_rates = Vec::new();
             let mut checksum = (0u64, 0.0f64);
             for _ in 0..a.runs {
                 let cpu = cpu_time::ProcessTime::now();
                 let start = Instant::now();
-                checksum = pool.install(|| cast(&scene, &rays, api));
+                checksum = pool.install(|| cast(&scene, &rays, api == "occluded1"));
                 let secs = start.elapsed().as_secs_f64();
                 wall.push(rays.len() as f64 / secs / 1e6);
                 cpu_rates.push(rays.len() as f64 / cpu.elapsed().as_secs_f64() / 1e6);
@@ -167,33 +167,20 @@ pub fn run(a: &RaysArgs) -> Result<()> {
     Ok(())
 }
 
-/// Casts every ray (in chunks of 4096, as the harness does) with query `api` and returns the hit
-/// count and the sum of the hits' t (0 for the occlusion query, which has no t).
-fn cast(scene: &Scene, rays: &[Ray], api: &str) -> (u64, f64) {
+/// Casts every ray (in chunks of 4096, as the harness does) and returns the hit count and the sum
+/// of the hits' t (0 for the occlusion query, which has no t).
+fn cast(scene: &Scene, rays: &[Ray], occlusion: bool) -> (u64, f64) {
     let (accel, g) = (scene.accel(), scene.geometry());
     rays.par_chunks(4096)
         .map(|chunk| {
             let mut acc = (0u64, 0.0f64);
-            match api {
-                "occluded1" => {
-                    for ray in chunk {
-                        acc.0 += accel.occluded(g, ray, f64::INFINITY, None) as u64;
-                    }
+            if occlusion {
+                for ray in chunk {
+                    acc.0 += accel.occluded(g, ray, f64::INFINITY, None) as u64;
                 }
-                "intersect1" => {
-                    for ray in chunk {
-                        if let Some((t, _)) = accel.closest(g, ray, f64::INFINITY, None) {
-                            acc.0 += 1;
-                            acc.1 += t;
-                        }
-                    }
-                }
-                _ => {
-                    // The slice query: packets of eight consecutive rays (4×2 pixel blocks in the
-                    // harness's coherent files).
-                    let mut out = vec![None; chunk.len()];
-                    accel.closest_many(g, chunk, &mut out);
-                    for (t, _) in out.into_iter().flatten() {
+            } else {
+                for ray in chunk {
+                    if let Some((t, _)) = accel.closest(g, ray, f64::INFINITY, None) {
                         acc.0 += 1;
                         acc.1 += t;
                     }

@@ -225,18 +225,10 @@ impl Scene {
 
     /// [`Scene::intersect`] for every ray of a slice, into `out` (one slot per ray), on the
     /// calling thread; split the slice (for instance with rayon's `par_chunks`) to use more.
-    /// Coherent consecutive rays (a pixel block's camera rays) are traced as packets.
     pub fn intersect_many(&self, rays: &[Ray], out: &mut [Option<SurfaceHit>]) {
         assert_eq!(rays.len(), out.len(), "one result per ray");
-        let mut first = vec![None; rays.len()];
-        self.accel.closest_many(&self.geometry, rays, &mut first);
-        for ((ray, out), hit) in rays.iter().zip(out).zip(first) {
-            *out = hit.map(|(t, prim)| SurfaceHit {
-                t,
-                prim,
-                material: self.geometry.material(prim),
-                geometry: self.geometry.surface(prim, ray, t),
-            });
+        for (ray, out) in rays.iter().zip(out) {
+            *out = self.intersect(ray);
         }
     }
 

@@ -28,25 +28,25 @@ pub(crate) type TriId = (u32, u32);
 
 /// A child reference with this bit set is a leaf: the rest is its first [`Tri4`] block, and the
 /// low [`LEAF_COUNT_BITS`] bits hold the block count.
-pub(super) const LEAF: u32 = 1 << 31;
-pub(super) const LEAF_COUNT_BITS: u32 = 3;
+const LEAF: u32 = 1 << 31;
+const LEAF_COUNT_BITS: u32 = 3;
 /// An unused child slot (its box is empty, so no ray enters it).
-pub(super) const EMPTY: u32 = u32::MAX;
+const EMPTY: u32 = u32::MAX;
 
 /// Four children: their boxes as `[min x, max x, min y, max y, min z, max z]` lanes, and their
 /// references (a node index, a leaf, or [`EMPTY`]).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(16))]
-pub(super) struct Node4 {
-    pub(super) bounds: [[f32; 4]; 6],
-    pub(super) children: [u32; 4],
+struct Node4 {
+    bounds: [[f32; 4]; 6],
+    children: [u32; 4],
 }
 
 /// A wide BVH over the triangles of one or more meshes.
 #[derive(Clone, Debug)]
 pub(crate) struct MeshBvh {
-    pub(super) nodes: Vec<Node4>,
-    pub(super) blocks: Vec<Tri4>,
+    nodes: Vec<Node4>,
+    blocks: Vec<Tri4>,
     /// (mesh, triangle) of each triangle number (the meshes' triangles numbered in turn); empty
     /// over a single mesh, whose triangle numbers are its triangle indices.
     ids: Vec<TriId>,
@@ -57,8 +57,8 @@ pub(crate) struct MeshBvh {
 /// An f32 ray in a mesh's space, prepared for the node and triangle tests.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct MeshRay {
-    pub(super) origin: Vec3A,
-    pub(super) inv_dir: Vec3A,
+    origin: Vec3A,
+    inv_dir: Vec3A,
     /// Whether each reciprocal direction component is negative: the near slab is the high one.
     negative: [bool; 3],
     sheared: ShearedRay,
@@ -333,7 +333,7 @@ impl MeshBvh {
 
     /// (mesh, triangle) of triangle number `number`.
     #[inline(always)]
-    pub(super) fn id(&self, number: u32) -> TriId {
+    fn id(&self, number: u32) -> TriId {
         match self.ids.get(number as usize) {
             Some(&id) => id,
             None => (0, number),
@@ -343,7 +343,7 @@ impl MeshBvh {
     /// The lanes of `block` the ray hits in (0, `t_max`) that count: not `skip`, and kept by the
     /// meshes' alpha cut-outs.
     #[inline(always)]
-    pub(super) fn block_hits(
+    fn block_hits(
         &self,
         meshes: &[Mesh],
         block: &Tri4,

@@ -17,7 +17,6 @@
 
 mod analytic;
 mod mesh_bvh;
-mod packet;
 mod tri4;
 
 use crate::geometry::Geometry;
@@ -27,7 +26,6 @@ use analytic::AnalyticBvh;
 use glam::{DVec3, Vec3A};
 use mesh_bvh::{MeshBvh, MeshRay};
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, bvh2::builder::build_bvh2};
-use packet::{MeshPacket, PACKET};
 use std::cell::RefCell;
 use std::sync::OnceLock;
 use std::time::Duration;
@@ -250,53 +248,11 @@ impl Accel {
         self.occluded_impl(g, ray, t_max, from)
     }
 
-    /// [`Accel::closest`] (from no primitive, in (0, ∞)) for each ray of a slice, into `out` (same
-    /// length), on the calling thread. Consecutive rays are traced through the world meshes'
-    /// BVH in packets of eight ([`packet`]), which pays when they are coherent (camera rays of a
-    /// pixel block); the result is the same as ray by ray.
+    /// [`Accel::closest`] for each ray of a slice, into `out` (same length), on the calling thread.
     pub fn closest_many(&self, g: &Geometry, rays: &[Ray], out: &mut [Option<(f64, PrimRef)>]) {
         assert_eq!(rays.len(), out.len(), "one result per ray");
-        #[cfg(target_arch = "x86_64")]
-        if simd_path() == SimdPath::Avx2 {
-            // SAFETY: the CPU supports AVX2 and FMA (checked by `simd_path`).
-            return unsafe { self.closest_many_avx2(g, rays, out) };
-        }
-        self.closest_many_impl(g, rays, out)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    fn closest_many_avx2(&self, g: &Geometry, rays: &[Ray], out: &mut [Option<(f64, PrimRef)>]) {
-        self.closest_many_impl(g, rays, out)
-    }
-
-    #[inline(always)]
-    fn closest_many_impl(&self, g: &Geometry, rays: &[Ray], out: &mut [Option<(f64, PrimRef)>]) {
-        let Some(world) = &self.world else {
-            for (ray, out) in rays.iter().zip(out) {
-                *out = self.closest_impl(g, ray, f64::INFINITY, None);
-            }
-            return;
-        };
-        for (chunk, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-            let mesh_rays: [MeshRay; PACKET] = std::array::from_fn(|i| {
-                let r = chunk.get(i).unwrap_or(&chunk[0]);
-                MeshRay::new(r.origin.as_vec3(), r.dir.as_vec3())
-            });
-            let packet = MeshPacket::new(&mesh_rays[..chunk.len()]);
-            let mut limits = [f32::INFINITY; PACKET];
-            let mut hits = [None; PACKET];
-            world.closest_packet(&g.meshes, &packet, &mut limits, &mut hits);
-            for ((ray, out), hit) in chunk.iter().zip(out).zip(hits) {
-                let mut best_t = f64::INFINITY;
-                let mut best = None;
-                if let Some(((m, tri), hit)) = hit {
-                    best_t = g.meshes[m as usize].refine_t(tri, ray, hit.t as f64);
-                    best = Some(PrimRef::Triangle { instance: m, tri });
-                }
-                self.closest_from(g, ray, None, &mut best_t, &mut best, false);
-                *out = best.map(|p| (best_t, p));
-            }
+        for (ray, out) in rays.iter().zip(out) {
+            *out = self.closest(g, ray, f64::INFINITY, None);
         }
     }
 
@@ -337,49 +293,30 @@ impl Accel {
     ) -> Option<(f64, PrimRef)> {
         let mut best_t = t_max;
         let mut best = None;
-        self.closest_from(g, ray, from, &mut best_t, &mut best, true);
-        best.map(|p| (best_t, p))
-    }
-
-    /// Lowers `best_t` to the nearest hit in every top-level item (the world meshes only if
-    /// `world` is set) and in the planes, recording its primitive in `best`.
-    #[inline(always)]
-    fn closest_from(
-        &self,
-        g: &Geometry,
-        ray: &Ray,
-        from: Option<PrimRef>,
-        best_t: &mut f64,
-        best: &mut Option<PrimRef>,
-        world: bool,
-    ) {
-        let wanted = |item: &TopItem| world || *item != TopItem::World;
         match &self.top {
             None => {
-                if let Some(&item) = self.items.first().filter(|i| wanted(i)) {
-                    self.closest_in(item, g, ray, from, best_t, best);
+                if let Some(&item) = self.items.first() {
+                    self.closest_in(item, g, ray, from, &mut best_t, &mut best);
                 }
             }
             Some(top) => with_stack(&TOP_STACK, |stack| {
-                let fray = to_obvhs(ray, *best_t);
+                let fray = to_obvhs(ray, best_t);
                 let mut leaves = TopLeaves::new(top, &fray, stack);
-                while let Some(range) = leaves.next(round_up(*best_t)) {
+                while let Some(range) = leaves.next(round_up(best_t)) {
                     for id in range {
-                        let item = self.items[id];
-                        if wanted(&item) {
-                            self.closest_in(item, g, ray, from, best_t, best);
-                        }
+                        self.closest_in(self.items[id], g, ray, from, &mut best_t, &mut best);
                     }
                 }
             }),
         }
         for i in 0..self.planes {
             let prim = PrimRef::Plane(i);
-            if let Some(t) = g.intersect(prim, ray, *best_t, from == Some(prim)) {
-                *best_t = t;
-                *best = Some(prim);
+            if let Some(t) = g.intersect(prim, ray, best_t, from == Some(prim)) {
+                best_t = t;
+                best = Some(prim);
             }
         }
+        best.map(|p| (best_t, p))
     }
 
     /// Lowers `best_t` to the nearest hit of the ray with top-level `item`, recording its primitive.
