@@ -130,7 +130,7 @@ pub fn run(a: &RaysArgs) -> Result<()> {
         mesh_bytes as f64 / triangles.max(1) as f64,
         accel_bytes as f64 / triangles.max(1) as f64,
         (mesh_bytes + accel_bytes) as f64 / triangles.max(1) as f64,
-        quadray::simd_path(),
+        scene.accel().traversal_path(),
     );
     for path in &a.rays {
         let rays = read_rays(path)?;

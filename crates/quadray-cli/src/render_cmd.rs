@@ -69,7 +69,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 (built_at - loaded_at).as_secs_f64(),
                 scene.accel().bounded_count(),
                 scene.accel().memory_bytes() as f64 / 1e6,
-                quadray::simd_path(),
+                scene.accel().traversal_path(),
                 pool.current_num_threads(),
             );
         }

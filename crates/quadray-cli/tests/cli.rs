@@ -546,9 +546,10 @@ fn compare_measures_and_fails_over_the_thresholds() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("/no/such.png"));
 }
 
-/// The AVX2+FMA traversal (chosen at run time where the CPU has it) and the baseline traversal
-/// render bit-identical images: the same arithmetic, only the instruction encoding differs. On a
-/// CPU without AVX2 both runs take the baseline path and the test still checks determinism.
+/// The AVX2+FMA traversal (chosen at run time where the CPU has it, for scenes that are mostly
+/// triangles, as scenes/obj-mesh.toml is) and the baseline traversal render bit-identical images:
+/// the same arithmetic, only the instruction encoding differs. On a CPU without AVX2 both runs take
+/// the baseline path and the test still checks determinism.
 #[test]
 fn simd_paths_render_identical_images() {
     let dir = tempfile::tempdir().unwrap();
@@ -556,13 +557,27 @@ fn simd_paths_render_identical_images() {
     for (path, name) in [("baseline", "base.png"), ("auto", "auto.png")] {
         let out = tmp(&dir, name);
         let status = Command::new(env!("CARGO_BIN_EXE_quadray"))
-            .args(["render", &scene("defense.toml"), "-o"])
+            .args(["render", &scene("obj-mesh.toml"), "-o"])
             .arg(&out)
-            .args(["--res", "160x90", "--spp", "2", "-q"])
+            .args(["--res", "160x90", "--spp", "2", "--stats"])
             .env("QUADRAY_SIMD", path)
-            .status()
+            .output()
             .unwrap();
-        assert!(status.success());
+        assert!(status.status.success());
+        let stats = String::from_utf8_lossy(&status.stderr);
+        #[cfg(target_arch = "x86_64")]
+        let avx2 = is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
+        #[cfg(not(target_arch = "x86_64"))]
+        let avx2 = false;
+        let expected = if path == "auto" && avx2 {
+            "traversal AVX2+FMA"
+        } else {
+            "traversal "
+        };
+        assert!(stats.contains(expected), "{stats}");
+        if path == "baseline" {
+            assert!(!stats.contains("AVX2"), "{stats}");
+        }
         outputs.push(std::fs::read(&out).unwrap());
     }
     assert!(
