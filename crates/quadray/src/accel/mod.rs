@@ -320,6 +320,10 @@ impl Accel {
         let mut best_t = t_max;
         let mut best = None;
         match &self.top {
+            None if self.items.len() == 1 => {
+                // One item tests its own root box.
+                self.closest_in(self.items[0], g, ray, from, &mut best_t, &mut best);
+            }
             None => {
                 // A few items: their boxes in order of entry, no BVH and no stack.
                 let fray = to_obvhs(ray, best_t);
@@ -425,6 +429,7 @@ impl Accel {
             }
         }
         match &self.top {
+            None if self.items.len() == 1 => self.occluded_in(self.items[0], g, ray, t_max, from),
             None => {
                 let fray = to_obvhs(ray, t_max);
                 self.items.iter().zip(&self.item_boxes).any(|(&item, b)| {
