@@ -6,11 +6,11 @@
 //! - `tobj`: tobj's parse alone, with the loader's options (the floor for any tobj-based loader);
 //! - `import`: quadray's OBJ import (tobj, MTL materials and textures, conversion to quadray
 //!   meshes in world space);
-//! - `bvh`: `Scene::new`, which validates the scene and builds the obvhs BVH, on a rayon pool of
-//!   1 or 2 threads.
+//! - `bvh`: `Scene::new`, which validates the scene and builds the acceleration structure, on a
+//!   rayon pool of 1 or 2 threads.
 //!
 //! Memory per triangle: the meshes' own bytes (`Mesh::memory_bytes`), the acceleration
-//! structure's persistent bytes (`Accel::memory_bytes`: BVH nodes, index lists, primitive list),
+//! structure's persistent bytes (`Accel::memory_bytes`: wide nodes, leaf blocks, id tables),
 //! and the largest resident-set growth seen over one `Scene::new` (which also counts the build's
 //! transient buffers and whatever the allocator keeps).
 
