@@ -387,8 +387,7 @@ impl MeshBvh {
         }
         let mut limit = t_max;
         let mut best: Option<(u32, TriangleHit)> = None;
-        STACK.with_borrow_mut(|stack| {
-            stack.clear();
+        super::with_stack(&STACK, |stack| {
             let mut current = 0u32;
             loop {
                 if current & LEAF == 0 {
@@ -468,8 +467,7 @@ impl MeshBvh {
         if self.nodes.is_empty() {
             return false;
         }
-        STACK.with_borrow_mut(|stack| {
-            stack.clear();
+        super::with_stack(&STACK, |stack| {
             let mut current = 0u32;
             loop {
                 if current & LEAF == 0 {

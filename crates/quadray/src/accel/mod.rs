@@ -274,23 +274,6 @@ impl Accel {
         self.occluded_impl(g, ray, t_max, from)
     }
 
-    /// [`Accel::closest`] for each ray of a slice, into `out` (same length), on the calling thread.
-    pub fn closest_many(&self, g: &Geometry, rays: &[Ray], out: &mut [Option<(f64, PrimRef)>]) {
-        assert_eq!(rays.len(), out.len(), "one result per ray");
-        for (ray, out) in rays.iter().zip(out) {
-            *out = self.closest(g, ray, f64::INFINITY, None);
-        }
-    }
-
-    /// [`Accel::occluded`] for each ray of a slice with its own `t_max`, into `out`, on the calling
-    /// thread.
-    pub fn occluded_many(&self, g: &Geometry, rays: &[(Ray, f64)], out: &mut [bool]) {
-        assert_eq!(rays.len(), out.len(), "one result per ray");
-        for ((ray, t_max), out) in rays.iter().zip(out) {
-            *out = self.occluded(g, ray, *t_max, None);
-        }
-    }
-
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn closest_avx2(
@@ -403,14 +386,12 @@ impl Accel {
                 instance,
                 prototype,
             } => {
-                let inst = &g.instances[instance as usize - g.meshes.len()];
-                let mesh = std::slice::from_ref(&g.prototypes[prototype as usize]);
-                let local = inst.ray_to_object(ray);
-                let mray = MeshRay::new(local.origin.as_vec3(), local.dir.as_vec3());
-                let skip = instance_skip(from, instance);
-                let blas = &self.prototypes[prototype as usize];
-                if let Some(((_, tri), hit)) = blas.closest(mesh, &mray, round_up(*best_t), skip) {
-                    let t = mesh[0].refine_t(tri, &local, hit.t as f64);
+                let q = self.instance_query(g, instance, prototype, ray, from);
+                let found = q
+                    .bvh
+                    .closest(q.mesh, &q.mesh_ray, round_up(*best_t), q.skip);
+                if let Some(((_, tri), hit)) = found {
+                    let t = q.mesh[0].refine_t(tri, &q.local, hit.t as f64);
                     if t < *best_t {
                         *best_t = t;
                         *best = Some(PrimRef::Triangle { instance, tri });
@@ -456,6 +437,26 @@ impl Accel {
         }
     }
 
+    /// The ray mapped into instance `instance` of prototype `prototype`, with what its BVH needs.
+    #[inline(always)]
+    fn instance_query<'a>(
+        &'a self,
+        g: &'a Geometry,
+        instance: u32,
+        prototype: u32,
+        ray: &Ray,
+        from: Option<PrimRef>,
+    ) -> InstanceQuery<'a> {
+        let local = g.instances[instance as usize - g.meshes.len()].ray_to_object(ray);
+        InstanceQuery {
+            bvh: &self.prototypes[prototype as usize],
+            mesh: std::slice::from_ref(&g.prototypes[prototype as usize]),
+            mesh_ray: MeshRay::new(local.origin.as_vec3(), local.dir.as_vec3()),
+            local,
+            skip: instance_skip(from, instance),
+        }
+    }
+
     /// Whether top-level `item` blocks the ray in (0, `t_max`).
     #[inline(always)]
     fn occluded_in(
@@ -480,12 +481,8 @@ impl Accel {
                 instance,
                 prototype,
             } => {
-                let inst = &g.instances[instance as usize - g.meshes.len()];
-                let mesh = std::slice::from_ref(&g.prototypes[prototype as usize]);
-                let local = inst.ray_to_object(ray);
-                let mray = MeshRay::new(local.origin.as_vec3(), local.dir.as_vec3());
-                let skip = instance_skip(from, instance);
-                self.prototypes[prototype as usize].occluded(mesh, &mray, round_up(t_max), skip)
+                let q = self.instance_query(g, instance, prototype, ray, from);
+                q.bvh.occluded(q.mesh, &q.mesh_ray, round_up(t_max), q.skip)
             }
         }
     }
@@ -536,6 +533,18 @@ impl<'a> TopLeaves<'a> {
         }
         None
     }
+}
+
+/// A ray in an instance's object space, ready for its prototype's BVH.
+struct InstanceQuery<'a> {
+    bvh: &'a MeshBvh,
+    /// The prototype, as the one mesh its BVH was built over.
+    mesh: &'a [crate::mesh::Mesh],
+    /// The ray in object space (f64, for the refinement of t).
+    local: Ray,
+    mesh_ray: MeshRay,
+    /// The prototype triangle the ray was spawned on, if on this instance.
+    skip: Option<(u32, u32)>,
 }
 
 /// The world-mesh triangle a ray was spawned on, if `from` is one (placements below `world_count`).
@@ -600,12 +609,13 @@ thread_local! {
     static TOP_STACK: RefCell<Vec<u32>> = const { RefCell::new(Vec::new()) };
 }
 
-/// Runs `f` with this thread's empty stack from `key` (a fresh one if it is already in use).
+/// Runs `f` with this thread's empty stack from `key` (a fresh one if it is already in use, so a
+/// nested query can never fail).
 #[inline]
-fn with_stack(
-    key: &'static std::thread::LocalKey<RefCell<Vec<u32>>>,
-    f: impl FnOnce(&mut Vec<u32>),
-) {
+pub(crate) fn with_stack<T, R>(
+    key: &'static std::thread::LocalKey<RefCell<Vec<T>>>,
+    f: impl FnOnce(&mut Vec<T>) -> R,
+) -> R {
     key.with(|cell| match cell.try_borrow_mut() {
         Ok(mut stack) => {
             stack.clear();
