@@ -73,7 +73,7 @@ fn invalid(what: impl Into<String>, problem: impl Into<String>) -> SceneError {
 
 impl Scene {
     /// Validates a description and builds its BVH.
-    pub fn new(d: SceneDescription) -> Result<Scene, SceneError> {
+    pub fn new(mut d: SceneDescription) -> Result<Scene, SceneError> {
         d.camera.prepare(1.0)?;
         if !d.background.is_finite() || d.background.min_element() < 0.0 {
             return Err(invalid("background", "must be finite and non-negative"));
@@ -109,7 +109,7 @@ impl Scene {
                 ));
             }
         }
-        for (i, inst) in d.geometry.instances.iter().enumerate() {
+        for (i, inst) in d.geometry.instances.iter_mut().enumerate() {
             if inst.prototype as usize >= d.geometry.prototypes.len() {
                 return Err(invalid(
                     format!("mesh instance {i}"),
@@ -120,12 +120,14 @@ impl Scene {
                     ),
                 ));
             }
-            if crate::math::Transform::new(inst.transform.to_world).is_none() {
-                return Err(invalid(
-                    format!("mesh instance {i}"),
-                    "transform must be finite and invertible",
-                ));
-            }
+            // Rebuilt from `to_world` alone, so the inverse and normal matrix always match it.
+            inst.transform =
+                crate::math::Transform::new(inst.transform.to_world).ok_or_else(|| {
+                    invalid(
+                        format!("mesh instance {i}"),
+                        "transform must be finite and invertible",
+                    )
+                })?;
         }
         for (i, l) in d.lights.iter().enumerate() {
             l.validate().map_err(|p| invalid(format!("light {i}"), p))?;

@@ -1,8 +1,11 @@
 //! Watertight ray/triangle intersection in f32: Woop, Benthin and Wald, "Watertight Ray/Triangle
 //! Intersection" (JCGT 2013), with the conservative bound on t of pbrt-v3 (§3.9.6) so that a ray
-//! spawned from a surface never re-hits it through rounding. One change to pbrt's bound: the
-//! error of the shear x' = x − sx·z is bounded with the unscaled z, not z·sz, so the bound holds for
-//! directions of any length (pbrt's rejects true hits of a ray whose direction has length 1e-6).
+//! spawned from a surface never re-hits it through rounding. Two changes to pbrt's test: the error
+//! of the shear x' = x − sx·z is bounded with the unscaled z, not z·sz, so the bound holds for
+//! directions of any length (pbrt's rejects true hits of a ray whose direction has length 1e-6);
+//! and a hit whose three sheared vertex depths all lie clearly in front of the origin is accepted
+//! whatever the bound says (pbrt's rejects every hit of a ray from 10⁵ times a triangle's size away,
+//! where the shear's absolute error rivals the triangle).
 //!
 //! The ray is permuted so that its largest direction component becomes z, and sheared so that it
 //! points along +z from the origin; the triangle is then tested in 2-d with three edge functions.
@@ -159,7 +162,14 @@ impl ShearedRay {
         let max_e = u.abs().max(v.abs()).max(w.abs());
         let delta_t =
             3.0 * (gamma32(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
-        if !(t > delta_t && t < t_max) {
+        // t is a weighted mean of the three sheared depths: when all three lie in front of the
+        // origin by more than twice their rounding error, so does the hit, however loose δt is
+        // (δt grows with the shear's absolute error and rejects every hit of a ray from 10⁵ times
+        // a triangle's size away). Rays spawned on a surface have a vertex at depth ~0 and are
+        // judged by δt alone.
+        let min_z = az.min(bz).min(cz);
+        let in_front = t > delta_t || (min_z > 2.0 * delta_z && t > 0.0);
+        if !(in_front && t < t_max) {
             return None;
         }
         Some(TriangleHit {

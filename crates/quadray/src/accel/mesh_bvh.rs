@@ -31,7 +31,7 @@ pub(crate) type TriId = (u32, u32);
 const LEAF: u32 = 1 << 31;
 const LEAF_COUNT_BITS: u32 = 3;
 /// An unused child slot (its box is empty, so no ray enters it).
-const EMPTY: u32 = u32::MAX;
+const EMPTY: u32 = LEAF;
 
 /// Four children: their boxes as `[min x, max x, min y, max y, min z, max z]` lanes, and their
 /// references (a node index, a leaf, or [`EMPTY`]).
@@ -61,8 +61,13 @@ pub(crate) struct MeshRay {
     inv_dir: Vec3A,
     /// Whether each reciprocal direction component is negative: the near slab is the high one.
     negative: [bool; 3],
+    /// Whether the origin and direction are finite in f32 (a ray that is not meets nothing).
+    finite: bool,
     sheared: ShearedRay,
 }
+
+/// 1 + 2γ(3) in f32: the factor that makes a slab's exit distance conservative.
+const ROBUST_EXIT: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// Reciprocal clamped to ±1e20, keeping the sign of zero.
 #[inline(always)]
@@ -88,6 +93,7 @@ impl MeshRay {
                 inv.z.is_sign_negative(),
             ],
             sheared: ShearedRay::new(origin, dir),
+            finite: origin.is_finite() && dir.is_finite() && dir != Vec3::ZERO,
         }
     }
 }
@@ -113,7 +119,10 @@ impl Node4 {
         let (y0, y1) = slab(1);
         let (z0, z1) = slab(2);
         let enter = x0.max(y0).max(z0).max(Vec4::ZERO);
-        let exit = x1.min(y1).min(z1).min(Vec4::splat(t_max));
+        // Ize's robust slab test (pbrt-v3 §3.9.2): widening the exit by 2γ(3) makes the f32 test
+        // conservative for the f32 ray, wherever it starts, so no ray slips past a box that holds a
+        // triangle it meets.
+        let exit = (x1.min(y1).min(z1) * Vec4::splat(ROBUST_EXIT)).min(Vec4::splat(t_max));
         (enter, enter.cmple(exit).bitmask())
     }
 }
@@ -222,6 +231,11 @@ fn collapse(bvh2: &Bvh2, triangles: &[[[f32; 3]; 3]]) -> (Vec<Node4>, Vec<Tri4>)
                 .map(|&p| (triangles[p as usize], p))
                 .collect();
             blocks.push(Tri4::new(&lanes));
+            // Block numbers have 28 bits: 2^28 blocks would be 170 GB of leaves.
+            assert!(
+                blocks.len() <= 1 << 28,
+                "a mesh BVH holds at most 2^30 triangles"
+            );
             LEAF | ((blocks.len() as u32 - 1) << LEAF_COUNT_BITS) | 1
         } else {
             let slot = nodes.len();
@@ -382,7 +396,7 @@ impl MeshBvh {
         t_max: f32,
         skip: Option<TriId>,
     ) -> Option<(TriId, TriangleHit)> {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !ray.finite {
             return None;
         }
         let mut limit = t_max;
@@ -464,7 +478,7 @@ impl MeshBvh {
         t_max: f32,
         skip: Option<TriId>,
     ) -> bool {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !ray.finite {
             return false;
         }
         super::with_stack(&STACK, |stack| {
@@ -578,6 +592,34 @@ mod tests {
                 h.t
             );
         }
+    }
+
+    /// Rays from far away aimed exactly at the grid's lines, where leaf boxes meet face to face,
+    /// all hit: the slab test is conservative for a ray starting at any distance (without the
+    /// robust exit factor, rays from 10⁴ away slip between two boxes).
+    #[test]
+    fn distant_rays_at_box_faces_hit() {
+        let meshes = [grid(16, 0)];
+        let bvh = MeshBvh::build(&meshes);
+        let mut holes = 0;
+        let mut rays = 0;
+        for distance in [1e3f32, 1e4, 1e5] {
+            for k in 0..20_000 {
+                let along = 1.0 + 14.0 * ((k as f32 * 0.618_034).fract());
+                let line = 1.0 + (k % 15) as f32;
+                let target = if k % 2 == 0 {
+                    Vec3::new(line, along, 0.0)
+                } else {
+                    Vec3::new(along, line, 0.0)
+                };
+                let tilt = Vec3::new(0.3 * (k as f32).sin(), 0.3 * (k as f32).cos(), 1.0);
+                let origin = target + tilt.normalize() * distance;
+                let ray = MeshRay::new(origin, target - origin);
+                holes += bvh.closest(&meshes, &ray, f32::INFINITY, None).is_none() as usize;
+                rays += 1;
+            }
+        }
+        assert_eq!(holes, 0, "{holes} of {rays} rays missed");
     }
 
     #[test]

@@ -1,17 +1,18 @@
 //! The two-level acceleration structure and the public ray-casting queries.
 //!
 //! - **Bottom level**: one wide BVH over all world-space meshes and one per prototype mesh
-//!   ([`mesh_bvh`]: obvhs' CWBVH, f32 watertight triangle tests), and one BVH2 over all spheres
-//!   and quadrics ([`analytic`]: f32 traversal over padded boxes, f64 intersection).
-//! - **Top level**: an obvhs BVH2 over the bottom-level items: the analytic level and the world
-//!   meshes (both in world space) and every instance of a prototype with its affine transform
-//!   (rays are mapped into the prototype's space, where t is unchanged). A scene with at most
-//!   eight items tests their boxes directly instead (measured: the top-level BVH cost 8% on
-//!   scenes/defense.toml, whose top level has two items). Infinite planes are tested in a short
-//!   list beside it.
+//!   ([`mesh_bvh`]: a 4-wide BVH of quadray's layout collapsed from obvhs' BVH2, with f32
+//!   watertight triangle tests four at a time), and one BVH2 over all spheres and quadrics
+//!   ([`analytic`]: f32 traversal over padded boxes, f64 intersection).
+//! - **Top level**: the analytic level and the world meshes (both in world space) and every
+//!   instance of a prototype with its affine transform (rays are mapped into the prototype's
+//!   space, where t is unchanged). Up to eight items are tested box by box (measured: an obvhs BVH2
+//!   over the two items of scenes/defense.toml cost several percent); more get an obvhs BVH2.
+//!   Infinite planes are tested in a short list beside it.
 //!
-//! A triangle hit found in f32 is refined in f64 (the ray against the triangle's plane) before
-//! it is compared with hits of other items, so quadrics and meshes are ordered by f64 distances.
+//! A triangle hit found in f32 is refined in f64 (the ray against the triangle's plane) before it
+//! is compared with hits of other items. Culling uses f32 distances rounded up, so hits of
+//! different items are ordered by their f64 distances except within f32 rounding of each other.
 //!
 //! The traversal code is compiled twice on x86-64: for the baseline (SSE2) and with AVX2 and FMA,
 //! chosen at run time ([`simd_path`]) for scenes that are mostly triangles
@@ -45,7 +46,7 @@ enum TopItem {
     Instance { instance: u32, prototype: u32 },
 }
 
-/// The scene's acceleration structure: bottom-level BVHs under one top-level BVH, plus planes.
+/// The scene's acceleration structure: bottom-level BVHs under a top level, plus planes.
 #[derive(Clone)]
 pub struct Accel {
     analytic: Option<AnalyticBvh>,
@@ -625,15 +626,22 @@ pub(crate) fn with_stack<T, R>(
     })
 }
 
-/// The f32 ray obvhs traverses with.
+/// The f32 ray obvhs traverses with. Built field by field: obvhs' constructor debug-asserts a
+/// finite origin, while a ray beyond f32's range (an origin at 10³⁹) must simply meet nothing.
 #[inline]
 fn to_obvhs(ray: &Ray, t_max: f64) -> obvhs::ray::Ray {
-    obvhs::ray::Ray::new(
-        ray.origin.as_vec3a(),
-        ray.dir.as_vec3a(),
-        0.0,
-        round_up(t_max),
-    )
+    let direction = ray.dir.as_vec3a();
+    obvhs::ray::Ray {
+        origin: ray.origin.as_vec3a(),
+        direction,
+        inv_direction: Vec3A::new(
+            obvhs::ray::safe_inverse(direction.x),
+            obvhs::ray::safe_inverse(direction.y),
+            obvhs::ray::safe_inverse(direction.z),
+        ),
+        tmin: 0.0,
+        tmax: round_up(t_max),
+    }
 }
 
 /// `t` as f32, never below its f64 value: culling with it never drops a nearer primitive.

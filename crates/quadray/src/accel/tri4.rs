@@ -102,17 +102,19 @@ impl Tri4 {
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
         let zero = Vec4::ZERO;
-        if (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).any() {
-            // An edge function rounded to zero: recompute in f64, where the products are exact.
+        let degenerate = u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero);
+        if degenerate.any() {
+            // An edge function rounded to zero: recompute that lane in f64, where the products
+            // are exact (only that lane, as the scalar test does).
             let f = |a: Vec4, b: Vec4, c: Vec4, d: Vec4| {
                 let (a, b, c, d) = (a.to_array(), b.to_array(), c.to_array(), d.to_array());
                 Vec4::from_array(std::array::from_fn(|i| {
                     (a[i] as f64 * b[i] as f64 - c[i] as f64 * d[i] as f64) as f32
                 }))
             };
-            u = f(cx, by, cy, bx);
-            v = f(ax, cy, ay, cx);
-            w = f(bx, ay, by, ax);
+            u = Vec4::select(degenerate, f(cx, by, cy, bx), u);
+            v = Vec4::select(degenerate, f(ax, cy, ay, cx), v);
+            w = Vec4::select(degenerate, f(bx, ay, by, ax), w);
         }
         let negative = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
         let positive = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
@@ -139,9 +141,12 @@ impl Tri4 {
         let delta_t = Vec4::splat(3.0)
             * (g3 * max_e * max_z + delta_e * max_z + delta_z * max_e)
             * inv_det.abs();
+        // In front of the origin: beyond the bound on t's error, or all three sheared depths
+        // clearly positive (as in the scalar test).
+        let min_z = az.min(bz).min(cz);
+        let in_front = t.cmpgt(delta_t) | (min_z.cmpgt(Vec4::splat(2.0) * delta_z) & t.cmpgt(zero));
         let inside = !(negative & positive);
-        let valid: BVec4A =
-            inside & det.cmpne(zero) & t.cmpgt(delta_t) & t.cmplt(Vec4::splat(t_max));
+        let valid: BVec4A = inside & det.cmpne(zero) & in_front & t.cmplt(Vec4::splat(t_max));
         BlockHits {
             valid: valid.bitmask(),
             t: t.to_array(),
@@ -203,6 +208,28 @@ mod tests {
             }
         }
         assert!(checked > 200, "{checked}");
+        // A lane whose edge function is exactly zero (a vertex on the ray) is recomputed in f64
+        // alone: its neighbour keeps its f32 result, as when tested by itself.
+        let pair = [
+            [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            [
+                [-0.973_664_05, 0.674_938_14, 0.0],
+                [-0.481_291_98, -0.531_338_1, 0.0],
+                [0.991_289_7, -0.059_472_986, 0.0],
+            ],
+        ];
+        let block = Tri4::new(&[(pair[0], 0), (pair[1], 1)]);
+        let ray = ShearedRay::new(Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0));
+        let hits = block.intersect(&ray, f32::INFINITY);
+        for (lane, t) in pair.iter().enumerate() {
+            let scalar = ray.intersect(&t[0], &t[1], &t[2], f32::INFINITY).unwrap();
+            let h = hits.nearest(1 << lane).unwrap();
+            assert_eq!(
+                (h.t, h.barycentrics),
+                (scalar.t, scalar.barycentrics),
+                "lane {lane}"
+            );
+        }
         // Unused lanes never hit.
         let single = Tri4::new(&[(tris[0], 7)]);
         let ray = ShearedRay::new(Vec3::new(0.0, -0.5, 3.0), Vec3::new(0.0, 0.0, -1.0));
