@@ -59,10 +59,13 @@ pub(crate) struct MeshBvh {
 pub(crate) struct MeshRay {
     origin: Vec3A,
     inv_dir: Vec3A,
+    /// The reciprocal widened by 1 + 2γ(3), for exit distances: Ize's robust slab test (pbrt-v3
+    /// §3.9.2). It makes the f32 box test conservative for the f32 ray wherever it starts, so no
+    /// ray slips between two boxes that meet face to face; scaling the reciprocal once per ray,
+    /// rather than each exit distance, keeps the node test's length.
+    inv_dir_far: Vec3A,
     /// Whether each reciprocal direction component is negative: the near slab is the high one.
     negative: [bool; 3],
-    /// Whether the origin and direction are finite in f32 (a ray that is not meets nothing).
-    finite: bool,
     sheared: ShearedRay,
 }
 
@@ -80,20 +83,20 @@ fn safe_recip(x: f32) -> f32 {
 }
 
 impl MeshRay {
-    /// Prepares `origin + t·dir` for traversal; `dir` must be finite and non-zero.
+    /// Prepares `origin + t·dir` for traversal (a ray that is not finite in f32 meets nothing).
     #[inline]
     pub(crate) fn new(origin: Vec3, dir: Vec3) -> MeshRay {
         let inv = Vec3A::new(safe_recip(dir.x), safe_recip(dir.y), safe_recip(dir.z));
         MeshRay {
             origin: origin.into(),
             inv_dir: inv,
+            inv_dir_far: inv * ROBUST_EXIT,
             negative: [
                 inv.x.is_sign_negative(),
                 inv.y.is_sign_negative(),
                 inv.z.is_sign_negative(),
             ],
             sheared: ShearedRay::new(origin, dir),
-            finite: origin.is_finite() && dir.is_finite() && dir != Vec3::ZERO,
         }
     }
 }
@@ -109,20 +112,21 @@ impl Node4 {
             } else {
                 (lo, hi)
             };
-            let (o, inv) = (
-                Vec4::splat(ray.origin[axis]),
+            let o = Vec4::splat(ray.origin[axis]);
+            let (inv, inv_far) = (
                 Vec4::splat(ray.inv_dir[axis]),
+                Vec4::splat(ray.inv_dir_far[axis]),
             );
-            ((Vec4::from(near) - o) * inv, (Vec4::from(far) - o) * inv)
+            (
+                (Vec4::from(near) - o) * inv,
+                (Vec4::from(far) - o) * inv_far,
+            )
         };
         let (x0, x1) = slab(0);
         let (y0, y1) = slab(1);
         let (z0, z1) = slab(2);
         let enter = x0.max(y0).max(z0).max(Vec4::ZERO);
-        // Ize's robust slab test (pbrt-v3 §3.9.2): widening the exit by 2γ(3) makes the f32 test
-        // conservative for the f32 ray, wherever it starts, so no ray slips past a box that holds a
-        // triangle it meets.
-        let exit = (x1.min(y1).min(z1) * Vec4::splat(ROBUST_EXIT)).min(Vec4::splat(t_max));
+        let exit = x1.min(y1).min(z1).min(Vec4::splat(t_max));
         (enter, enter.cmple(exit).bitmask())
     }
 }
@@ -396,7 +400,7 @@ impl MeshBvh {
         t_max: f32,
         skip: Option<TriId>,
     ) -> Option<(TriId, TriangleHit)> {
-        if self.nodes.is_empty() || !ray.finite {
+        if self.nodes.is_empty() {
             return None;
         }
         let mut limit = t_max;
@@ -478,7 +482,7 @@ impl MeshBvh {
         t_max: f32,
         skip: Option<TriId>,
     ) -> bool {
-        if self.nodes.is_empty() || !ray.finite {
+        if self.nodes.is_empty() {
             return false;
         }
         super::with_stack(&STACK, |stack| {

@@ -141,12 +141,15 @@ impl Tri4 {
         let delta_t = Vec4::splat(3.0)
             * (g3 * max_e * max_z + delta_e * max_z + delta_z * max_e)
             * inv_det.abs();
-        // In front of the origin: beyond the bound on t's error, or all three sheared depths
-        // clearly positive (as in the scalar test).
-        let min_z = az.min(bz).min(cz);
-        let in_front = t.cmpgt(delta_t) | (min_z.cmpgt(Vec4::splat(2.0) * delta_z) & t.cmpgt(zero));
         let inside = !(negative & positive);
-        let valid: BVec4A = inside & det.cmpne(zero) & in_front & t.cmplt(Vec4::splat(t_max));
+        let candidate: BVec4A = inside & det.cmpne(zero) & t.cmplt(Vec4::splat(t_max));
+        let mut valid = candidate & t.cmpgt(delta_t);
+        if (candidate & !valid).any() {
+            // Rejected by the bound on t's error: still in front of the origin if all three
+            // sheared depths clearly are (as in the scalar test). Rare, so off the common path.
+            let min_z = az.min(bz).min(cz);
+            valid |= candidate & min_z.cmpgt(Vec4::splat(2.0) * delta_z) & t.cmpgt(zero);
+        }
         BlockHits {
             valid: valid.bitmask(),
             t: t.to_array(),
