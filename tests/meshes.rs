@@ -210,8 +210,8 @@ fn instance_renders_like_the_baked_mesh() {
     }))
     .unwrap();
     let instanced = Scene::new(description(Geometry {
-        prototypes: vec![proto],
-        instances: vec![MeshInstance {
+        prototypes: vec![Prototype::mesh(proto)],
+        instances: vec![Instance {
             prototype: 0,
             transform,
             material: Some(1),
@@ -241,7 +241,11 @@ fn instance_renders_like_the_baked_mesh() {
     let centre_ray = Ray::new(DVec3::new(0.4, -0.3, 10.0), -DVec3::Z);
     let hit = instanced.intersect(&centre_ray).expect("the instance");
     assert_eq!(hit.material, 1);
-    assert!(matches!(hit.prim, PrimRef::Triangle { instance: 0, .. }));
+    assert_eq!(hit.prim.placement, 1);
+    assert!(matches!(
+        hit.prim.local,
+        LocalPrim::Triangle { mesh: 0, .. }
+    ));
     let flat_hit = flat.intersect(&centre_ray).unwrap();
     assert!(
         (hit.t - flat_hit.t).abs() < 1e-5,
@@ -259,14 +263,14 @@ fn instance_renders_like_the_baked_mesh() {
 fn instances_share_one_prototype() {
     let proto = icosphere(1, 0.4, DVec3::ZERO);
     let triangles = proto.triangle_count();
-    let instances: Vec<MeshInstance> = (0..50)
+    let instances: Vec<Instance> = (0..50)
         .map(|i| {
             let at = DVec3::new((i % 10) as f64, (i / 10) as f64, 0.0);
-            MeshInstance::new(0, Transform::new(DAffine3::from_translation(at)).unwrap())
+            Instance::new(0, Transform::new(DAffine3::from_translation(at)).unwrap())
         })
         .collect();
     let scene = scene_of(Geometry {
-        prototypes: vec![proto],
+        prototypes: vec![Prototype::mesh(proto)],
         instances,
         ..Geometry::default()
     });
@@ -275,7 +279,7 @@ fn instances_share_one_prototype() {
         let at = DVec3::new((i % 10) as f64, (i / 10) as f64, 0.0);
         let ray = Ray::new(at + DVec3::new(0.01, 0.02, 5.0), -DVec3::Z);
         let hit = scene.intersect(&ray).expect("instance hit");
-        assert!(matches!(hit.prim, PrimRef::Triangle { instance, .. } if instance == i));
+        assert_eq!(hit.prim.placement, 1 + i as u64);
         assert!(
             (hit.geometry.point.z - 0.4).abs() < 0.02,
             "{:?}",
@@ -311,12 +315,12 @@ fn instance_of_a_missing_prototype_is_an_error() {
         materials: vec![Material::default()],
         lights: vec![],
         geometry: Geometry {
-            instances: vec![MeshInstance::new(3, Transform::IDENTITY)],
+            instances: vec![Instance::new(3, Transform::IDENTITY)],
             ..Geometry::default()
         },
     })
     .unwrap_err();
-    assert!(err.to_string().contains("prototype mesh 3"), "{err}");
+    assert!(err.to_string().contains("prototype 3"), "{err}");
 }
 
 /// Rays from far away (10³ to 10⁶ times the mesh's size), aimed radially at every vertex and
@@ -350,8 +354,8 @@ fn distant_rays_through_shared_edges_hit() {
 fn rays_beyond_f32_meet_nothing_without_panicking() {
     let scene = scene_of(Geometry {
         meshes: vec![icosphere(1, 1.0, DVec3::ZERO)],
-        prototypes: vec![icosphere(1, 1.0, DVec3::ZERO)],
-        instances: vec![MeshInstance::new(
+        prototypes: vec![Prototype::mesh(icosphere(1, 1.0, DVec3::ZERO))],
+        instances: vec![Instance::new(
             0,
             Transform::new(DAffine3::from_scale(DVec3::splat(1e-40))).unwrap(),
         )],
@@ -370,7 +374,13 @@ fn rays_beyond_f32_meet_nothing_without_panicking() {
     let near = Ray::new(DVec3::new(0.0, 0.0, 1e-39), -DVec3::Z);
     let hit = scene.intersect(&near).map(|h| h.prim);
     assert!(
-        matches!(hit, Some(PrimRef::Triangle { instance: 0, .. })),
+        matches!(
+            hit,
+            Some(PrimRef {
+                placement: 0,
+                local: LocalPrim::Triangle { mesh: 0, .. }
+            })
+        ),
         "{hit:?}"
     );
 }

@@ -158,22 +158,29 @@ impl Aovs {
 }
 
 impl Geometry {
-    /// A primitive's 1-based object index: spheres, then planes, then quadrics, then meshes (a
-    /// whole mesh is one object), then mesh instances, each in the order they were given; 0 is left
-    /// for "no object".
+    /// A primitive's 1-based object index: the world's spheres, then planes, then quadrics, then
+    /// meshes (a whole mesh is one object), each in the order they were given, then one index per
+    /// placement of a prototype (a whole placed copy is one object), in placement order; 0 is left
+    /// for "no object". Saturates at `u32::MAX`.
     pub fn object_index(&self, prim: crate::shape::PrimRef) -> u32 {
-        use crate::shape::PrimRef;
+        use crate::shape::LocalPrim;
         let (s, p, q) = (
-            self.spheres.len() as u32,
-            self.planes.len() as u32,
-            self.quadrics.len() as u32,
+            self.spheres.len() as u64,
+            self.planes.len() as u64,
+            self.quadrics.len() as u64,
         );
-        1 + match prim {
-            PrimRef::Sphere(i) => i,
-            PrimRef::Plane(i) => s + i,
-            PrimRef::Quadric(i) => s + p + i,
-            PrimRef::Triangle { instance, .. } => s + p + q + instance,
-        }
+        let world = s + p + q + self.meshes.len() as u64;
+        let index = if prim.placement > 0 {
+            world + prim.placement
+        } else {
+            1 + match prim.local {
+                LocalPrim::Sphere(i) => i as u64,
+                LocalPrim::Plane(i) => s + i as u64,
+                LocalPrim::Quadric(i) => s + p + i as u64,
+                LocalPrim::Triangle { mesh, .. } => s + p + q + mesh as u64,
+            }
+        };
+        index.min(u32::MAX as u64) as u32
     }
 }
 

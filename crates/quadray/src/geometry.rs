@@ -1,158 +1,273 @@
-//! All primitives of a scene, with the one `match` that dispatches over [`PrimRef`].
+//! All primitives of a scene, grouped in levels (the world and the prototypes it places), with
+//! the one `match` that dispatches over [`LocalPrim`].
 
-use crate::instance::MeshInstance;
+use crate::instance::{Instance, InstancePath};
 use crate::material::MaterialId;
 use crate::math::Ray;
 use crate::mesh::Mesh;
 use crate::plane::Plane;
 use crate::quadric::Quadric;
-use crate::shape::{PrimRef, SurfaceGeometry};
+use crate::shape::{LocalPrim, PrimRef, SurfaceGeometry};
 use crate::sphere::Sphere;
 use crate::texture::{TexturePoint, VertexAttributes};
 use glam::DVec3;
 
-/// The scene's primitives, grouped by kind.
+/// The scene's primitives: the world's own, by kind, and the prototypes its instances place.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
     /// Spheres.
     pub spheres: Vec<Sphere>,
-    /// Infinite planes.
+    /// Infinite planes (world level only: an unbounded shape cannot be placed by an instance).
     pub planes: Vec<Plane>,
     /// Clipped quadrics.
     pub quadrics: Vec<Quadric>,
     /// Triangle meshes placed once, in world space.
     pub meshes: Vec<Mesh>,
-    /// Meshes in their own object space, stored once and placed only by [`Geometry::instances`].
-    pub prototypes: Vec<Mesh>,
-    /// Placements of prototypes, each with its own transform.
-    pub instances: Vec<MeshInstance>,
+    /// Shapes in their own object space, stored once and placed only by instances.
+    pub prototypes: Vec<Prototype>,
+    /// Placements of prototypes in the world, each with its own transform.
+    pub instances: Vec<Instance>,
+}
+
+/// Shapes stored once in their own object space and placed by [`Instance`]s: a mesh used by ten
+/// nodes, or a whole group of shapes.
+#[derive(Clone, Debug, Default)]
+pub struct Prototype {
+    /// Spheres.
+    pub spheres: Vec<Sphere>,
+    /// Clipped quadrics.
+    pub quadrics: Vec<Quadric>,
+    /// Triangle meshes.
+    pub meshes: Vec<Mesh>,
+    /// Placements of earlier prototypes (lower indices in [`Geometry::prototypes`]) inside this
+    /// one: the order rules out cycles.
+    pub instances: Vec<Instance>,
+}
+
+impl Prototype {
+    /// A prototype of one mesh.
+    pub fn mesh(mesh: Mesh) -> Prototype {
+        Prototype {
+            meshes: vec![mesh],
+            ..Prototype::default()
+        }
+    }
+}
+
+/// The bounded shapes of one level, in that level's own space.
+#[derive(Clone, Copy, Debug)]
+pub struct Level<'a> {
+    /// Spheres.
+    pub spheres: &'a [Sphere],
+    /// Clipped quadrics.
+    pub quadrics: &'a [Quadric],
+    /// Triangle meshes.
+    pub meshes: &'a [Mesh],
+    /// Placements of prototypes.
+    pub instances: &'a [Instance],
+}
+
+impl Level<'_> {
+    /// Phase one: the nearest t in (0, `t_max`) where the ray meets `prim` (planes are the
+    /// world's: see [`Geometry::intersect_plane`]).
+    #[inline]
+    pub fn intersect(
+        &self,
+        prim: LocalPrim,
+        ray: &Ray,
+        t_max: f64,
+        from_self: bool,
+    ) -> Option<f64> {
+        match prim {
+            LocalPrim::Sphere(i) => self.spheres[i as usize].intersect(ray, t_max, from_self),
+            LocalPrim::Quadric(i) => self.quadrics[i as usize].intersect(ray, t_max, from_self),
+            LocalPrim::Triangle { mesh, tri } => {
+                self.meshes[mesh as usize].intersect(tri, ray, t_max, from_self)
+            }
+            LocalPrim::Plane(_) => None,
+        }
+    }
+
+    /// Number of bounded primitives: spheres, quadrics and triangles (instances not counted).
+    pub fn primitive_count(&self) -> usize {
+        self.spheres.len()
+            + self.quadrics.len()
+            + self.meshes.iter().map(Mesh::triangle_count).sum::<usize>()
+    }
 }
 
 impl Geometry {
-    /// Mesh placement `instance` of [`PrimRef::Triangle`]: `meshes[instance]` (placed as it is) for
-    /// the first `meshes.len()`, then the prototypes placed by `instances`.
+    /// Level `index`: 0 is the world, `1 + i` is prototype `i`.
     #[inline]
-    pub fn placement(&self, instance: u32) -> (&Mesh, Option<&MeshInstance>) {
-        let i = instance as usize;
-        match self.meshes.get(i) {
-            Some(mesh) => (mesh, None),
-            None => {
-                let inst = &self.instances[i - self.meshes.len()];
-                (&self.prototypes[inst.prototype as usize], Some(inst))
+    pub fn level(&self, index: usize) -> Level<'_> {
+        match index {
+            0 => Level {
+                spheres: &self.spheres,
+                quadrics: &self.quadrics,
+                meshes: &self.meshes,
+                instances: &self.instances,
+            },
+            _ => {
+                let p = &self.prototypes[index - 1];
+                Level {
+                    spheres: &p.spheres,
+                    quadrics: &p.quadrics,
+                    meshes: &p.meshes,
+                    instances: &p.instances,
+                }
             }
         }
     }
 
-    /// Number of mesh placements: meshes plus instances.
-    pub fn placement_count(&self) -> usize {
-        self.meshes.len() + self.instances.len()
+    /// Number of levels: the world and every prototype.
+    pub fn level_count(&self) -> usize {
+        1 + self.prototypes.len()
     }
 
-    /// Phase one: the nearest t in (0, `t_max`) where the ray meets `prim`.
+    /// Phase one for world plane `i`.
     #[inline]
-    pub fn intersect(&self, prim: PrimRef, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
+    pub fn intersect_plane(&self, i: u32, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
+        self.planes[i as usize].intersect(ray, t_max, from_self)
+    }
+
+    /// Phase two: surface geometry, in world space, of the hit at `t` on `prim`, reached through
+    /// `path` (the instances leading to its placement).
+    pub fn surface(
+        &self,
+        prim: PrimRef,
+        path: &InstancePath,
+        ray: &Ray,
+        t: f64,
+    ) -> SurfaceGeometry {
+        if path.is_empty() {
+            return self.level_surface(self.level(0), prim.local, ray, t);
+        }
+        let level = self.level(path.level(self));
+        // The ray in the primitive's space: mapped level by level, exactly as traversal did.
+        let mut local = *ray;
+        for inst in path.instances(self) {
+            local = inst.ray_to_object(&local);
+        }
+        let mut g = self.level_surface(level, prim.local, &local, t);
+        for inst in path.instances(self).rev() {
+            g = inst.surface_to_world(g);
+        }
+        g
+    }
+
+    /// Surface geometry of `prim` of `level`, in that level's space.
+    #[inline(always)]
+    fn level_surface(
+        &self,
+        level: Level<'_>,
+        prim: LocalPrim,
+        ray: &Ray,
+        t: f64,
+    ) -> SurfaceGeometry {
         match prim {
-            PrimRef::Sphere(i) => self.spheres[i as usize].intersect(ray, t_max, from_self),
-            PrimRef::Quadric(i) => self.quadrics[i as usize].intersect(ray, t_max, from_self),
-            PrimRef::Triangle { instance, tri } => match self.placement(instance) {
-                (mesh, None) => mesh.intersect(tri, ray, t_max, from_self),
-                (mesh, Some(inst)) => {
-                    mesh.intersect(tri, &inst.ray_to_object(ray), t_max, from_self)
+            LocalPrim::Sphere(i) => level.spheres[i as usize].surface(ray, t),
+            LocalPrim::Quadric(i) => level.quadrics[i as usize].surface(ray, t),
+            LocalPrim::Triangle { mesh, tri } => level.meshes[mesh as usize].surface(tri, ray, t),
+            LocalPrim::Plane(i) => self.planes[i as usize].surface(ray, t),
+        }
+    }
+
+    /// The material of `prim`: its own, unless an instance on `path` replaces it (the outermost
+    /// one that does).
+    #[inline]
+    pub fn material(&self, prim: PrimRef, path: &InstancePath) -> MaterialId {
+        let level = if path.is_empty() {
+            self.level(0)
+        } else if let Some(m) = path.instances(self).find_map(|inst| inst.material) {
+            return m;
+        } else {
+            self.level(path.level(self))
+        };
+        match prim.local {
+            LocalPrim::Sphere(i) => level.spheres[i as usize].material,
+            LocalPrim::Quadric(i) => level.quadrics[i as usize].material(),
+            LocalPrim::Triangle { mesh, .. } => level.meshes[mesh as usize].material(),
+            LocalPrim::Plane(i) => self.planes[i as usize].material,
+        }
+    }
+
+    /// `point` (world space) in the space of the level `path` ends in.
+    fn point_to_level(&self, path: &InstancePath, point: DVec3) -> DVec3 {
+        path.instances(self)
+            .fold(point, |p, inst| inst.point_to_object(p))
+    }
+
+    /// Texture coordinates at a world-space surface point of `prim`, computed in the primitive's
+    /// own space (textures move with an instance); only textured materials ask for them.
+    pub fn texture_point(&self, prim: PrimRef, path: &InstancePath, point: DVec3) -> TexturePoint {
+        let (level, p) = match path.is_empty() {
+            true => (self.level(0), point),
+            false => (
+                self.level(path.level(self)),
+                self.point_to_level(path, point),
+            ),
+        };
+        match prim.local {
+            LocalPrim::Sphere(i) => level.spheres[i as usize].texture_point(p),
+            LocalPrim::Quadric(i) => level.quadrics[i as usize].texture_point(p),
+            LocalPrim::Triangle { mesh, .. } => level.meshes[mesh as usize].texture_point(p),
+            LocalPrim::Plane(i) => self.planes[i as usize].texture_point(point),
+        }
+    }
+
+    /// Interpolated vertex attributes at world-space `point` on `prim` (texture coordinates and
+    /// colours exist only on meshes; other primitives get the defaults).
+    #[inline]
+    pub fn attributes(&self, prim: PrimRef, path: &InstancePath, point: DVec3) -> VertexAttributes {
+        match prim.local {
+            LocalPrim::Triangle { mesh, tri } => {
+                let mesh = &self.level(path.level(self)).meshes[mesh as usize];
+                if !mesh.has_attributes() {
+                    return VertexAttributes::default();
                 }
-            },
-            PrimRef::Plane(i) => self.planes[i as usize].intersect(ray, t_max, from_self),
-        }
-    }
-
-    /// Phase two: surface geometry of the hit at `t` on `prim`.
-    pub fn surface(&self, prim: PrimRef, ray: &Ray, t: f64) -> SurfaceGeometry {
-        match prim {
-            PrimRef::Sphere(i) => self.spheres[i as usize].surface(ray, t),
-            PrimRef::Quadric(i) => self.quadrics[i as usize].surface(ray, t),
-            PrimRef::Triangle { instance, tri } => match self.placement(instance) {
-                (mesh, None) => mesh.surface(tri, ray, t),
-                (mesh, Some(inst)) => {
-                    inst.surface_to_world(mesh.surface(tri, &inst.ray_to_object(ray), t))
-                }
-            },
-            PrimRef::Plane(i) => self.planes[i as usize].surface(ray, t),
-        }
-    }
-
-    /// The material of `prim`.
-    #[inline]
-    pub fn material(&self, prim: PrimRef) -> MaterialId {
-        match prim {
-            PrimRef::Sphere(i) => self.spheres[i as usize].material,
-            PrimRef::Quadric(i) => self.quadrics[i as usize].material(),
-            PrimRef::Triangle { instance, .. } => match self.placement(instance) {
-                (mesh, None) => mesh.material(),
-                (mesh, Some(inst)) => inst.material.unwrap_or(mesh.material()),
-            },
-            PrimRef::Plane(i) => self.planes[i as usize].material,
-        }
-    }
-
-    /// Texture coordinates at a surface point of `prim`; only textured materials ask for them.
-    pub fn texture_point(&self, prim: PrimRef, point: DVec3) -> TexturePoint {
-        match prim {
-            PrimRef::Sphere(i) => self.spheres[i as usize].texture_point(point),
-            PrimRef::Quadric(i) => self.quadrics[i as usize].texture_point(point),
-            PrimRef::Triangle { instance, .. } => match self.placement(instance) {
-                (mesh, None) => mesh.texture_point(point),
-                (mesh, Some(inst)) => mesh.texture_point(inst.point_to_object(point)),
-            },
-            PrimRef::Plane(i) => self.planes[i as usize].texture_point(point),
-        }
-    }
-
-    /// Interpolated vertex attributes at `point` on `prim` (texture coordinates and colours exist
-    /// only on meshes; other primitives get the defaults).
-    #[inline]
-    pub fn attributes(&self, prim: PrimRef, point: glam::DVec3) -> VertexAttributes {
-        match prim {
-            PrimRef::Triangle { instance, tri } => match self.placement(instance) {
-                (mesh, None) => mesh.attributes(tri, point),
-                (mesh, Some(inst)) => mesh.attributes(tri, inst.point_to_object(point)),
-            },
-            PrimRef::Sphere(_) | PrimRef::Quadric(_) | PrimRef::Plane(_) => {
+                mesh.attributes(tri, self.point_to_level(path, point))
+            }
+            LocalPrim::Sphere(_) | LocalPrim::Quadric(_) | LocalPrim::Plane(_) => {
                 VertexAttributes::default()
             }
         }
     }
 
-    /// Every primitive's material index, with a description of the primitive for error messages.
+    /// Every primitive's and instance's material index, with a description for error messages.
     pub fn materials_used(&self) -> impl Iterator<Item = (String, MaterialId)> + '_ {
-        let s = self
-            .spheres
-            .iter()
-            .enumerate()
-            .map(|(i, s)| (format!("sphere {i}"), s.material));
-        let p = self
+        let planes = self
             .planes
             .iter()
             .enumerate()
             .map(|(i, p)| (format!("plane {i}"), p.material));
-        let q = self
-            .quadrics
-            .iter()
-            .enumerate()
-            .map(|(i, q)| (format!("quadric {i}"), q.material()));
-        let m = self
-            .meshes
-            .iter()
-            .enumerate()
-            .map(|(i, m)| (format!("mesh {i}"), m.material()));
-        let proto = self
-            .prototypes
-            .iter()
-            .enumerate()
-            .map(|(i, m)| (format!("prototype mesh {i}"), m.material()));
-        let inst = self
-            .instances
-            .iter()
-            .enumerate()
-            .filter_map(|(i, m)| Some((format!("mesh instance {i}"), m.material?)));
-        s.chain(p).chain(q).chain(m).chain(proto).chain(inst)
+        let levels = (0..self.level_count()).flat_map(move |level| {
+            let l = self.level(level);
+            let name = move |what: &str, i: usize| match level {
+                0 => format!("{what} {i}"),
+                _ => format!("{what} {i} of prototype {}", level - 1),
+            };
+            let s = l
+                .spheres
+                .iter()
+                .enumerate()
+                .map(move |(i, s)| (name("sphere", i), s.material));
+            let q = l
+                .quadrics
+                .iter()
+                .enumerate()
+                .map(move |(i, q)| (name("quadric", i), q.material()));
+            let m = l
+                .meshes
+                .iter()
+                .enumerate()
+                .map(move |(i, m)| (name("mesh", i), m.material()));
+            let inst = l
+                .instances
+                .iter()
+                .enumerate()
+                .filter_map(move |(i, inst)| Some((name("instance", i), inst.material?)));
+            s.chain(q).chain(m).chain(inst)
+        });
+        planes.chain(levels)
     }
 }

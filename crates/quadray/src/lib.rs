@@ -3,10 +3,10 @@
 //!
 //! # Brief overview
 //! - [`Scene`] is built from a [`SceneDescription`]: a [`Camera`], [`Material`]s, [`Light`]s and the
-//!   [`Geometry`] ([`Sphere`], [`Plane`], [`Mesh`], [`Quadric`], and prototype meshes placed by
-//!   [`MeshInstance`]s). Building validates every value and builds the two-level acceleration
-//!   structure ([`accel`]): 4-wide BVHs over meshes and a BVH over the analytic shapes, under a
-//!   top-level BVH over instances.
+//!   [`Geometry`] ([`Sphere`], [`Plane`], [`Mesh`], [`Quadric`], and [`Prototype`]s: shapes stored
+//!   once and placed by [`Instance`]s, which nest). Building validates every value and builds the
+//!   multi-level acceleration structure ([`accel`]): per level, 4-wide BVHs over meshes and a BVH
+//!   over the analytic shapes, under a top over them and the level's instances.
 //! - [`Scene::intersect`] and [`Scene::occluded`] (and their slice forms) cast rays without the
 //!   renderer.
 //! - [`render()`] traces the scene with the [`Whitted`] integrator into a linear [`Film`], in parallel
@@ -68,13 +68,15 @@ pub mod sphere;
 pub mod texture;
 pub mod triangle;
 
-pub use accel::{SimdPath, simd_path};
+pub use accel::{AccelStats, SimdPath, simd_path};
 pub use aov::{AovSample, AovSelection, Aovs};
 pub use camera::{Camera, CameraError, CameraFrame, Projection};
 pub use film::Film;
-pub use geometry::Geometry;
+pub use geometry::{Geometry, Level, Prototype};
 pub use image_texture::{ColorEncoding, Filter, Image, ImageError, ImageMap, Wrap};
-pub use instance::MeshInstance;
+pub use instance::{
+    Instance, InstancePath, MAX_NESTING, MAX_PLACEMENTS, PlacementError, Placements,
+};
 pub use integrator::{RayCounts, Whitted};
 pub use light::Light;
 pub use material::{Material, MaterialId, SpecularModel};
@@ -88,6 +90,6 @@ pub use render::{
     NoProgress, Progress, RenderError, RenderSettings, Rendered, render, render_with_aovs,
 };
 pub use scene::{Scene, SceneDescription, SceneError};
-pub use shape::{PrimRef, SurfaceGeometry, SurfaceHit};
+pub use shape::{LocalPrim, PrimRef, SurfaceGeometry, SurfaceHit};
 pub use sphere::Sphere;
 pub use texture::{ImageTexture, Texture, TexturePoint, VertexAttributes};

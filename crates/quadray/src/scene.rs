@@ -3,6 +3,7 @@
 use crate::accel::{Accel, max_abs_coordinate};
 use crate::camera::{Camera, CameraError, Projection};
 use crate::geometry::Geometry;
+use crate::instance::{InstancePath, PlacementError};
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::Ray;
@@ -48,6 +49,9 @@ pub enum SceneError {
     /// The camera cannot produce rays.
     #[error("camera: {0}")]
     Camera(#[from] CameraError),
+    /// The instances cannot be placed: a cycle or an unknown prototype, too deep, too many.
+    #[error(transparent)]
+    Instances(#[from] PlacementError),
 }
 
 /// A scene ready to render.
@@ -90,14 +94,7 @@ impl Scene {
                 });
             }
         }
-        for (i, s) in d.geometry.spheres.iter().enumerate() {
-            if !(s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0) {
-                return Err(invalid(
-                    format!("sphere {i}"),
-                    "centre must be finite and radius positive",
-                ));
-            }
-        }
+        validate_levels(&mut d.geometry)?;
         for (i, p) in d.geometry.planes.iter().enumerate() {
             if !(p.point.is_finite()
                 && p.normal.is_finite()
@@ -109,26 +106,7 @@ impl Scene {
                 ));
             }
         }
-        for (i, inst) in d.geometry.instances.iter_mut().enumerate() {
-            if inst.prototype as usize >= d.geometry.prototypes.len() {
-                return Err(invalid(
-                    format!("mesh instance {i}"),
-                    format!(
-                        "places prototype mesh {}, but the scene has {}",
-                        inst.prototype,
-                        d.geometry.prototypes.len()
-                    ),
-                ));
-            }
-            // Rebuilt from `to_world` alone, so the inverse and normal matrix always match it.
-            inst.transform =
-                crate::math::Transform::new(inst.transform.to_world).ok_or_else(|| {
-                    invalid(
-                        format!("mesh instance {i}"),
-                        "transform must be finite and invertible",
-                    )
-                })?;
-        }
+        crate::instance::Placements::new(&d.geometry)?;
         for (i, l) in d.lights.iter().enumerate() {
             l.validate().map_err(|p| invalid(format!("light {i}"), p))?;
         }
@@ -191,9 +169,28 @@ impl Scene {
         // Vertex attributes are defaults off meshes (at once); the texture point is computed only
         // for the procedural textures that read it.
         let point = hit.geometry.point;
-        let attributes = self.geometry.attributes(hit.prim, point);
-        self.materials[hit.material as usize]
-            .base_color(|| self.geometry.texture_point(hit.prim, point), &attributes)
+        let decoded;
+        let path = match hit.prim.placement {
+            0 => &InstancePath::WORLD,
+            p => {
+                decoded = self.accel.placements().path(&self.geometry, p);
+                &decoded
+            }
+        };
+        let attributes = self.geometry.attributes(hit.prim, path, point);
+        self.materials[hit.material as usize].base_color(
+            || self.geometry.texture_point(hit.prim, path, point),
+            &attributes,
+        )
+    }
+
+    /// The instances leading from the world to `prim`'s placement.
+    #[inline]
+    pub fn path(&self, prim: PrimRef) -> InstancePath {
+        if prim.placement == 0 {
+            return InstancePath::WORLD;
+        }
+        self.accel.placements().path(&self.geometry, prim.placement)
     }
 
     /// The acceleration structure.
@@ -212,11 +209,20 @@ impl Scene {
         let (t, prim) = self
             .accel
             .closest(&self.geometry, ray, f64::INFINITY, from)?;
+        // The world's primitives (placement 0) need no path decoded.
+        let decoded;
+        let path = match prim.placement {
+            0 => &InstancePath::WORLD,
+            p => {
+                decoded = self.accel.placements().path(&self.geometry, p);
+                &decoded
+            }
+        };
         Some(SurfaceHit {
             t,
             prim,
-            material: self.geometry.material(prim),
-            geometry: self.geometry.surface(prim, ray, t),
+            material: self.geometry.material(prim, path),
+            geometry: self.geometry.surface(prim, path, ray, t),
         })
     }
 
@@ -241,6 +247,49 @@ impl Scene {
             *out = self.occluded(ray, *t_max);
         }
     }
+}
+
+/// Checks every level's spheres and instances, rebuilding each instance's inverse and normal
+/// matrix from its `to_world` alone, so they always match it.
+fn validate_levels(g: &mut Geometry) -> Result<(), SceneError> {
+    let prototypes = g.prototypes.len();
+    let mut levels: Vec<(
+        String,
+        &[crate::sphere::Sphere],
+        &mut [crate::instance::Instance],
+    )> = vec![(String::new(), &g.spheres, &mut g.instances)];
+    for (i, p) in g.prototypes.iter_mut().enumerate() {
+        levels.push((format!(" of prototype {i}"), &p.spheres, &mut p.instances));
+    }
+    for (suffix, spheres, instances) in levels {
+        for (i, s) in spheres.iter().enumerate() {
+            if !(s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0) {
+                return Err(invalid(
+                    format!("sphere {i}{suffix}"),
+                    "centre must be finite and radius positive",
+                ));
+            }
+        }
+        for (i, inst) in instances.iter_mut().enumerate() {
+            if inst.prototype as usize >= prototypes {
+                return Err(invalid(
+                    format!("instance {i}{suffix}"),
+                    format!(
+                        "places prototype {}, but the scene has {prototypes}",
+                        inst.prototype
+                    ),
+                ));
+            }
+            inst.transform =
+                crate::math::Transform::new(inst.transform.to_world).ok_or_else(|| {
+                    invalid(
+                        format!("instance {i}{suffix}"),
+                        "transform must be finite and invertible",
+                    )
+                })?;
+        }
+    }
+    Ok(())
 }
 
 fn non_negative(c: Vec3) -> bool {

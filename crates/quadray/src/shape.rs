@@ -6,23 +6,46 @@
 use crate::material::MaterialId;
 use glam::DVec3;
 
-/// One primitive of a scene: what the BVH leaves and the plane list refer to.
+/// One primitive within a level of the scene (the world, or one prototype): what the BVH leaves
+/// and the plane list refer to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum PrimRef {
-    /// Index into [`crate::Geometry::spheres`].
+pub enum LocalPrim {
+    /// Index into the level's spheres.
     Sphere(u32),
-    /// Index into [`crate::Geometry::quadrics`].
+    /// Index into the level's quadrics.
     Quadric(u32),
-    /// Triangle `tri` of mesh placement `instance` ([`crate::Geometry::placement`]): a mesh of
-    /// [`crate::Geometry::meshes`], or an instance of a prototype after them.
+    /// Triangle `tri` of the level's mesh `mesh`.
     Triangle {
-        /// Mesh placement index.
-        instance: u32,
+        /// Mesh index within the level.
+        mesh: u32,
         /// Triangle index within the mesh.
         tri: u32,
     },
-    /// Index into [`crate::Geometry::planes`] (unbounded: tested outside the BVH).
+    /// Index into [`crate::Geometry::planes`] (world level only; unbounded, tested outside the BVH).
     Plane(u32),
+}
+
+/// One primitive of the scene as placed: a [`LocalPrim`] of the level reached by `placement`.
+///
+/// Placements number the scene's instance tree expanded in depth-first order: 0 is the world
+/// itself, and every placement of a prototype, however deeply nested, has its own number
+/// ([`crate::instance::Placements`]). Two copies of one shared triangle are two primitives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PrimRef {
+    /// The placement whose level holds the primitive (0: the world).
+    pub placement: u64,
+    /// The primitive within that level.
+    pub local: LocalPrim,
+}
+
+impl PrimRef {
+    /// A primitive of the world level.
+    pub const fn world(local: LocalPrim) -> PrimRef {
+        PrimRef {
+            placement: 0,
+            local,
+        }
+    }
 }
 
 /// Geometry at a hit point, built once for the nearest hit.

@@ -7,37 +7,37 @@
 //! is rounded up.
 
 use super::{padded_aabb, round_up, to_obvhs, with_stack};
-use crate::geometry::Geometry;
+use crate::geometry::Level;
 use crate::math::Ray;
-use crate::shape::PrimRef;
+use crate::shape::LocalPrim;
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, bvh2::builder::build_bvh2, ray::RayHit};
 use std::time::Duration;
 
-/// A BVH over the spheres and quadrics of a [`Geometry`].
+/// A BVH over the spheres and quadrics of one level.
 #[derive(Clone)]
 pub(crate) struct AnalyticBvh {
     bvh: Bvh2,
     /// Primitives in BVH leaf order, so a leaf's index needs no indirection.
-    prims: Vec<PrimRef>,
+    prims: Vec<LocalPrim>,
 }
 
 thread_local! {
-    /// The analytic level's traversal stack (the top level has its own: they nest).
+    /// The analytic BVHs' traversal stack, reused ([`with_stack`]).
     static STACK: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 impl AnalyticBvh {
     /// Builds the BVH, or `None` when there are no analytic primitives. `extent` bounds the
     /// magnitude of every coordinate a ray may start at.
-    pub(crate) fn build(geometry: &Geometry, extent: f32) -> Option<AnalyticBvh> {
+    pub(crate) fn build(level: Level<'_>, extent: f32) -> Option<AnalyticBvh> {
         let mut prims = Vec::new();
         let mut aabbs = Vec::new();
-        for (i, s) in geometry.spheres.iter().enumerate() {
-            prims.push(PrimRef::Sphere(i as u32));
+        for (i, s) in level.spheres.iter().enumerate() {
+            prims.push(LocalPrim::Sphere(i as u32));
             aabbs.push(padded_aabb(s.bounds(), extent));
         }
-        for (i, q) in geometry.quadrics.iter().enumerate() {
-            prims.push(PrimRef::Quadric(i as u32));
+        for (i, q) in level.quadrics.iter().enumerate() {
+            prims.push(LocalPrim::Quadric(i as u32));
             aabbs.push(padded_aabb(q.bounds(), extent));
         }
         if prims.is_empty() {
@@ -79,18 +79,18 @@ impl AnalyticBvh {
                 + b.primitives_to_nodes.capacity()
                 + b.parents.capacity())
                 * std::mem::size_of::<u32>()
-            + self.prims.capacity() * std::mem::size_of::<PrimRef>()
+            + self.prims.capacity() * std::mem::size_of::<LocalPrim>()
     }
 
     /// Lowers `best_t` to the nearest hit in (0, `best_t`), returning its primitive if there is one.
     #[inline]
     pub(crate) fn closest(
         &self,
-        g: &Geometry,
+        g: Level<'_>,
         ray: &Ray,
         best_t: &mut f64,
-        from: Option<PrimRef>,
-    ) -> Option<PrimRef> {
+        from: Option<LocalPrim>,
+    ) -> Option<LocalPrim> {
         let mut best = None;
         with_stack(&STACK, |stack| {
             let mut hit = RayHit::none();
@@ -115,10 +115,10 @@ impl AnalyticBvh {
     #[inline]
     pub(crate) fn occluded(
         &self,
-        g: &Geometry,
+        g: Level<'_>,
         ray: &Ray,
         t_max: f64,
-        from: Option<PrimRef>,
+        from: Option<LocalPrim>,
     ) -> bool {
         let mut blocked = false;
         with_stack(&STACK, |stack| {

@@ -1,14 +1,20 @@
-//! The two-level acceleration structure and the public ray-casting queries.
+//! The multi-level acceleration structure and the public ray-casting queries.
 //!
-//! - **Bottom level**: one wide BVH over all world-space meshes and one per prototype mesh
-//!   ([`mesh_bvh`]: a 4-wide BVH of quadray's layout collapsed from obvhs' BVH2, with f32
-//!   watertight triangle tests four at a time), and one BVH2 over all spheres and quadrics
-//!   ([`analytic`]: f32 traversal over padded boxes, f64 intersection).
-//! - **Top level**: the analytic level and the world meshes (both in world space) and every
-//!   instance of a prototype with its affine transform (rays are mapped into the prototype's
-//!   space, where t is unchanged). Up to eight items are tested box by box (measured: an obvhs BVH2
-//!   over the two items of scenes/defense.toml cost several percent); more get an obvhs BVH2.
-//!   Infinite planes are tested in a short list beside it.
+//! The scene is a set of levels: the world, and prototypes placed by instances (in the world or in
+//! other prototypes, so instance graphs nest). Each level is built once, in its own space:
+//! - **Bottom level**: one wide BVH over the level's meshes ([`mesh_bvh`]: a 4-wide BVH of
+//!   quadray's layout collapsed from obvhs' BVH2, with f32 watertight triangle tests four at a
+//!   time), and one BVH2 over its spheres and quadrics ([`analytic`]: f32 traversal over padded
+//!   boxes, f64 intersection).
+//! - **Top**: those two and the level's instances, each an affine transform and the level it
+//!   places (rays are mapped into the placed level's space, where t is unchanged, and that level
+//!   is traversed the same way). Up to eight items are tested box by box (measured: an obvhs BVH2
+//!   over the two items of scenes/defense.toml cost several percent); more get an obvhs BVH2. The
+//!   world's infinite planes are tested in a short list beside it.
+//!
+//! A hit names its placement ([`crate::instance::Placements`]): the instance path from the world,
+//! numbered, so a shared triangle placed twice is two primitives and a ray spawned on one copy
+//! still meets the other.
 //!
 //! A triangle hit found in f32 is refined in f64 (the ray against the triangle's plane) before it
 //! is compared with hits of other items. Culling uses f32 distances rounded up, so hits of
@@ -25,8 +31,9 @@ mod mesh_bvh;
 mod tri4;
 
 use crate::geometry::Geometry;
+use crate::instance::{Instance, Placements};
 use crate::math::Ray;
-use crate::shape::PrimRef;
+use crate::shape::{LocalPrim, PrimRef};
 use analytic::AnalyticBvh;
 use glam::{DVec3, Vec3A};
 use mesh_bvh::{MeshBvh, MeshRay};
@@ -35,33 +42,57 @@ use std::cell::RefCell;
 use std::sync::OnceLock;
 use std::time::Duration;
 
-/// One leaf item of the top level.
+/// One leaf item of a level's top.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum TopItem {
-    /// The BVH over spheres and quadrics.
+    /// The level's BVH over its spheres and quadrics.
     Analytic,
-    /// The BVH over all of [`Geometry::meshes`].
-    World,
-    /// Mesh placement `instance` ([`Geometry::placement`]) of prototype `prototype`.
-    Instance { instance: u32, prototype: u32 },
+    /// The level's BVH over its meshes.
+    Meshes,
+    /// Instance `index` of the level, placing level `level` (`1 +` its prototype).
+    Instance { index: u32, level: u32 },
 }
 
-/// The scene's acceleration structure: bottom-level BVHs under a top level, plus planes.
+/// The structures of one level (the world, or one prototype in its own space): bottom-level BVHs
+/// over its shapes, and a top over those and its instances.
+#[derive(Clone, Default)]
+struct LevelAccel {
+    analytic: Option<AnalyticBvh>,
+    meshes: Option<MeshBvh>,
+    /// Top items in leaf order.
+    items: Vec<TopItem>,
+    /// The top's BVH; `None` when there are at most [`FLAT_TOP`] items.
+    top: Option<Bvh2>,
+    /// The items' boxes, for a top without a BVH.
+    item_boxes: Vec<Aabb>,
+}
+
+impl LevelAccel {
+    /// Bytes of the bottom-level BVHs (over shapes).
+    fn bottom_bytes(&self) -> usize {
+        self.analytic.as_ref().map_or(0, AnalyticBvh::memory_bytes)
+            + self.meshes.as_ref().map_or(0, MeshBvh::memory_bytes)
+    }
+
+    /// Bytes of the top (over the level's items).
+    fn top_bytes(&self) -> usize {
+        let bvh = self.top.as_ref().map_or(0, |b| {
+            b.nodes.capacity() * std::mem::size_of::<obvhs::bvh2::node::Bvh2Node>()
+                + b.primitive_indices.capacity() * std::mem::size_of::<u32>()
+        });
+        bvh + self.items.capacity() * std::mem::size_of::<TopItem>()
+            + self.item_boxes.capacity() * std::mem::size_of::<Aabb>()
+    }
+}
+
+/// The scene's acceleration structure: one [`LevelAccel`] per level, plus the world's planes.
 #[derive(Clone)]
 pub struct Accel {
-    analytic: Option<AnalyticBvh>,
-    /// Over all of [`Geometry::meshes`].
-    world: Option<MeshBvh>,
-    /// One per [`Geometry::prototypes`].
-    prototypes: Vec<MeshBvh>,
-    /// Top-level items in leaf order.
-    items: Vec<TopItem>,
-    /// The top-level BVH; `None` when there are at most [`FLAT_TOP`] items.
-    top: Option<Bvh2>,
-    /// The items' boxes, for a top level without a BVH.
-    item_boxes: Vec<Aabb>,
+    /// Per level: 0 is the world, `1 + i` prototype `i`.
+    levels: Vec<LevelAccel>,
+    placements: Placements,
     planes: u32,
-    /// Triangles stored (each mesh and prototype counted once).
+    /// Triangles stored (each level's counted once).
     triangles: usize,
     /// Whether queries take the AVX2+FMA path: where the CPU has it and the scene is mostly
     /// triangles (measured: 8% faster on the kitchen's rays; 3% slower on scenes/reflective.toml
@@ -72,16 +103,33 @@ pub struct Accel {
 impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Accel")
-            .field(
-                "analytic",
-                &self.analytic.as_ref().map_or(0, AnalyticBvh::len),
-            )
-            .field("world_meshes", &self.world.is_some())
-            .field("prototypes", &self.prototypes.len())
-            .field("top_items", &self.items.len())
+            .field("levels", &self.levels.len())
+            .field("placements", &self.placements.count())
+            .field("triangles", &self.triangles)
             .field("planes", &self.planes)
             .finish()
     }
+}
+
+/// What the acceleration structure stores and what it stands for ([`Accel::stats`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AccelStats {
+    /// Prototypes (shapes stored once, placed by instances).
+    pub prototypes: usize,
+    /// Instances written in the scene (each one placement of a prototype by its parent).
+    pub instances: usize,
+    /// Placements of prototypes in the expanded instance tree (the world not counted).
+    pub placements: u64,
+    /// Spheres, quadrics and triangles stored, each level's once.
+    pub primitives_stored: usize,
+    /// Triangles stored.
+    pub triangles_stored: usize,
+    /// Triangles as instanced: each placement's triangles counted again (saturating).
+    pub triangles_instanced: u64,
+    /// Bytes of the bottom-level BVHs (over shapes).
+    pub bottom_bytes: usize,
+    /// Bytes of the tops (over each level's shape BVHs and instances).
+    pub top_bytes: usize,
 }
 
 /// Most top-level items tested box by box, without a top-level BVH.
@@ -100,15 +148,19 @@ fn padded_aabb((lo, hi): (DVec3, DVec3), extent: f32) -> Aabb {
     )
 }
 
-/// World-space bounds of a mesh placement: the mesh's box, through the instance's transform.
-fn placement_bounds(g: &Geometry, instance: u32) -> (DVec3, DVec3) {
-    let (mesh, inst) = g.placement(instance);
-    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    for p in mesh.positions() {
-        lo = lo.min(p.as_dvec3());
-        hi = hi.max(p.as_dvec3());
-    }
-    let Some(inst) = inst else { return (lo, hi) };
+/// An f64 box.
+type Bounds = (DVec3, DVec3);
+
+fn union(a: Option<Bounds>, b: Bounds) -> Option<Bounds> {
+    Some(match a {
+        None => b,
+        Some((lo, hi)) => (lo.min(b.0), hi.max(b.1)),
+    })
+}
+
+/// The box of `b`'s eight corners through an instance's transform, widened by the transform's own
+/// rounding (a few ulps of the magnitudes it combines).
+fn transformed_bounds((lo, hi): Bounds, inst: &Instance) -> Bounds {
     let (mut wlo, mut whi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for corner in 0..8 {
         let pick = |bit: u32, a: f64, b: f64| if corner & bit == 0 { a } else { b };
@@ -121,114 +173,192 @@ fn placement_bounds(g: &Geometry, instance: u32) -> (DVec3, DVec3) {
         wlo = wlo.min(w);
         whi = whi.max(w);
     }
-    // The transform's own rounding: a few ulps of the magnitudes it combines.
     let slack = (wlo.abs().max(whi.abs()).max_element()) * 1e-12;
     (wlo - DVec3::splat(slack), whi + DVec3::splat(slack))
 }
 
-impl Accel {
-    /// Builds both levels. `origin_extent` bounds the magnitude of every coordinate a ray may start
-    /// at outside the primitives' own bounds (the camera).
-    pub fn build(geometry: &Geometry, origin_extent: f64) -> Accel {
-        let world_count = geometry.meshes.len() as u32;
-        let world_bounds = (0..world_count)
-            .filter(|&i| geometry.meshes[i as usize].triangle_count() > 0)
-            .map(|i| placement_bounds(geometry, i))
-            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)));
-        let instance_boxes: Vec<(u32, (DVec3, DVec3))> = (world_count
-            ..geometry.placement_count() as u32)
-            .filter(|&i| geometry.placement(i).0.triangle_count() > 0)
-            .map(|i| (i, placement_bounds(geometry, i)))
-            .collect();
-        let analytic_bounds = geometry
-            .spheres
-            .iter()
-            .map(|s| s.bounds())
-            .chain(geometry.quadrics.iter().map(|q| q.bounds()));
-        let extent = analytic_bounds
-            .chain(world_bounds)
-            .chain(instance_boxes.iter().map(|(_, b)| *b))
-            .map(|(lo, hi)| lo.abs().max(hi.abs()).max_element())
-            .fold(origin_extent.abs(), f64::max) as f32;
+/// Largest coordinate magnitude of a box.
+fn magnitude((lo, hi): Bounds) -> f64 {
+    lo.abs().max(hi.abs()).max_element()
+}
 
-        let analytic = AnalyticBvh::build(geometry, extent);
-        let analytic_count = analytic.as_ref().map_or(0, AnalyticBvh::len);
-        let world = world_bounds.map(|_| MeshBvh::build(&geometry.meshes));
-        let prototypes: Vec<MeshBvh> = geometry
-            .prototypes
+/// Bounds of every level in its own space (children before parents), and each level's instance
+/// boxes; `None` for a level with nothing bounded.
+fn level_bounds(g: &Geometry) -> (Vec<Option<Bounds>>, Vec<Vec<Option<Bounds>>>) {
+    let n = g.level_count();
+    let mut bounds: Vec<Option<Bounds>> = vec![None; n];
+    let mut instance_boxes = vec![Vec::new(); n];
+    for level in (1..n).chain([0]) {
+        let l = g.level(level);
+        let mut b = None;
+        for s in l.spheres {
+            b = union(b, s.bounds());
+        }
+        for q in l.quadrics {
+            b = union(b, q.bounds());
+        }
+        for m in l.meshes.iter().filter(|m| m.triangle_count() > 0) {
+            b = union(b, mesh_bounds(m));
+        }
+        let boxes: Vec<Option<Bounds>> = l
+            .instances
             .iter()
-            .map(|m| MeshBvh::build(std::slice::from_ref(m)))
+            .map(|inst| bounds[inst.prototype as usize + 1].map(|c| transformed_bounds(c, inst)))
             .collect();
-        let triangles = geometry
-            .meshes
-            .iter()
-            .chain(&geometry.prototypes)
-            .map(|m| m.triangle_count())
-            .sum();
+        for ib in boxes.iter().flatten() {
+            b = union(b, *ib);
+        }
+        bounds[level] = b;
+        instance_boxes[level] = boxes;
+    }
+    (bounds, instance_boxes)
+}
 
-        let mut items = Vec::new();
-        let mut boxes = Vec::new();
-        if let Some(a) = &analytic {
-            items.push(TopItem::Analytic);
-            boxes.push(a.bounds());
-        }
-        if let Some(bounds) = world_bounds {
-            items.push(TopItem::World);
-            boxes.push(padded_aabb(bounds, extent));
-        }
-        for (instance, bounds) in instance_boxes {
-            let prototype = geometry.instances[(instance - world_count) as usize].prototype;
-            items.push(TopItem::Instance {
-                instance,
-                prototype,
-            });
-            boxes.push(padded_aabb(bounds, extent));
-        }
-        let top = (items.len() > FLAT_TOP).then(|| {
-            let mut build_time = Duration::ZERO;
-            let params = BvhBuildParams {
-                max_prims_per_leaf: 1,
-                ..BvhBuildParams::medium_build()
-            };
-            build_bvh2(&boxes, params, &mut build_time)
-        });
-        if let Some(top) = &top {
-            items = top
-                .primitive_indices
+/// Bounds of a mesh's vertices.
+fn mesh_bounds(m: &crate::mesh::Mesh) -> Bounds {
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for p in m.positions() {
+        lo = lo.min(p.as_dvec3());
+        hi = hi.max(p.as_dvec3());
+    }
+    (lo, hi)
+}
+
+/// Per level, a bound on the magnitude of every coordinate a ray in that level's space may start
+/// at: the world's is `world`; a prototype's is its own bounds' or what its placements map the
+/// parent's bound to, whichever is larger (parents are numbered after their children).
+fn level_extents(g: &Geometry, bounds: &[Option<Bounds>], world: f64) -> Vec<f64> {
+    let n = g.level_count();
+    let mut extents: Vec<f64> = bounds.iter().map(|b| b.map_or(0.0, magnitude)).collect();
+    extents[0] = extents[0].max(world);
+    for level in [0].into_iter().chain((1..n).rev()) {
+        for inst in g.level(level).instances {
+            let m = &inst.transform.from_world;
+            // ‖x‖∞ ≤ e maps to ‖Mx + t‖∞ ≤ ‖M‖∞·e + ‖t‖∞ (‖M‖∞: the largest absolute row sum).
+            let rows = m.matrix3.transpose().abs();
+            let norm = [rows.x_axis, rows.y_axis, rows.z_axis]
                 .iter()
-                .map(|&i| items[i as usize])
-                .collect();
-            boxes = Vec::new();
+                .map(|r| r.element_sum())
+                .fold(0.0, f64::max);
+            let e = (norm * extents[level] + m.translation.abs().max_element()) * (1.0 + 1e-12);
+            let child = inst.prototype as usize + 1;
+            extents[child] = extents[child].max(e);
+        }
+    }
+    extents
+}
+
+impl Accel {
+    /// Builds every level. `origin_extent` bounds the magnitude of every coordinate a ray may
+    /// start at outside the primitives' own bounds (the camera). The instances must be numbered
+    /// ([`Placements::new`] succeeds); otherwise the scene is built without them.
+    pub fn build(geometry: &Geometry, origin_extent: f64) -> Accel {
+        let placements = Placements::new(geometry).unwrap_or_default();
+        let (bounds, instance_boxes) = level_bounds(geometry);
+        let world = bounds[0].map_or(0.0, magnitude).max(origin_extent.abs());
+        let extents = level_extents(geometry, &bounds, world);
+        let mut levels = Vec::with_capacity(geometry.level_count());
+        let (mut triangles, mut analytic_count) = (0, 0);
+        for (level, boxes) in instance_boxes.iter().enumerate() {
+            let l = geometry.level(level);
+            let extent = extents[level] as f32;
+            let analytic = AnalyticBvh::build(l, extent);
+            analytic_count += analytic.as_ref().map_or(0, AnalyticBvh::len);
+            let mesh_triangles: usize = l.meshes.iter().map(|m| m.triangle_count()).sum();
+            triangles += mesh_triangles;
+            let meshes = (mesh_triangles > 0).then(|| MeshBvh::build(l.meshes));
+
+            let mut items = Vec::new();
+            let mut item_boxes = Vec::new();
+            if let Some(a) = &analytic {
+                items.push(TopItem::Analytic);
+                item_boxes.push(a.bounds());
+            }
+            if meshes.is_some() {
+                let b = l
+                    .meshes
+                    .iter()
+                    .filter(|m| m.triangle_count() > 0)
+                    .fold(None, |b, m| union(b, mesh_bounds(m)));
+                items.push(TopItem::Meshes);
+                item_boxes.push(padded_aabb(b.expect("meshes have triangles"), extent));
+            }
+            if placements.count() > 0 {
+                for (k, (inst, b)) in l.instances.iter().zip(boxes).enumerate() {
+                    if let Some(b) = b {
+                        items.push(TopItem::Instance {
+                            index: k as u32,
+                            level: inst.prototype + 1,
+                        });
+                        item_boxes.push(padded_aabb(*b, extent));
+                    }
+                }
+            }
+            let top = (items.len() > FLAT_TOP).then(|| {
+                let mut build_time = Duration::ZERO;
+                let params = BvhBuildParams {
+                    max_prims_per_leaf: 1,
+                    ..BvhBuildParams::medium_build()
+                };
+                build_bvh2(&item_boxes, params, &mut build_time)
+            });
+            if let Some(top) = &top {
+                items = top
+                    .primitive_indices
+                    .iter()
+                    .map(|&i| items[i as usize])
+                    .collect();
+                item_boxes = Vec::new();
+            }
+            levels.push(LevelAccel {
+                analytic,
+                meshes,
+                items,
+                top,
+                item_boxes,
+            });
         }
         Accel {
-            analytic,
-            world,
-            prototypes,
-            items,
-            top,
-            item_boxes: boxes,
+            levels,
+            placements,
             planes: geometry.planes.len() as u32,
             avx2: simd_path() == SimdPath::Avx2 && triangles > 4 * analytic_count,
             triangles,
         }
     }
 
-    /// Bytes the acceleration structure keeps allocated: the bottom levels' nodes and index lists
-    /// and the top level's (memory reports; the build's transient buffers are not counted).
+    /// Bytes the acceleration structure keeps allocated: every level's BVHs and index lists (memory
+    /// reports; the build's transient buffers are not counted).
     pub fn memory_bytes(&self) -> usize {
-        let top = self.top.as_ref().map_or(0, |b| {
-            b.nodes.capacity() * std::mem::size_of::<obvhs::bvh2::node::Bvh2Node>()
-                + b.primitive_indices.capacity() * std::mem::size_of::<u32>()
-        });
-        self.analytic.as_ref().map_or(0, AnalyticBvh::memory_bytes)
-            + self.world.as_ref().map_or(0, MeshBvh::memory_bytes)
-            + self
-                .prototypes
-                .iter()
-                .map(MeshBvh::memory_bytes)
-                .sum::<usize>()
-            + top
-            + self.items.capacity() * std::mem::size_of::<TopItem>()
+        self.levels
+            .iter()
+            .map(|l| l.bottom_bytes() + l.top_bytes())
+            .sum()
+    }
+
+    /// Counts and memory of what is stored and what it expands to.
+    pub fn stats(&self, g: &Geometry) -> AccelStats {
+        // Triangles each level stands for once expanded: its own plus its instances' (children
+        // first, saturating: a deep DAG can stand for more than a u64 counts).
+        let n = g.level_count();
+        let mut expanded = vec![0u64; n];
+        for level in (1..n).chain([0]) {
+            let l = g.level(level);
+            let own: u64 = l.meshes.iter().map(|m| m.triangle_count() as u64).sum();
+            expanded[level] = l.instances.iter().fold(own, |sum, inst| {
+                sum.saturating_add(expanded[inst.prototype as usize + 1])
+            });
+        }
+        AccelStats {
+            prototypes: g.prototypes.len(),
+            instances: (0..n).map(|l| g.level(l).instances.len()).sum(),
+            placements: self.placements.count().saturating_sub(1),
+            primitives_stored: self.bounded_count(),
+            triangles_stored: self.triangles,
+            triangles_instanced: expanded[0],
+            bottom_bytes: self.levels.iter().map(LevelAccel::bottom_bytes).sum(),
+            top_bytes: self.levels.iter().map(LevelAccel::top_bytes).sum(),
+        }
     }
 
     /// The compiled path this scene's queries take.
@@ -240,10 +370,19 @@ impl Accel {
         }
     }
 
-    /// Number of bounded primitives stored: spheres, quadrics and triangles (each mesh and
-    /// prototype counted once, however often it is instanced).
+    /// Number of bounded primitives stored: spheres, quadrics and triangles (each level counted
+    /// once, however often it is instanced).
     pub fn bounded_count(&self) -> usize {
-        self.analytic.as_ref().map_or(0, AnalyticBvh::len) + self.triangles
+        self.levels
+            .iter()
+            .map(|l| l.analytic.as_ref().map_or(0, AnalyticBvh::len))
+            .sum::<usize>()
+            + self.triangles
+    }
+
+    /// The numbering of the scene's placements.
+    pub fn placements(&self) -> &Placements {
+        &self.placements
     }
 
     /// The nearest hit in (0, `t_max`), skipping self-hits of the primitive `from` the ray was
@@ -264,17 +403,6 @@ impl Accel {
         self.closest_impl(g, ray, t_max, from)
     }
 
-    /// Whether anything blocks the ray in (0, `t_max`): the any-hit query for shadow rays.
-    #[inline]
-    pub fn occluded(&self, g: &Geometry, ray: &Ray, t_max: f64, from: Option<PrimRef>) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if self.avx2 {
-            // SAFETY: the CPU supports AVX2 and FMA (checked by `simd_path`).
-            return unsafe { self.occluded_avx2(g, ray, t_max, from) };
-        }
-        self.occluded_impl(g, ray, t_max, from)
-    }
-
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn closest_avx2(
@@ -287,12 +415,8 @@ impl Accel {
         self.closest_impl(g, ray, t_max, from)
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    fn occluded_avx2(&self, g: &Geometry, ray: &Ray, t_max: f64, from: Option<PrimRef>) -> bool {
-        self.occluded_impl(g, ray, t_max, from)
-    }
-
+    /// The world level inlined (nested levels are entered through [`Accel::closest_level`]),
+    /// then the planes.
     #[inline(always)]
     fn closest_impl(
         &self,
@@ -303,17 +427,139 @@ impl Accel {
     ) -> Option<(f64, PrimRef)> {
         let mut best_t = t_max;
         let mut best = None;
-        match &self.top {
-            None if self.items.len() == 1 => {
+        self.closest_level_impl(g, 0, 0, ray, from, &mut best_t, &mut best);
+        for i in 0..self.planes {
+            let prim = PrimRef::world(LocalPrim::Plane(i));
+            if let Some(t) = g.intersect_plane(i, ray, best_t, from == Some(prim)) {
+                best_t = t;
+                best = Some(prim);
+            }
+        }
+        best.map(|p| (best_t, p))
+    }
+
+    /// Whether anything blocks the ray in (0, `t_max`): the any-hit query for shadow rays.
+    #[inline]
+    pub fn occluded(&self, g: &Geometry, ray: &Ray, t_max: f64, from: Option<PrimRef>) -> bool {
+        for i in 0..self.planes {
+            let prim = PrimRef::world(LocalPrim::Plane(i));
+            if g.intersect_plane(i, ray, t_max, from == Some(prim))
+                .is_some()
+            {
+                return true;
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: the CPU supports AVX2 and FMA (checked by `simd_path`).
+            return unsafe { self.occluded_level_avx2(g, 0, 0, ray, t_max, from) };
+        }
+        self.occluded_level_impl(g, 0, 0, ray, t_max, from)
+    }
+
+    /// [`Accel::closest`] within `level` reached at `placement`, with the ray in its space: the
+    /// entry point of each level, choosing the compiled path.
+    #[allow(clippy::too_many_arguments)]
+    fn closest_level(
+        &self,
+        g: &Geometry,
+        level: usize,
+        placement: u64,
+        ray: &Ray,
+        from: Option<PrimRef>,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: the CPU supports AVX2 and FMA (checked by `simd_path`).
+            return unsafe {
+                self.closest_level_avx2(g, level, placement, ray, from, best_t, best)
+            };
+        }
+        self.closest_level_impl(g, level, placement, ray, from, best_t, best)
+    }
+
+    /// [`Accel::occluded`] within `level` reached at `placement`.
+    fn occluded_level(
+        &self,
+        g: &Geometry,
+        level: usize,
+        placement: u64,
+        ray: &Ray,
+        t_max: f64,
+        from: Option<PrimRef>,
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: the CPU supports AVX2 and FMA (checked by `simd_path`).
+            return unsafe { self.occluded_level_avx2(g, level, placement, ray, t_max, from) };
+        }
+        self.occluded_level_impl(g, level, placement, ray, t_max, from)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[allow(clippy::too_many_arguments)]
+    fn closest_level_avx2(
+        &self,
+        g: &Geometry,
+        level: usize,
+        placement: u64,
+        ray: &Ray,
+        from: Option<PrimRef>,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) {
+        self.closest_level_impl(g, level, placement, ray, from, best_t, best)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn occluded_level_avx2(
+        &self,
+        g: &Geometry,
+        level: usize,
+        placement: u64,
+        ray: &Ray,
+        t_max: f64,
+        from: Option<PrimRef>,
+    ) -> bool {
+        self.occluded_level_impl(g, level, placement, ray, t_max, from)
+    }
+
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn closest_level_impl(
+        &self,
+        g: &Geometry,
+        level: usize,
+        placement: u64,
+        ray: &Ray,
+        from: Option<PrimRef>,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) {
+        let l = &self.levels[level];
+        let q = Query {
+            g,
+            level,
+            placement,
+            ray,
+            skip: from.filter(|f| f.placement == placement).map(|f| f.local),
+            from,
+        };
+        match &l.top {
+            None if l.items.len() == 1 => {
                 // One item tests its own root box.
-                self.closest_in(self.items[0], g, ray, from, &mut best_t, &mut best);
+                self.closest_in(l, l.items[0], &q, best_t, best);
             }
             None => {
                 // A few items: their boxes in order of entry, no BVH and no stack.
-                let fray = to_obvhs(ray, best_t);
+                let fray = to_obvhs(ray, *best_t);
                 let mut order = [(0usize, 0f32); FLAT_TOP];
                 let mut n = 0;
-                for (i, b) in self.item_boxes.iter().enumerate() {
+                for (i, b) in l.item_boxes.iter().enumerate() {
                     let enter = b.intersect_ray(&fray);
                     if enter < fray.tmax {
                         let mut j = n;
@@ -326,97 +572,96 @@ impl Accel {
                     }
                 }
                 for &(i, enter) in &order[..n] {
-                    if (enter as f64) <= best_t {
-                        self.closest_in(self.items[i], g, ray, from, &mut best_t, &mut best);
+                    if (enter as f64) <= *best_t {
+                        self.closest_in(l, l.items[i], &q, best_t, best);
                     }
                 }
             }
             Some(top) => with_stack(&TOP_STACK, |stack| {
-                let fray = to_obvhs(ray, best_t);
+                let fray = to_obvhs(ray, *best_t);
                 let mut leaves = TopLeaves::new(top, &fray, stack);
-                while let Some(range) = leaves.next(round_up(best_t)) {
+                while let Some(range) = leaves.next(round_up(*best_t)) {
                     for id in range {
-                        self.closest_in(self.items[id], g, ray, from, &mut best_t, &mut best);
+                        self.closest_in(l, l.items[id], &q, best_t, best);
                     }
                 }
             }),
         }
-        for i in 0..self.planes {
-            let prim = PrimRef::Plane(i);
-            if let Some(t) = g.intersect(prim, ray, best_t, from == Some(prim)) {
-                best_t = t;
-                best = Some(prim);
-            }
-        }
-        best.map(|p| (best_t, p))
     }
 
-    /// Lowers `best_t` to the nearest hit of the ray with top-level `item`, recording its primitive.
+    /// Lowers `best_t` to the nearest hit of the query's ray with `item` of level `l`, recording
+    /// its primitive.
     #[inline(always)]
     fn closest_in(
         &self,
+        l: &LevelAccel,
         item: TopItem,
-        g: &Geometry,
-        ray: &Ray,
-        from: Option<PrimRef>,
+        q: &Query<'_>,
         best_t: &mut f64,
         best: &mut Option<PrimRef>,
     ) {
         match item {
             TopItem::Analytic => {
-                if let Some(a) = &self.analytic
-                    && let Some(prim) = a.closest(g, ray, best_t, from)
+                if let Some(a) = &l.analytic
+                    && let Some(local) = a.closest(q.g.level(q.level), q.ray, best_t, q.skip)
                 {
-                    *best = Some(prim);
+                    *best = Some(PrimRef {
+                        placement: q.placement,
+                        local,
+                    });
                 }
             }
-            TopItem::World => {
-                let Some(world) = &self.world else { return };
-                let mray = MeshRay::new(ray.origin.as_vec3(), ray.dir.as_vec3());
-                let skip = world_skip(from, g.meshes.len());
-                let found = world.closest(&g.meshes, &mray, round_up(*best_t), skip);
-                if let Some(((m, tri), hit)) = found {
-                    let t = g.meshes[m as usize].refine_t(tri, ray, hit.t as f64);
+            TopItem::Meshes => {
+                let Some(bvh) = &l.meshes else { return };
+                let meshes = q.g.level(q.level).meshes;
+                let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+                if let Some(((mesh, tri), hit)) =
+                    bvh.closest(meshes, &mray, round_up(*best_t), q.triangle_skip())
+                {
+                    let t = meshes[mesh as usize].refine_t(tri, q.ray, hit.t as f64);
                     if t < *best_t {
                         *best_t = t;
-                        *best = Some(PrimRef::Triangle { instance: m, tri });
+                        *best = Some(PrimRef {
+                            placement: q.placement,
+                            local: LocalPrim::Triangle { mesh, tri },
+                        });
                     }
                 }
             }
-            TopItem::Instance {
-                instance,
-                prototype,
-            } => {
-                let q = self.instance_query(g, instance, prototype, ray, from);
-                let found = q
-                    .bvh
-                    .closest(q.mesh, &q.mesh_ray, round_up(*best_t), q.skip);
-                if let Some(((_, tri), hit)) = found {
-                    let t = q.mesh[0].refine_t(tri, &q.local, hit.t as f64);
-                    if t < *best_t {
-                        *best_t = t;
-                        *best = Some(PrimRef::Triangle { instance, tri });
-                    }
-                }
+            TopItem::Instance { index, level } => {
+                let inst = &q.g.level(q.level).instances[index as usize];
+                let local = inst.ray_to_object(q.ray);
+                let placement = self.placements.child(q.level, index as usize, q.placement);
+                self.closest_level(q.g, level as usize, placement, &local, q.from, best_t, best);
             }
         }
     }
 
     #[inline(always)]
-    fn occluded_impl(&self, g: &Geometry, ray: &Ray, t_max: f64, from: Option<PrimRef>) -> bool {
-        for i in 0..self.planes {
-            let prim = PrimRef::Plane(i);
-            if g.intersect(prim, ray, t_max, from == Some(prim)).is_some() {
-                return true;
-            }
-        }
-        match &self.top {
-            None if self.items.len() == 1 => self.occluded_in(self.items[0], g, ray, t_max, from),
+    fn occluded_level_impl(
+        &self,
+        g: &Geometry,
+        level: usize,
+        placement: u64,
+        ray: &Ray,
+        t_max: f64,
+        from: Option<PrimRef>,
+    ) -> bool {
+        let l = &self.levels[level];
+        let q = Query {
+            g,
+            level,
+            placement,
+            ray,
+            skip: from.filter(|f| f.placement == placement).map(|f| f.local),
+            from,
+        };
+        match &l.top {
+            None if l.items.len() == 1 => self.occluded_in(l, l.items[0], &q, t_max),
             None => {
                 let fray = to_obvhs(ray, t_max);
-                self.items.iter().zip(&self.item_boxes).any(|(&item, b)| {
-                    b.intersect_ray(&fray) < fray.tmax
-                        && self.occluded_in(item, g, ray, t_max, from)
+                l.items.iter().zip(&l.item_boxes).any(|(&item, b)| {
+                    b.intersect_ray(&fray) < fray.tmax && self.occluded_in(l, item, &q, t_max)
                 })
             }
             Some(top) => {
@@ -426,7 +671,7 @@ impl Accel {
                     let mut leaves = TopLeaves::new(top, &fray, stack);
                     'search: while let Some(range) = leaves.next(fray.tmax) {
                         for id in range {
-                            if self.occluded_in(self.items[id], g, ray, t_max, from) {
+                            if self.occluded_in(l, l.items[id], &q, t_max) {
                                 blocked = true;
                                 break 'search;
                             }
@@ -438,52 +683,24 @@ impl Accel {
         }
     }
 
-    /// The ray mapped into instance `instance` of prototype `prototype`, with what its BVH needs.
+    /// Whether `item` of level `l` blocks the query's ray in (0, `t_max`).
     #[inline(always)]
-    fn instance_query<'a>(
-        &'a self,
-        g: &'a Geometry,
-        instance: u32,
-        prototype: u32,
-        ray: &Ray,
-        from: Option<PrimRef>,
-    ) -> InstanceQuery<'a> {
-        let local = g.instances[instance as usize - g.meshes.len()].ray_to_object(ray);
-        InstanceQuery {
-            bvh: &self.prototypes[prototype as usize],
-            mesh: std::slice::from_ref(&g.prototypes[prototype as usize]),
-            mesh_ray: MeshRay::new(local.origin.as_vec3(), local.dir.as_vec3()),
-            local,
-            skip: instance_skip(from, instance),
-        }
-    }
-
-    /// Whether top-level `item` blocks the ray in (0, `t_max`).
-    #[inline(always)]
-    fn occluded_in(
-        &self,
-        item: TopItem,
-        g: &Geometry,
-        ray: &Ray,
-        t_max: f64,
-        from: Option<PrimRef>,
-    ) -> bool {
+    fn occluded_in(&self, l: &LevelAccel, item: TopItem, q: &Query<'_>, t_max: f64) -> bool {
         match item {
-            TopItem::Analytic => self
+            TopItem::Analytic => l
                 .analytic
                 .as_ref()
-                .is_some_and(|a| a.occluded(g, ray, t_max, from)),
-            TopItem::World => self.world.as_ref().is_some_and(|world| {
-                let mray = MeshRay::new(ray.origin.as_vec3(), ray.dir.as_vec3());
-                let skip = world_skip(from, g.meshes.len());
-                world.occluded(&g.meshes, &mray, round_up(t_max), skip)
+                .is_some_and(|a| a.occluded(q.g.level(q.level), q.ray, t_max, q.skip)),
+            TopItem::Meshes => l.meshes.as_ref().is_some_and(|bvh| {
+                let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+                let meshes = q.g.level(q.level).meshes;
+                bvh.occluded(meshes, &mray, round_up(t_max), q.triangle_skip())
             }),
-            TopItem::Instance {
-                instance,
-                prototype,
-            } => {
-                let q = self.instance_query(g, instance, prototype, ray, from);
-                q.bvh.occluded(q.mesh, &q.mesh_ray, round_up(t_max), q.skip)
+            TopItem::Instance { index, level } => {
+                let inst = &q.g.level(q.level).instances[index as usize];
+                let local = inst.ray_to_object(q.ray);
+                let placement = self.placements.child(q.level, index as usize, q.placement);
+                self.occluded_level(q.g, level as usize, placement, &local, t_max, q.from)
             }
         }
     }
@@ -536,35 +753,27 @@ impl<'a> TopLeaves<'a> {
     }
 }
 
-/// A ray in an instance's object space, ready for its prototype's BVH.
-struct InstanceQuery<'a> {
-    bvh: &'a MeshBvh,
-    /// The prototype, as the one mesh its BVH was built over.
-    mesh: &'a [crate::mesh::Mesh],
-    /// The ray in object space (f64, for the refinement of t).
-    local: Ray,
-    mesh_ray: MeshRay,
-    /// The prototype triangle the ray was spawned on, if on this instance.
-    skip: Option<(u32, u32)>,
+/// A ray in one level's space, with what that level's items need.
+struct Query<'a> {
+    g: &'a Geometry,
+    level: usize,
+    /// The placement the level was reached at.
+    placement: u64,
+    ray: &'a Ray,
+    /// The primitive the ray was spawned on, if it is in this placement.
+    skip: Option<LocalPrim>,
+    /// The primitive the ray was spawned on, for nested levels.
+    from: Option<PrimRef>,
 }
 
-/// The world-mesh triangle a ray was spawned on, if `from` is one (placements below `world_count`).
-#[inline(always)]
-fn world_skip(from: Option<PrimRef>, world_count: usize) -> Option<(u32, u32)> {
-    match from {
-        Some(PrimRef::Triangle { instance, tri }) if (instance as usize) < world_count => {
-            Some((instance, tri))
+impl Query<'_> {
+    /// The (mesh, triangle) the ray was spawned on, if in this placement.
+    #[inline(always)]
+    fn triangle_skip(&self) -> Option<(u32, u32)> {
+        match self.skip {
+            Some(LocalPrim::Triangle { mesh, tri }) => Some((mesh, tri)),
+            _ => None,
         }
-        _ => None,
-    }
-}
-
-/// The triangle of placement `instance` a ray was spawned on, if `from` is one.
-#[inline(always)]
-fn instance_skip(from: Option<PrimRef>, instance: u32) -> Option<(u32, u32)> {
-    match from {
-        Some(PrimRef::Triangle { instance: i, tri }) if i == instance => Some((0, tri)),
-        _ => None,
     }
 }
 
@@ -605,13 +814,14 @@ pub fn simd_path() -> SimdPath {
 }
 
 thread_local! {
-    /// The top level's traversal stack, reused: obvhs' own stacks are zeroed on every traversal,
-    /// which showed up as 5% of all instructions in profiles.
+    /// The tops' traversal stack, reused: obvhs' own stacks are zeroed on every traversal, which
+    /// showed up as 5% of all instructions in profiles.
     static TOP_STACK: RefCell<Vec<u32>> = const { RefCell::new(Vec::new()) };
 }
 
-/// Runs `f` with this thread's empty stack from `key` (a fresh one if it is already in use, so a
-/// nested query can never fail).
+/// Runs `f` with this thread's empty stack from `key`, or with a fresh one when it is in use: a
+/// level's top can reach an instance whose level has a top of its own (measured: a pool of stacks
+/// taken and returned per query cost 15% of a frame of scenes/reflective.toml).
 #[inline]
 pub(crate) fn with_stack<T, R>(
     key: &'static std::thread::LocalKey<RefCell<Vec<T>>>,
