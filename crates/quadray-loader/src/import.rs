@@ -150,27 +150,12 @@ impl Imported {
             MaterialMap::Replace(r) => r,
         };
         let g = &mut self.geometry;
-        for s in &mut g.spheres {
-            s.material = f(s.material);
-        }
         for p in &mut g.planes {
             p.material = f(p.material);
         }
-        for m in std::mem::take(&mut g.meshes) {
-            let id = f(m.material());
-            g.meshes.push(m.with_material(id));
-        }
-        for q in std::mem::take(&mut g.quadrics) {
-            // Quadric keeps its material private; rebuilding it with the same parameters cannot fail
-            // in principle, but an error is still reported rather than unwrapped.
-            let q = Quadric::new(
-                q.surface_description(),
-                q.clip(),
-                *q.transform(),
-                f(q.material()),
-            )
-            .map_err(|e| LoadError::new(path, None, LoadErrorKind::Unsupported(e.to_string())))?;
-            g.quadrics.push(q);
+        remap_level(&mut g.spheres, &mut g.quadrics, &mut g.meshes, &mut g.instances, &f, path)?;
+        for p in &mut g.prototypes {
+            remap_level(&mut p.spheres, &mut p.quadrics, &mut p.meshes, &mut p.instances, &f, path)?;
         }
         Ok(())
     }
@@ -190,6 +175,40 @@ impl Imported {
     }
 }
 
+/// Applies `f` to the material of every shape of one level and to its instances' overrides.
+fn remap_level(
+    spheres: &mut [Sphere],
+    quadrics: &mut Vec<Quadric>,
+    meshes: &mut Vec<quadray::Mesh>,
+    instances: &mut [quadray::Instance],
+    f: &impl Fn(u32) -> u32,
+    path: &Path,
+) -> Result<(), LoadError> {
+    for s in spheres {
+        s.material = f(s.material);
+    }
+    for m in std::mem::take(meshes) {
+        let id = f(m.material());
+        meshes.push(m.with_material(id));
+    }
+    for q in std::mem::take(quadrics) {
+        // Quadric keeps its material private; rebuilding it with the same parameters cannot fail
+        // in principle, but an error is still reported rather than unwrapped.
+        let q = Quadric::new(
+            q.surface_description(),
+            q.clip(),
+            *q.transform(),
+            f(q.material()),
+        )
+        .map_err(|e| LoadError::new(path, None, LoadErrorKind::Unsupported(e.to_string())))?;
+        quadrics.push(q);
+    }
+    for inst in instances {
+        inst.material = inst.material.map(f);
+    }
+    Ok(())
+}
+
 /// How [`Imported::remap_materials`] changes material indices.
 #[derive(Clone, Copy, Debug)]
 pub enum MaterialMap {
@@ -199,23 +218,42 @@ pub enum MaterialMap {
     Replace(u32),
 }
 
-/// Bounds of the bounded primitives of `g`, if any.
+/// Bounds of the bounded primitives of `g`, instances included, if any.
 pub fn geometry_bounds(g: &Geometry) -> Option<(DVec3, DVec3)> {
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    let mut grow = |(a, b): (DVec3, DVec3)| {
-        lo = lo.min(a);
-        hi = hi.max(b);
-    };
-    g.spheres.iter().for_each(|s| grow(s.bounds()));
-    g.quadrics.iter().for_each(|q| grow(q.bounds()));
-    for m in &g.meshes {
-        for p in m.positions() {
-            let p = p.as_dvec3();
-            grow((p, p));
+    // Each prototype's box once, children first (they come before their parents), then placed
+    // by its instances' transforms (the box of the transformed corners).
+    let mut boxes: Vec<Option<(DVec3, DVec3)>> = Vec::with_capacity(g.level_count());
+    let level_box = |level: quadray::Level<'_>, boxes: &[Option<(DVec3, DVec3)>]| {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        let mut grow = |(a, b): (DVec3, DVec3)| {
+            lo = lo.min(a);
+            hi = hi.max(b);
+        };
+        level.spheres.iter().for_each(|s| grow(s.bounds()));
+        level.quadrics.iter().for_each(|q| grow(q.bounds()));
+        for m in level.meshes {
+            for p in m.positions() {
+                let p = p.as_dvec3();
+                grow((p, p));
+            }
         }
+        for inst in level.instances {
+            let Some(Some((a, b))) = boxes.get(inst.prototype as usize) else { continue };
+            for corner in 0..8 {
+                let pick = |bit: u32, x: f64, y: f64| if corner & bit == 0 { x } else { y };
+                let c = DVec3::new(pick(1, a.x, b.x), pick(2, a.y, b.y), pick(4, a.z, b.z));
+                let w = inst.transform.to_world.transform_point3(c);
+                grow((w, w));
+            }
+        }
+        (lo.cmple(hi).all()).then_some((lo, hi))
+    };
+    for i in 0..g.prototypes.len() {
+        let b = level_box(g.level(i + 1), &boxes);
+        boxes.push(b);
     }
-    (lo.cmple(hi).all()).then_some((lo, hi))
+    level_box(g.level(0), &boxes)
 }
 
 /// A sphere of `radius` at the origin of `to_world`: a [`Sphere`] when the map is a similarity

@@ -65,6 +65,17 @@ pub fn merge(
     geometry.quadrics.extend(g.quadrics);
     geometry.spheres.extend(g.spheres);
     geometry.planes.extend(g.planes);
+    // The file's prototypes follow the scene's: renumber every reference to them.
+    let offset = geometry.prototypes.len() as u32;
+    let shift = |mut inst: quadray::Instance| {
+        inst.prototype += offset;
+        inst
+    };
+    for mut p in g.prototypes {
+        p.instances = p.instances.into_iter().map(shift).collect();
+        geometry.prototypes.push(p);
+    }
+    geometry.instances.extend(g.instances.into_iter().map(shift));
     imported.notes = imported
         .notes
         .into_iter()

@@ -1,0 +1,122 @@
+//! `[camera]` and `[render]`: how the scene is seen and sampled.
+
+use super::*;
+
+impl Builder<'_> {
+    pub(super) fn camera(&self, spec: &Spanned<CameraSpec>) -> Result<Camera, LoadError> {
+        let c = spec.get_ref();
+        let vfov = c
+            .vfov
+            .as_ref()
+            .map(|v| self.number(v, "camera.vfov"))
+            .transpose()?
+            .unwrap_or(40.0);
+        let up =
+            c.up.as_ref()
+                .map(|v| self.vec3(v, "camera.up"))
+                .transpose()?
+                .unwrap_or(DVec3::Z);
+        let projection = c
+            .projection
+            .as_ref()
+            .map(|p| (p.get_ref().as_str(), p.span()));
+        let camera = match (&c.orbit, projection) {
+            (Some(orbit), None | Some(("perspective", _))) => {
+                if c.from.is_some() {
+                    return Err(self.err(
+                        spec.span(),
+                        "camera",
+                        "give either `orbit` or `from`/`to`, not both",
+                    ));
+                }
+                let o = orbit.get_ref();
+                let target = o
+                    .target
+                    .as_ref()
+                    .map(|v| self.vec3(v, "camera.orbit.target"))
+                    .transpose()?
+                    .unwrap_or_default();
+                let distance = self.positive(&o.distance, "camera.orbit.distance")?;
+                let yaw = self.number(&o.yaw, "camera.orbit.yaw")?;
+                let pitch = self.number(&o.pitch, "camera.orbit.pitch")?;
+                Camera::orbit(target, yaw, pitch, distance, vfov)
+            }
+            (Some(orbit), Some(_)) => {
+                return Err(self.err(
+                    orbit.span(),
+                    "camera.orbit",
+                    "an orbit camera is perspective",
+                ));
+            }
+            (None, projection) => {
+                let from = c.from.as_ref().ok_or_else(|| {
+                    self.err(spec.span(), "camera", "needs `from` and `to`, or `orbit`")
+                })?;
+                let to =
+                    c.to.as_ref()
+                        .ok_or_else(|| self.err(spec.span(), "camera", "needs `to`"))?;
+                let projection = match projection {
+                    None | Some(("perspective", _)) => Projection::Perspective { vfov_deg: vfov },
+                    Some(("orthographic", span)) => {
+                        let h = c.height.as_ref().ok_or_else(|| {
+                            self.err(
+                                span,
+                                "camera.height",
+                                "an orthographic camera needs `height`",
+                            )
+                        })?;
+                        Projection::Orthographic {
+                            height: self.positive(h, "camera.height")?,
+                        }
+                    }
+                    Some((other, span)) => {
+                        return Err(self.err(
+                            span,
+                            "camera.projection",
+                            format!("unknown projection \"{other}\" (perspective, orthographic)"),
+                        ));
+                    }
+                };
+                Camera {
+                    from: self.vec3(from, "camera.from")?,
+                    to: self.vec3(to, "camera.to")?,
+                    up,
+                    projection,
+                }
+            }
+        };
+        camera
+            .prepare(1.0)
+            .map_err(|e| self.err(spec.span(), "camera", e.to_string()))?;
+        Ok(camera)
+    }
+
+    pub(super) fn render(&self, r: &RenderSpec) -> Result<(SceneSettings, Vec3), LoadError> {
+        let mut s = SceneSettings::default();
+        if let Some(res) = &r.resolution {
+            let [w, h] = *res.get_ref();
+            if !(1..=MAX_SIDE as i64).contains(&w) || !(1..=MAX_SIDE as i64).contains(&h) {
+                return Err(self.err(
+                    res.span(),
+                    "render.resolution",
+                    format!("each side must be between 1 and {MAX_SIDE}, got {w}x{h}"),
+                ));
+            }
+            (s.width, s.height) = (w as u32, h as u32);
+        }
+        if let Some(v) = &r.spp {
+            s.spp = self.count(v, "render.spp", MAX_SPP)?;
+        }
+        if let Some(v) = &r.max_depth {
+            s.max_depth = self.count(v, "render.max_depth", MAX_DEPTH)?;
+        }
+        let background = r
+            .background
+            .as_ref()
+            .map(|v| self.colour(v, "render.background"))
+            .transpose()?
+            .unwrap_or(Vec3::ZERO);
+        Ok((s, background))
+    }
+
+}

@@ -1,0 +1,144 @@
+//! `[[material]]`: colours, textures and the lighting model.
+
+use super::*;
+
+impl Builder<'_> {
+    pub(super) fn material(&self, m: &MaterialSpec, key: &str) -> Result<Material, LoadError> {
+        let defaults = Material::default();
+        let color = m
+            .color
+            .as_ref()
+            .map(|c| self.colour(c, &format!("{key}.color")))
+            .transpose()?;
+        let texture_name = m.texture.as_ref().map(|t| (t.get_ref().as_str(), t.span()));
+        let only_for = |field: bool, name: &str, texture: &str| -> Result<(), LoadError> {
+            if field {
+                return Err(LoadError::invalid(
+                    self.path,
+                    None,
+                    format!("{key}.{name}"),
+                    format!("only applies to texture = \"{texture}\""),
+                ));
+            }
+            Ok(())
+        };
+        if !matches!(texture_name, Some(("bands", _))) {
+            only_for(m.bands.is_some(), "bands", "bands")?;
+        }
+        if !matches!(texture_name, Some(("checker", _))) {
+            only_for(
+                m.checker_size.is_some() || m.color2.is_some(),
+                "checker_size/color2",
+                "checker",
+            )?;
+        }
+        let texture = match texture_name {
+            None | Some(("constant", _)) => Texture::Constant(color.unwrap_or(Vec3::splat(0.8))),
+            Some(("ramp", _)) => Texture::HeightRamp,
+            Some(("bands", _)) => {
+                let steps = m
+                    .bands
+                    .as_ref()
+                    .map(|b| self.count(b, &format!("{key}.bands"), 1024))
+                    .transpose()?
+                    .unwrap_or(8);
+                Texture::Bands { steps }
+            }
+            Some(("checker", _)) => {
+                let even = color.unwrap_or(Vec3::splat(0.4));
+                let size = m
+                    .checker_size
+                    .as_ref()
+                    .map(|s| self.positive(s, &format!("{key}.checker_size")))
+                    .transpose()?
+                    .unwrap_or(1.0);
+                let odd = m
+                    .color2
+                    .as_ref()
+                    .map(|c| self.colour(c, &format!("{key}.color2")))
+                    .transpose()?;
+                Texture::Checker {
+                    size,
+                    even,
+                    odd: odd.unwrap_or(quadray::texture::lighten(even)),
+                }
+            }
+            Some((other, span)) => {
+                return Err(self.err(
+                    span,
+                    format!("{key}.texture"),
+                    format!("unknown texture \"{other}\" (constant, ramp, bands, checker)"),
+                ));
+            }
+        };
+        let specular_model = match m
+            .specular_model
+            .as_ref()
+            .map(|s| (s.get_ref().as_str(), s.span()))
+        {
+            None | Some(("phong", _)) => SpecularModel::Phong,
+            Some(("blinn", _)) => SpecularModel::Blinn,
+            Some((other, span)) => {
+                return Err(self.err(
+                    span,
+                    format!("{key}.specular_model"),
+                    format!("unknown model \"{other}\" (phong, blinn)"),
+                ));
+            }
+        };
+        let reflectivity =
+            self.non_negative(&m.reflectivity, &format!("{key}.reflectivity"), 0.0)?;
+        if reflectivity > 1.0 {
+            let span = m
+                .reflectivity
+                .as_ref()
+                .map(|r| r.span())
+                .unwrap_or_default();
+            return Err(self.err(
+                span,
+                format!("{key}.reflectivity"),
+                format!("must be in [0, 1], got {reflectivity}"),
+            ));
+        }
+        Ok(Material {
+            texture,
+            ambient: self.non_negative(
+                &m.ambient,
+                &format!("{key}.ambient"),
+                defaults.ambient as f64,
+            )?,
+            diffuse: self.non_negative(
+                &m.diffuse,
+                &format!("{key}.diffuse"),
+                defaults.diffuse as f64,
+            )?,
+            specular: self.non_negative(
+                &m.specular,
+                &format!("{key}.specular"),
+                defaults.specular as f64,
+            )?,
+            shininess: self.non_negative(
+                &m.shininess,
+                &format!("{key}.shininess"),
+                defaults.shininess as f64,
+            )?,
+            specular_model,
+            reflectivity,
+            reflection_tint: match &m.reflection_tint {
+                None => 0.0,
+                Some(v) => {
+                    let t = self.number(v, &format!("{key}.reflection_tint"))?;
+                    if !(0.0..=1.0).contains(&t) {
+                        return Err(self.err(
+                            v.span(),
+                            format!("{key}.reflection_tint"),
+                            format!("must be in [0, 1], got {t}"),
+                        ));
+                    }
+                    t as f32
+                }
+            },
+        })
+    }
+
+}

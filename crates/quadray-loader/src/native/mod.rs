@@ -1,0 +1,367 @@
+//! The native TOML scene format (documented with examples in `docs/scene-format.md`).
+//!
+//! Every table denies unknown keys. Values are read as `toml::Spanned` so that a semantic error
+//! (a negative radius, an unknown material) points at the offending value's line and column.
+//! Kinds that select fields (`light.type`, `quadric.kind`, `material.texture`) are plain keys of a
+//! flat table rather than serde-tagged enums, because tagged enums lose spans (toml-rs #535).
+
+use crate::error::{LoadError, LoadErrorKind, Location};
+use crate::import::{
+    ImportOptions, Selector, UpAxis, framing_camera, geometry_bounds, select_camera,
+};
+use crate::include;
+use glam::{DVec3, Vec3};
+use quadray::render::{MAX_DEPTH, MAX_SIDE, MAX_SPP};
+use quadray::{
+    Camera, ClipBox, Coefficients, Geometry, Light, Material, Mesh, Plane, Projection, Quadric,
+    QuadricKind, QuadricSurface, SceneDescription, SpecularModel, Sphere, Texture, Transform,
+};
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::Path;
+use toml::Spanned;
+
+/// The scene format version this loader reads.
+
+mod camera;
+mod groups;
+mod light;
+mod material;
+mod objects;
+mod spec;
+#[cfg(test)]
+mod tests;
+mod transform;
+
+use spec::*;
+
+pub const FORMAT_VERSION: i64 = 1;
+
+type V3 = [f64; 3];
+
+/// Render settings a scene file carries (each overridable on the command line).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Most rays in one chain (camera ray included).
+    pub max_depth: u32,
+}
+
+impl SceneSettings {
+    /// The renderer's settings for these values (the integrator's other limits at their defaults).
+    pub fn render_settings(&self) -> quadray::RenderSettings {
+        quadray::RenderSettings {
+            width: self.width,
+            height: self.height,
+            spp: self.spp,
+            whitted: quadray::Whitted {
+                max_depth: self.max_depth,
+                ..quadray::Whitted::default()
+            },
+            ..quadray::RenderSettings::default()
+        }
+    }
+}
+
+impl Default for SceneSettings {
+    fn default() -> Self {
+        SceneSettings {
+            width: 640,
+            height: 480,
+            spp: 1,
+            max_depth: 8,
+        }
+    }
+}
+
+/// A scene file, loaded and validated.
+#[derive(Clone, Debug)]
+pub struct LoadedScene {
+    /// The scene, ready for [`quadray::Scene::new`].
+    pub description: SceneDescription,
+    /// The render settings from the `[render]` table.
+    pub settings: SceneSettings,
+    /// Material names, by material index.
+    pub material_names: Vec<String>,
+    /// What the loader assumed or skipped (a default camera or light, an unsupported primitive),
+    /// for the user to see on stderr.
+    pub notes: Vec<String>,
+}
+/// Reads and validates the scene file at `path`.
+pub fn load_scene(path: &Path) -> Result<LoadedScene, LoadError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| LoadError::new(path, None, LoadErrorKind::Io(e)))?;
+    parse_scene(&text, path)
+}
+
+/// Parses and validates scene text; `path` names the file in errors.
+pub fn parse_scene(text: &str, path: &Path) -> Result<LoadedScene, LoadError> {
+    let file: SceneFile = toml::from_str(text).map_err(|e| {
+        let location = e.span().map(|s| Location::from_offset(text, s.start));
+        LoadError::new(
+            path,
+            location,
+            LoadErrorKind::Syntax(e.message().trim().to_string()),
+        )
+    })?;
+    Builder { path, text }.build(file)
+}
+
+/// Validation context: the file's path and text, to turn spans into locations.
+struct Builder<'a> {
+    path: &'a Path,
+    text: &'a str,
+}
+
+impl Builder<'_> {
+    fn at(&self, span: Range<usize>) -> Option<Location> {
+        Some(Location::from_offset(self.text, span.start))
+    }
+
+    fn err(
+        &self,
+        span: Range<usize>,
+        key: impl Into<String>,
+        message: impl Into<String>,
+    ) -> LoadError {
+        LoadError::invalid(self.path, self.at(span), key, message)
+    }
+
+    fn vec3(&self, v: &Spanned<V3>, key: &str) -> Result<DVec3, LoadError> {
+        let d = DVec3::from_array(*v.get_ref());
+        if !d.is_finite() {
+            return Err(self.err(v.span(), key, format!("must be finite numbers, got {d}")));
+        }
+        Ok(d)
+    }
+
+    fn unit(&self, v: &Spanned<V3>, key: &str) -> Result<DVec3, LoadError> {
+        let d = self.vec3(v, key)?;
+        d.try_normalize()
+            .ok_or_else(|| self.err(v.span(), key, "must not be the zero vector"))
+    }
+
+    fn colour(&self, v: &Spanned<V3>, key: &str) -> Result<Vec3, LoadError> {
+        let c = self.vec3(v, key)?;
+        if c.min_element() < 0.0 {
+            return Err(self.err(
+                v.span(),
+                key,
+                format!("colour components must be non-negative, got {c}"),
+            ));
+        }
+        Ok(c.as_vec3())
+    }
+
+    fn number(&self, v: &Spanned<f64>, key: &str) -> Result<f64, LoadError> {
+        let x = *v.get_ref();
+        if !x.is_finite() {
+            return Err(self.err(v.span(), key, format!("must be a finite number, got {x}")));
+        }
+        Ok(x)
+    }
+
+    fn positive(&self, v: &Spanned<f64>, key: &str) -> Result<f64, LoadError> {
+        let x = self.number(v, key)?;
+        if x <= 0.0 {
+            return Err(self.err(v.span(), key, format!("must be positive, got {x}")));
+        }
+        Ok(x)
+    }
+
+    fn non_negative(
+        &self,
+        v: &Option<Spanned<f64>>,
+        key: &str,
+        default: f64,
+    ) -> Result<f32, LoadError> {
+        let Some(v) = v else {
+            return Ok(default as f32);
+        };
+        let x = self.number(v, key)?;
+        if x < 0.0 {
+            return Err(self.err(v.span(), key, format!("must not be negative, got {x}")));
+        }
+        Ok(x as f32)
+    }
+
+    fn count(&self, v: &Spanned<i64>, key: &str, max: u32) -> Result<u32, LoadError> {
+        let x = *v.get_ref();
+        if !(1..=max as i64).contains(&x) {
+            return Err(self.err(
+                v.span(),
+                key,
+                format!("must be between 1 and {max}, got {x}"),
+            ));
+        }
+        Ok(x as u32)
+    }
+
+    fn material_id(
+        &self,
+        names: &HashMap<String, u32>,
+        v: &Spanned<String>,
+        key: &str,
+    ) -> Result<u32, LoadError> {
+        names.get(v.get_ref()).copied().ok_or_else(|| {
+            let mut known: Vec<_> = names.keys().map(String::as_str).collect();
+            known.sort_unstable();
+            self.err(
+                v.span(),
+                key,
+                format!(
+                    "unknown material \"{}\" (defined: {})",
+                    v.get_ref(),
+                    known.join(", ")
+                ),
+            )
+        })
+    }
+
+    fn build(&self, file: SceneFile) -> Result<LoadedScene, LoadError> {
+        if *file.version.get_ref() != FORMAT_VERSION {
+            return Err(self.err(
+                file.version.span(),
+                "version",
+                format!(
+                    "this quadray reads scene format version {FORMAT_VERSION}, the file has {}",
+                    file.version.get_ref()
+                ),
+            ));
+        }
+        let (mut settings, background) = self.render(&file.render)?;
+        let mut notes = Vec::new();
+
+        let mut names = HashMap::new();
+        let mut materials = Vec::new();
+        let mut material_names = Vec::new();
+        for (i, m) in file.materials.iter().enumerate() {
+            let key = format!("material[{i}]");
+            let name = m.get_ref().name.get_ref().clone();
+            if names.insert(name.clone(), i as u32).is_some() {
+                return Err(self.err(
+                    m.get_ref().name.span(),
+                    format!("{key}.name"),
+                    format!("material \"{name}\" is defined twice"),
+                ));
+            }
+            materials.push(self.material(m.get_ref(), &key)?);
+            material_names.push(name);
+        }
+
+        // The world and every group, built into prototypes children first (groups.rs).
+        let world = groups::Contents::world(&file);
+        let mut graph = self.graph(&world, materials, material_names)?;
+        let mut top = quadray::Prototype::default();
+        let mut planes = Vec::new();
+        self.fill(&mut graph, &names, &world, &mut top, Some(&mut planes))?;
+        let (mut materials, mut material_names) = (graph.materials, graph.material_names);
+        notes.append(&mut graph.notes);
+        let mut geometry = Geometry {
+            spheres: top.spheres,
+            planes,
+            quadrics: top.quadrics,
+            meshes: top.meshes,
+            prototypes: graph.prototypes,
+            instances: top.instances,
+        };
+        let mut lights = Vec::new();
+        for (i, l) in file.lights.iter().enumerate() {
+            lights.push(self.light(l.get_ref(), &format!("light[{i}]"))?);
+        }
+        let mut included_cameras = Vec::new();
+        for (i, inc) in file.includes.iter().enumerate() {
+            let key = format!("include[{i}]");
+            let spec = inc.get_ref();
+            let options = ImportOptions {
+                transform: Some(self.transform(&spec.transform, &format!("{key}.transform"))?),
+                scene: spec
+                    .scene
+                    .as_ref()
+                    .map(|s| self.selector(s, &format!("{key}.scene")))
+                    .transpose()?,
+                up: self.up_axis(&spec.up, &format!("{key}.up"))?,
+                skip_materials: false,
+            };
+            let path = include::resolve(self.path, spec.path.get_ref());
+            let imported = include::import_file(&path, &options)
+                .map_err(|e| self.include_err(Some(&spec.path), &format!("{key}.path"), e))?;
+            let mut merged = include::merge(
+                imported,
+                &path,
+                None,
+                &mut materials,
+                &mut material_names,
+                &mut geometry,
+            )
+            .map_err(|e| self.include_err(Some(&spec.path), &format!("{key}.path"), e))?;
+            notes.append(&mut merged.notes);
+            if spec.lights.unwrap_or(true) {
+                lights.append(&mut merged.lights);
+            }
+            let chosen = match &spec.camera {
+                Some(sel) => {
+                    let s = self.selector(sel, &format!("{key}.camera"))?;
+                    let c = select_camera(&merged.cameras, &s)
+                        .map_err(|m| self.err(sel.span(), format!("{key}.camera"), m))?;
+                    vec![c.clone()]
+                }
+                None => merged.cameras,
+            };
+            included_cameras.extend(chosen);
+        }
+        let camera = match &file.camera {
+            Some(c) => self.camera(c)?,
+            None => match included_cameras.first() {
+                Some(c) => {
+                    notes.push(format!(
+                        "no [camera]: using the included file's camera{}",
+                        c.name
+                            .as_deref()
+                            .map(|n| format!(" \"{n}\""))
+                            .unwrap_or_default()
+                    ));
+                    if let (Some(aspect), None) = (c.aspect, &file.render.resolution) {
+                        settings.height =
+                            ((settings.width as f64 / aspect).round() as u32).clamp(1, MAX_SIDE);
+                    }
+                    c.camera
+                }
+                None => {
+                    notes.push("no [camera] and no included camera: using one that frames the scene's bounds".into());
+                    framing_camera(geometry_bounds(&geometry))
+                }
+            },
+        };
+        Ok(LoadedScene {
+            description: SceneDescription {
+                camera,
+                background,
+                materials,
+                lights,
+                geometry,
+            },
+            settings,
+            material_names,
+            notes,
+        })
+    }
+
+    /// An included file's error, wrapped so that it names the scene, the key and the file.
+    fn include_err(&self, path: Option<&Spanned<String>>, key: &str, e: LoadError) -> LoadError {
+        LoadError::new(
+            self.path,
+            path.and_then(|p| self.at(p.span())),
+            LoadErrorKind::Include {
+                key: key.into(),
+                source: Box::new(e),
+            },
+        )
+    }
+
+}

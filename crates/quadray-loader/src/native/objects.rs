@@ -1,0 +1,229 @@
+//! `[[quadric]]` and `[[mesh]]` (inline or from an OBJ/glTF file), and the glTF selectors the
+//! latter take.
+
+use super::*;
+
+impl Builder<'_> {
+    pub(super) fn selector(&self, s: &Spanned<SelectorSpec>, key: &str) -> Result<Selector, LoadError> {
+        match s.get_ref() {
+            SelectorSpec::Index(i) if *i >= 0 => Ok(Selector::Index(*i as usize)),
+            SelectorSpec::Index(i) => Err(self.err(
+                s.span(),
+                key,
+                format!("an index must not be negative, got {i}"),
+            )),
+            SelectorSpec::Name(n) => Ok(Selector::Name(n.clone())),
+        }
+    }
+
+    pub(super) fn up_axis(&self, up: &Option<Spanned<String>>, key: &str) -> Result<UpAxis, LoadError> {
+        match up.as_ref().map(|u| (u.get_ref().as_str(), u.span())) {
+            None | Some(("y", _)) => Ok(UpAxis::Y),
+            Some(("z", _)) => Ok(UpAxis::Z),
+            Some((other, span)) => {
+                Err(self.err(span, key, format!("unknown up axis \"{other}\" (y, z)")))
+            }
+        }
+    }
+
+    /// Imports the file of a `[[mesh]] path = …`; returns it with its path and the override material.
+    #[allow(clippy::type_complexity)]
+    pub(super) fn mesh_file(
+        &self,
+        spec: &Spanned<MeshSpec>,
+        key: &str,
+        names: &HashMap<String, u32>,
+    ) -> Result<(crate::import::Imported, (std::path::PathBuf, Option<u32>)), LoadError> {
+        let m = spec.get_ref();
+        let Some(path_spec) = &m.path else {
+            return Err(self.err(spec.span(), key, "needs `path`"));
+        };
+        for (present, name) in [
+            (m.vertices.is_some(), "vertices"),
+            (m.indices.is_some(), "indices"),
+            (m.normals.is_some(), "normals"),
+        ] {
+            if present {
+                return Err(self.err(
+                    spec.span(),
+                    format!("{key}.{name}"),
+                    "a mesh is either read from `path` or given inline, not both",
+                ));
+            }
+        }
+        let replace = m
+            .material
+            .as_ref()
+            .map(|v| self.material_id(names, v, &format!("{key}.material")))
+            .transpose()?;
+        let options = ImportOptions {
+            transform: Some(self.transform(&m.transform, &format!("{key}.transform"))?),
+            scene: m
+                .scene
+                .as_ref()
+                .map(|s| self.selector(s, &format!("{key}.scene")))
+                .transpose()?,
+            up: self.up_axis(&m.up, &format!("{key}.up"))?,
+            skip_materials: replace.is_some(),
+        };
+        let path = include::resolve(self.path, path_spec.get_ref());
+        let imported = include::import_file(&path, &options)
+            .map_err(|e| self.include_err(Some(path_spec), &format!("{key}.path"), e))?;
+        Ok((imported, (path, replace)))
+    }
+
+
+    pub(super) fn quadric(
+        &self,
+        spec: &Spanned<QuadricSpec>,
+        key: &str,
+        names: &HashMap<String, u32>,
+    ) -> Result<Quadric, LoadError> {
+        let q = spec.get_ref();
+        let param = |v: &Option<Spanned<f64>>, name: &str| -> Result<f64, LoadError> {
+            v.as_ref()
+                .map(|v| self.positive(v, &format!("{key}.{name}")))
+                .transpose()
+                .map(|x| x.unwrap_or(1.0))
+        };
+        let kind = q.kind.get_ref().as_str();
+        let surface = if kind == "general" {
+            if q.a.is_some() || q.b.is_some() || q.c.is_some() {
+                return Err(self.err(
+                    spec.span(),
+                    key,
+                    "a general quadric takes `coefficients`, not a, b, c",
+                ));
+            }
+            let k = q.coefficients.as_ref().ok_or_else(|| {
+                self.err(
+                    q.kind.span(),
+                    format!("{key}.coefficients"),
+                    "a general quadric needs 10 coefficients",
+                )
+            })?;
+            let arr: [f64; 10] = k.get_ref().as_slice().try_into().map_err(|_| {
+                self.err(
+                    k.span(),
+                    format!("{key}.coefficients"),
+                    format!("needs exactly 10 numbers (A..J), got {}", k.get_ref().len()),
+                )
+            })?;
+            QuadricSurface::General(Coefficients(arr))
+        } else {
+            let kind = QuadricKind::from_name(kind).ok_or_else(|| {
+                let names: Vec<_> = QuadricKind::ALL.iter().map(|k| k.name()).collect();
+                self.err(
+                    q.kind.span(),
+                    format!("{key}.kind"),
+                    format!(
+                        "unknown kind \"{kind}\" (one of {}, general)",
+                        names.join(", ")
+                    ),
+                )
+            })?;
+            if let Some(k) = &q.coefficients {
+                return Err(self.err(
+                    k.span(),
+                    format!("{key}.coefficients"),
+                    "only a `general` quadric takes coefficients",
+                ));
+            }
+            QuadricSurface::Canonical {
+                kind,
+                a: param(&q.a, "a")?,
+                b: param(&q.b, "b")?,
+                c: param(&q.c, "c")?,
+            }
+        };
+        let clip = match q.clip.get_ref() {
+            ClipSpec::Radius(r) => ClipBox::cube(*r),
+            ClipSpec::Box { min, max } => ClipBox {
+                min: DVec3::from_array(*min),
+                max: DVec3::from_array(*max),
+            },
+        };
+        let transform = self.transform(&q.transform, &format!("{key}.transform"))?;
+        let material = self.material_id(names, &q.material, &format!("{key}.material"))?;
+        Quadric::new(surface, clip, transform, material).map_err(|e| {
+            let span = match &e {
+                quadray::QuadricError::EmptyClipBox { .. } => q.clip.span(),
+                quadray::QuadricError::BadTransform => {
+                    q.transform.as_ref().map_or(spec.span(), |t| t.span())
+                }
+                _ => spec.span(),
+            };
+            self.err(span, key, e.to_string())
+        })
+    }
+
+    pub(super) fn mesh(
+        &self,
+        spec: &Spanned<MeshSpec>,
+        key: &str,
+        names: &HashMap<String, u32>,
+    ) -> Result<Mesh, LoadError> {
+        let m = spec.get_ref();
+        let missing = |name: &str| {
+            self.err(
+                spec.span(),
+                format!("{key}.{name}"),
+                format!("an inline mesh needs `{name}` (or give `path` to read a file)"),
+            )
+        };
+        let vertices = m.vertices.as_ref().ok_or_else(|| missing("vertices"))?;
+        let indices_spec = m.indices.as_ref().ok_or_else(|| missing("indices"))?;
+        let material_spec = m.material.as_ref().ok_or_else(|| missing("material"))?;
+        for (present, name) in [(m.up.is_some(), "up"), (m.scene.is_some(), "scene")] {
+            if present {
+                return Err(self.err(
+                    spec.span(),
+                    format!("{key}.{name}"),
+                    "only applies to a mesh read from `path`",
+                ));
+            }
+        }
+        let transform = self.transform(&m.transform, &format!("{key}.transform"))?;
+        let positions: Vec<Vec3> = vertices
+            .get_ref()
+            .iter()
+            .map(|v| {
+                transform
+                    .to_world
+                    .transform_point3(DVec3::from_array(*v))
+                    .as_vec3()
+            })
+            .collect();
+        let vertex_count = positions.len() as i64;
+        let mut indices = Vec::with_capacity(indices_spec.get_ref().len());
+        let flip = transform.to_world.matrix3.determinant() < 0.0;
+        for (t, tri) in indices_spec.get_ref().iter().enumerate() {
+            if let Some(&bad) = tri.iter().find(|&&i| !(0..vertex_count).contains(&i)) {
+                return Err(self.err(
+                    indices_spec.span(),
+                    format!("{key}.indices[{t}]"),
+                    format!(
+                        "vertex index {bad} is out of range (the mesh has {vertex_count} vertices)"
+                    ),
+                ));
+            }
+            // A mirroring transform would turn the triangle's front face away: keep the winding's meaning.
+            let t = tri.map(|i| i as u32);
+            indices.push(if flip { [t[0], t[2], t[1]] } else { t });
+        }
+        let normals = m.normals.as_ref().map(|n| {
+            n.get_ref()
+                .iter()
+                .map(|v| {
+                    (transform.normal_to_world * DVec3::from_array(*v))
+                        .normalize_or_zero()
+                        .as_vec3()
+                })
+                .collect()
+        });
+        let material = self.material_id(names, material_spec, &format!("{key}.material"))?;
+        Mesh::new(positions, indices, normals, material)
+            .map_err(|e| self.err(spec.span(), key, e.to_string()))
+    }
+
+}

@@ -1,0 +1,221 @@
+//! The scene file's tables as serde reads them: every table denies unknown keys, and every value
+//! a later check may reject keeps its span.
+
+use super::V3;
+use serde::Deserialize;
+use toml::Spanned;
+
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SceneFile {
+    pub(super) version: Spanned<i64>,
+    pub(super) camera: Option<Spanned<CameraSpec>>,
+    #[serde(default)]
+    pub(super) render: RenderSpec,
+    #[serde(default, rename = "material")]
+    pub(super) materials: Vec<Spanned<MaterialSpec>>,
+    #[serde(default, rename = "sphere")]
+    pub(super) spheres: Vec<Spanned<SphereSpec>>,
+    #[serde(default, rename = "plane")]
+    pub(super) planes: Vec<Spanned<PlaneSpec>>,
+    #[serde(default, rename = "quadric")]
+    pub(super) quadrics: Vec<Spanned<QuadricSpec>>,
+    #[serde(default, rename = "mesh")]
+    pub(super) meshes: Vec<Spanned<MeshSpec>>,
+    #[serde(default, rename = "light")]
+    pub(super) lights: Vec<Spanned<LightSpec>>,
+    #[serde(default, rename = "include")]
+    pub(super) includes: Vec<Spanned<IncludeSpec>>,
+    #[serde(default, rename = "group")]
+    pub(super) groups: Vec<Spanned<GroupSpec>>,
+    #[serde(default, rename = "instance")]
+    pub(super) instances: Vec<Spanned<InstanceSpec>>,
+}
+
+/// `[[group]]`: named shapes, groups and instances placed together by one transform.
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct GroupSpec {
+    pub(super) name: Spanned<String>,
+    pub(super) transform: Option<Spanned<TransformSpec>>,
+    /// Only a definition for instances: not placed where it is written.
+    pub(super) template: Option<Spanned<bool>>,
+    #[serde(default, rename = "sphere")]
+    pub(super) spheres: Vec<Spanned<SphereSpec>>,
+    /// Present only to be refused with a clear message: a plane is unbounded.
+    #[serde(default, rename = "plane")]
+    pub(super) planes: Vec<Spanned<PlaneSpec>>,
+    #[serde(default, rename = "quadric")]
+    pub(super) quadrics: Vec<Spanned<QuadricSpec>>,
+    #[serde(default, rename = "mesh")]
+    pub(super) meshes: Vec<Spanned<MeshSpec>>,
+    #[serde(default, rename = "group")]
+    pub(super) groups: Vec<Spanned<GroupSpec>>,
+    #[serde(default, rename = "instance")]
+    pub(super) instances: Vec<Spanned<InstanceSpec>>,
+}
+
+/// `[[instance]]`: a named group or shape placed again.
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct InstanceSpec {
+    pub(super) of: Spanned<String>,
+    pub(super) transform: Option<Spanned<TransformSpec>>,
+    pub(super) material: Option<Spanned<String>>,
+}
+
+/// A glTF scene or camera chosen by index or by name.
+#[derive(Clone, Deserialize)]
+#[serde(untagged)]
+pub(super) enum SelectorSpec {
+    Index(i64),
+    Name(String),
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct IncludeSpec {
+    pub(super) path: Spanned<String>,
+    pub(super) transform: Option<Spanned<TransformSpec>>,
+    pub(super) scene: Option<Spanned<SelectorSpec>>,
+    pub(super) camera: Option<Spanned<SelectorSpec>>,
+    pub(super) lights: Option<bool>,
+    pub(super) up: Option<Spanned<String>>,
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct CameraSpec {
+    pub(super) projection: Option<Spanned<String>>,
+    pub(super) from: Option<Spanned<V3>>,
+    pub(super) to: Option<Spanned<V3>>,
+    pub(super) up: Option<Spanned<V3>>,
+    pub(super) vfov: Option<Spanned<f64>>,
+    pub(super) height: Option<Spanned<f64>>,
+    pub(super) orbit: Option<Spanned<OrbitSpec>>,
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct OrbitSpec {
+    pub(super) yaw: Spanned<f64>,
+    pub(super) pitch: Spanned<f64>,
+    pub(super) distance: Spanned<f64>,
+    pub(super) target: Option<Spanned<V3>>,
+}
+
+#[derive(Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RenderSpec {
+    pub(super) resolution: Option<Spanned<[i64; 2]>>,
+    pub(super) spp: Option<Spanned<i64>>,
+    pub(super) max_depth: Option<Spanned<i64>>,
+    pub(super) background: Option<Spanned<V3>>,
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct MaterialSpec {
+    pub(super) name: Spanned<String>,
+    pub(super) color: Option<Spanned<V3>>,
+    pub(super) texture: Option<Spanned<String>>,
+    pub(super) bands: Option<Spanned<i64>>,
+    pub(super) checker_size: Option<Spanned<f64>>,
+    pub(super) color2: Option<Spanned<V3>>,
+    pub(super) ambient: Option<Spanned<f64>>,
+    pub(super) diffuse: Option<Spanned<f64>>,
+    pub(super) specular: Option<Spanned<f64>>,
+    pub(super) shininess: Option<Spanned<f64>>,
+    pub(super) specular_model: Option<Spanned<String>>,
+    pub(super) reflectivity: Option<Spanned<f64>>,
+    pub(super) reflection_tint: Option<Spanned<f64>>,
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SphereSpec {
+    pub(super) name: Option<Spanned<String>>,
+    pub(super) center: Spanned<V3>,
+    pub(super) radius: Spanned<f64>,
+    pub(super) transform: Option<Spanned<TransformSpec>>,
+    pub(super) material: Spanned<String>,
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct PlaneSpec {
+    pub(super) point: Spanned<V3>,
+    pub(super) normal: Spanned<V3>,
+    pub(super) transform: Option<Spanned<TransformSpec>>,
+    pub(super) material: Spanned<String>,
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct QuadricSpec {
+    pub(super) name: Option<Spanned<String>>,
+    pub(super) kind: Spanned<String>,
+    pub(super) a: Option<Spanned<f64>>,
+    pub(super) b: Option<Spanned<f64>>,
+    pub(super) c: Option<Spanned<f64>>,
+    pub(super) coefficients: Option<Spanned<Vec<f64>>>,
+    pub(super) clip: Spanned<ClipSpec>,
+    pub(super) transform: Option<Spanned<TransformSpec>>,
+    pub(super) material: Spanned<String>,
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(untagged)]
+pub(super) enum ClipSpec {
+    Radius(f64),
+    Box { min: V3, max: V3 },
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(untagged)]
+pub(super) enum ScaleSpec {
+    Uniform(f64),
+    PerAxis(V3),
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct TransformSpec {
+    pub(super) translate: Option<Spanned<V3>>,
+    pub(super) rotate: Option<Spanned<V3>>,
+    /// A unit quaternion [x, y, z, w] (glTF's order), instead of `rotate`.
+    pub(super) rotation: Option<Spanned<[f64; 4]>>,
+    pub(super) scale: Option<Spanned<ScaleSpec>>,
+    /// A 4x4 affine matrix, row-major, instead of the other keys.
+    pub(super) matrix: Option<Spanned<[[f64; 4]; 4]>>,
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct MeshSpec {
+    pub(super) name: Option<Spanned<String>>,
+    pub(super) path: Option<Spanned<String>>,
+    pub(super) vertices: Option<Spanned<Vec<V3>>>,
+    pub(super) indices: Option<Spanned<Vec<[i64; 3]>>>,
+    pub(super) normals: Option<Spanned<Vec<V3>>>,
+    pub(super) transform: Option<Spanned<TransformSpec>>,
+    pub(super) material: Option<Spanned<String>>,
+    pub(super) up: Option<Spanned<String>>,
+    pub(super) scene: Option<Spanned<SelectorSpec>>,
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct LightSpec {
+    #[serde(rename = "type")]
+    pub(super) kind: Spanned<String>,
+    pub(super) position: Option<Spanned<V3>>,
+    pub(super) direction: Option<Spanned<V3>>,
+    pub(super) color: Option<Spanned<V3>>,
+    pub(super) intensity: Option<Spanned<f64>>,
+    pub(super) inner_angle: Option<Spanned<f64>>,
+    pub(super) outer_angle: Option<Spanned<f64>>,
+    pub(super) falloff: Option<Spanned<bool>>,
+}
+
