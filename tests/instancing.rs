@@ -41,7 +41,10 @@ fn instanced_columns_render_like_the_flat_scene() {
     let (instanced, stats) = render_file(&root.join("scenes/columns.toml"));
     let (flat, flat_stats) = render_file(&root.join("tests/scenes/columns-flat.toml"));
     let (share, largest) = difference(&instanced, &flat);
-    assert!(share <= 0.001, "{share} of pixels differ (largest {largest}/255)");
+    assert!(
+        share <= 0.001,
+        "{share} of pixels differ (largest {largest}/255)"
+    );
     // Stored once: the column's 3 shapes and the orb, against 21 flat.
     assert_eq!(stats.primitives_stored, 4);
     assert_eq!(flat_stats.primitives_stored, 21);
@@ -64,7 +67,8 @@ name = "m"
 "#;
 
 fn error(body: &str) -> String {
-    let e = load_text(&format!("{HEADER}{body}")).err().expect("an error");
+    let e = load_text(&format!("{HEADER}{body}"))
+        .expect_err("an error");
     assert!(e.contains("graph.toml"), "names the file: {e}");
     e
 }
@@ -84,7 +88,10 @@ name = "b"
   of = "a"
 "#,
     );
-    assert!(e.contains("cycle") && e.contains("\"a\" -> \"b\" -> \"a\""), "{e}");
+    assert!(
+        e.contains("cycle") && e.contains("\"a\" -> \"b\" -> \"a\""),
+        "{e}"
+    );
     assert!(e.starts_with("graph.toml:16:"), "{e}");
     // A group placing itself.
     let e = error("[[group]]\nname = \"s\"\n  [[group.instance]]\n  of = \"s\"\n");
@@ -94,21 +101,35 @@ name = "b"
     assert!(e.starts_with("graph.toml:9:"), "{e}");
     let sphere = "[[sphere]]\nname = \"s\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n";
     for (matrix, expected) in [
-        ("[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0, 0], [0, 0, 0, 1]]", "singular"),
-        ("[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0.5, 1]]", "affine"),
-        ("[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, nan], [0, 0, 0, 1]]", "finite"),
+        (
+            "[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0, 0], [0, 0, 0, 1]]",
+            "singular",
+        ),
+        (
+            "[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0.5, 1]]",
+            "affine",
+        ),
+        (
+            "[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, nan], [0, 0, 0, 1]]",
+            "finite",
+        ),
     ] {
         let e = error(&format!(
             "{sphere}[[instance]]\nof = \"s\"\ntransform = {{ matrix = {matrix} }}\n"
         ));
-        assert!(e.contains(expected) && e.contains("instance[0].transform.matrix"), "{e}");
+        assert!(
+            e.contains(expected) && e.contains("instance[0].transform.matrix"),
+            "{e}"
+        );
         assert!(e.starts_with("graph.toml:15:"), "{e}");
     }
     let e = error(&format!(
         "{sphere}[[instance]]\nof = \"s\"\ntransform = {{ rotation = [0, 0, 0, 0] }}\n"
     ));
     assert!(e.contains("quaternion"), "{e}");
-    let e = error("[[group]]\nname = \"g\"\n  [[group.plane]]\n  point = [0, 0, 0]\n  normal = [0, 0, 1]\n  material = \"m\"\n");
+    let e = error(
+        "[[group]]\nname = \"g\"\n  [[group.plane]]\n  point = [0, 0, 0]\n  normal = [0, 0, 1]\n  material = \"m\"\n",
+    );
     assert!(e.contains("unbounded"), "{e}");
     let e = error(&format!("{sphere}[[group]]\nname = \"s\"\n"));
     assert!(e.contains("already the name of sphere[0]"), "{e}");
@@ -118,17 +139,24 @@ name = "b"
 /// binary DAG of 2^20 placements loads from a file of a few dozen lines, in its own size.
 #[test]
 fn nesting_is_bounded_and_dags_load_at_the_cost_of_the_file() {
-    let mut deep = String::from("[[sphere]]\nname = \"g0\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n");
+    let mut deep = String::from(
+        "[[sphere]]\nname = \"g0\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n",
+    );
     for i in 1..=40 {
-        deep += &format!("[[group]]\nname = \"g{i}\"\ntemplate = true\n  [[group.instance]]\n  of = \"g{}\"\n", i - 1);
+        deep += &format!(
+            "[[group]]\nname = \"g{i}\"\ntemplate = true\n  [[group.instance]]\n  of = \"g{}\"\n",
+            i - 1
+        );
     }
     deep += "[[instance]]\nof = \"g40\"\n";
     let e = error(&deep);
     assert!(e.contains("nest more than 32"), "{e}");
 
-    let mut dag = String::from("[[sphere]]\nname = \"d0\"\ncenter = [0, 0, 0]\nradius = 0.001\nmaterial = \"m\"\n");
+    let mut dag = String::from(
+        "[[sphere]]\nname = \"d0\"\ncenter = [0, 0, 0]\nradius = 0.001\nmaterial = \"m\"\n",
+    );
     for i in 1..=20 {
-        let step = 2f64.powi(-(i as i32));
+        let step = 2f64.powi(-i);
         dag += &format!(
             "[[group]]\nname = \"d{i}\"\ntemplate = true\n  [[group.instance]]\n  of = \"d{p}\"\n  [[group.instance]]\n  of = \"d{p}\"\n  transform = {{ translate = [{step}, 0, 0] }}\n",
             p = i - 1
@@ -146,5 +174,203 @@ fn nesting_is_bounded_and_dags_load_at_the_cost_of_the_file() {
     // above at its top.
     let ray = quadray::Ray::new(glam::DVec3::new(0.5, 0.0, 1.0), -glam::DVec3::Z);
     let hit = scene.intersect(&ray).expect("a copy at x = 0.5");
-    assert!((hit.geometry.point.z - 0.001).abs() < 1e-9, "{:?}", hit.geometry.point);
+    assert!(
+        (hit.geometry.point.z - 0.001).abs() < 1e-9,
+        "{:?}",
+        hit.geometry.point
+    );
+}
+
+/// Renders any scene file quadray reads, seen by the camera and lit by the lights `like` gets
+/// (a glTF file gets a framing camera and a key light: the framing would differ, instance bounds
+/// being boxes of transformed boxes).
+fn render_any(path: &Path, like: &Path) -> (Vec<u8>, quadray::AccelStats) {
+    let mut loaded = quadray_loader::load_any(path).unwrap_or_else(|e| panic!("{e}"));
+    let view = quadray_loader::load_any(like).unwrap().description;
+    loaded.description.camera = view.camera;
+    loaded.description.lights = view.lights;
+    let mut settings = loaded.settings.render_settings();
+    settings.width = 160;
+    settings.height = 120;
+    let scene = Scene::new(loaded.description).expect("scene is valid");
+    let film = render(&scene, &settings, &NoProgress).unwrap().film;
+    (film.to_srgb8(), scene.accel().stats(scene.geometry()))
+}
+
+/// A glTF document and its buffer, written to `dir` as `name.gltf` + `name.bin`.
+fn write_gltf(
+    dir: &Path,
+    name: &str,
+    mut doc: serde_json::Value,
+    bin: &[u8],
+) -> std::path::PathBuf {
+    std::fs::write(dir.join(format!("{name}.bin")), bin).unwrap();
+    doc["buffers"][0]["uri"] = serde_json::json!(format!("{name}.bin"));
+    let path = dir.join(format!("{name}.gltf"));
+    std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+    path
+}
+
+/// Khronos' SimpleMeshes (one mesh used by two nodes) loads as one prototype placed twice and
+/// renders exactly like the same file with the mesh duplicated (which loads flat, baked).
+#[test]
+fn gltf_shared_meshes_render_like_their_copies() {
+    let dir = repo_root().join("../shared/assets/gltf/khronos/SimpleMeshes/glTF");
+    if !dir.exists() {
+        eprintln!("skipped: ../shared/assets is absent");
+        return;
+    }
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("SimpleMeshes.gltf")).unwrap())
+            .unwrap();
+    let bin = std::fs::read(dir.join("triangle.bin")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let shared = write_gltf(tmp.path(), "shared", doc.clone(), &bin);
+    let mut flat_doc = doc;
+    let mesh = flat_doc["meshes"][0].clone();
+    flat_doc["meshes"].as_array_mut().unwrap().push(mesh);
+    flat_doc["nodes"][1]["mesh"] = serde_json::json!(1);
+    let flat = write_gltf(tmp.path(), "flat", flat_doc, &bin);
+    let (a, stats) = render_any(&shared, &flat);
+    let (b, flat_stats) = render_any(&flat, &flat);
+    assert_eq!((stats.prototypes, stats.placements), (1, 2));
+    assert_eq!((flat_stats.prototypes, flat_stats.triangles_stored), (0, 2));
+    assert_eq!((stats.triangles_stored, stats.triangles_instanced), (1, 2));
+    let (share, largest) = difference(&a, &b);
+    assert!(
+        share <= 0.001,
+        "{share} of pixels differ (largest {largest}/255)"
+    );
+    assert!(a.iter().any(|&v| v != a[0]), "the triangles are visible");
+}
+
+/// A node used by two parents (glTF asks for trees; files share nodes anyway) becomes one
+/// prototype placed twice, and renders like the file with the node duplicated; a `QUADRAY_quadrics`
+/// sphere on the shared node is instanced with it.
+#[test]
+fn gltf_shared_nodes_render_like_their_copies() {
+    let dir = repo_root().join("../shared/assets/gltf/khronos/SimpleMeshes/glTF");
+    if !dir.exists() {
+        eprintln!("skipped: ../shared/assets is absent");
+        return;
+    }
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("SimpleMeshes.gltf")).unwrap())
+            .unwrap();
+    let bin = std::fs::read(dir.join("triangle.bin")).unwrap();
+    let ext = serde_json::json!({"QUADRAY_quadrics": {"shapes": [
+        {"type": "sphere", "sphere": {"radius": 0.2}}
+    ]}});
+    doc["extensionsUsed"] = serde_json::json!(["QUADRAY_quadrics"]);
+    doc["extensions"] = ext;
+    doc["nodes"] = serde_json::json!([
+        {"children": [2], "translation": [-0.8, 0.0, 0.0]},
+        {"children": [2], "translation": [0.8, 0.3, 0.0], "rotation": [0.0, 0.0, 0.3826834, 0.9238795]},
+        {"children": [3, 4], "scale": [1.0, 0.5, 1.0]},
+        {"mesh": 0},
+        {"translation": [0.5, 0.5, 0.2], "extensions": {"QUADRAY_quadrics": {"shape": 0}}}
+    ]);
+    doc["scenes"] = serde_json::json!([{"nodes": [0, 1]}]);
+    let tmp = tempfile::tempdir().unwrap();
+    let shared = write_gltf(tmp.path(), "shared", doc.clone(), &bin);
+    // The flat copy: node 2's subtree, its mesh and its shape duplicated for node 1 (so nothing
+    // is used twice).
+    let mesh = doc["meshes"][0].clone();
+    doc["meshes"].as_array_mut().unwrap().push(mesh);
+    doc["extensions"]["QUADRAY_quadrics"]["shapes"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"type": "sphere", "sphere": {"radius": 0.2}}));
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    nodes.push(serde_json::json!({"children": [6, 7], "scale": [1.0, 0.5, 1.0]}));
+    nodes.push(serde_json::json!({"mesh": 1}));
+    nodes.push(serde_json::json!({"translation": [0.5, 0.5, 0.2], "extensions": {"QUADRAY_quadrics": {"shape": 1}}}));
+    nodes[1]["children"] = serde_json::json!([5]);
+    let flat = write_gltf(tmp.path(), "flat", doc, &bin);
+    let (a, stats) = render_any(&shared, &flat);
+    let (b, flat_stats) = render_any(&flat, &flat);
+    assert_eq!(stats.prototypes, 1, "node 2 is one prototype");
+    assert_eq!(stats.placements, 2);
+    assert_eq!(
+        stats.primitives_stored, 2,
+        "one triangle and one sphere stored"
+    );
+    assert_eq!(
+        (flat_stats.prototypes, flat_stats.primitives_stored),
+        (0, 4)
+    );
+    let (share, largest) = difference(&a, &b);
+    assert!(
+        share <= 0.001,
+        "{share} of pixels differ (largest {largest}/255)"
+    );
+}
+
+/// A GLB file's JSON and binary chunks.
+fn read_glb(path: &Path) -> (serde_json::Value, Vec<u8>) {
+    let bytes = std::fs::read(path).unwrap();
+    let chunk = |at: usize| {
+        let len = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+        (&bytes[at + 8..at + 8 + len], at + 8 + len)
+    };
+    let (json, next) = chunk(12);
+    let (bin, _) = chunk(next);
+    (serde_json::from_slice(json).unwrap(), bin.to_vec())
+}
+
+/// Khronos samples whose meshes several nodes use load them once and render as before: like the
+/// same file with every shared mesh duplicated per node, which loads flat (the path every file
+/// took before instancing). The camera is the flat file's framing one.
+#[test]
+fn khronos_samples_with_shared_meshes_render_as_before() {
+    let root = repo_root().join("../shared/assets/gltf/khronos");
+    if !root.exists() {
+        eprintln!("skipped: ../shared/assets is absent");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    for name in ["2CylinderEngine", "CesiumMilkTruck", "NegativeScaleTest"] {
+        let (doc, bin) = read_glb(&root.join(format!("{name}/glTF-Binary/{name}.glb")));
+        // The buffer holds images by bufferView, so the .bin serves both copies unchanged.
+        let shared = write_gltf(tmp.path(), &format!("{name}-shared"), doc.clone(), &bin);
+        let mut flat_doc = doc;
+        let mut used = std::collections::HashSet::new();
+        let node_count = flat_doc["nodes"].as_array().map_or(0, Vec::len);
+        for i in 0..node_count {
+            let Some(mesh) = flat_doc["nodes"][i]["mesh"].as_u64() else {
+                continue;
+            };
+            if !used.insert(mesh) {
+                let copy = flat_doc["meshes"][mesh as usize].clone();
+                let meshes = flat_doc["meshes"].as_array_mut().unwrap();
+                meshes.push(copy);
+                flat_doc["nodes"][i]["mesh"] = serde_json::json!(meshes.len() - 1);
+            }
+        }
+        let flat = write_gltf(tmp.path(), &format!("{name}-flat"), flat_doc, &bin);
+        let (a, stats) = render_any(&shared, &flat);
+        let (b, flat_stats) = render_any(&flat, &flat);
+        assert!(stats.prototypes > 0, "{name} shares meshes");
+        assert_eq!(flat_stats.prototypes, 0, "{name}");
+        assert_eq!(
+            stats.triangles_instanced, flat_stats.triangles_stored as u64,
+            "{name}"
+        );
+        assert!(
+            stats.triangles_stored < flat_stats.triangles_stored,
+            "{name}"
+        );
+        let (share, largest) = difference(&a, &b);
+        assert!(
+            share <= 0.001,
+            "{name}: {share} of pixels differ (largest {largest}/255)"
+        );
+        // The framing camera follows the same bounds: vertices placed through the instances.
+        let camera = |p: &Path| quadray_loader::load_any(p).unwrap().description.camera;
+        let (c, f) = (camera(&shared), camera(&flat));
+        assert!(
+            (c.from - f.from).length() <= 1e-6 * f.from.length().max(1.0),
+            "{name}"
+        );
+    }
 }

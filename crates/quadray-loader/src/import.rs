@@ -153,20 +153,43 @@ impl Imported {
         for p in &mut g.planes {
             p.material = f(p.material);
         }
-        remap_level(&mut g.spheres, &mut g.quadrics, &mut g.meshes, &mut g.instances, &f, path)?;
+        remap_level(
+            &mut g.spheres,
+            &mut g.quadrics,
+            &mut g.meshes,
+            &mut g.instances,
+            &f,
+            path,
+        )?;
         for p in &mut g.prototypes {
-            remap_level(&mut p.spheres, &mut p.quadrics, &mut p.meshes, &mut p.instances, &f, path)?;
+            remap_level(
+                &mut p.spheres,
+                &mut p.quadrics,
+                &mut p.meshes,
+                &mut p.instances,
+                &f,
+                path,
+            )?;
         }
         Ok(())
     }
 
-    /// Number of triangles over all meshes.
+    /// Number of triangles as instanced: each placement of a prototype counts its triangles again
+    /// (saturating).
     pub fn triangle_count(&self) -> usize {
-        self.geometry
-            .meshes
-            .iter()
-            .map(|m| m.triangle_count())
-            .sum()
+        let g = &self.geometry;
+        let mut counts: Vec<u64> = Vec::with_capacity(g.prototypes.len());
+        let level = |l: quadray::Level<'_>, counts: &[u64]| {
+            let own: u64 = l.meshes.iter().map(|m| m.triangle_count() as u64).sum();
+            l.instances.iter().fold(own, |sum, inst| {
+                sum.saturating_add(counts.get(inst.prototype as usize).copied().unwrap_or(0))
+            })
+        };
+        for i in 0..g.prototypes.len() {
+            let c = level(g.level(i + 1), &counts);
+            counts.push(c);
+        }
+        usize::try_from(level(g.level(0), &counts)).unwrap_or(usize::MAX)
     }
 
     /// Bounds of every bounded primitive (planes are unbounded and ignored), if there is any.
@@ -218,10 +241,89 @@ pub enum MaterialMap {
     Replace(u32),
 }
 
-/// Bounds of the bounded primitives of `g`, instances included, if any.
+/// Bounds of the bounded primitives of `g`, instances included, if any (for framing a camera).
+///
+/// Mesh vertices are placed through every instance path, so the box is the one the same scene
+/// written flat would have, as long as the expansion stays small (at most [`EXACT_BOUNDS_WORK`]
+/// vertex placements); beyond, each prototype's box is placed by its instances instead (a box of
+/// boxes: never smaller, possibly larger). Spheres and quadrics under instances contribute their
+/// boxes' placed corners.
 pub fn geometry_bounds(g: &Geometry) -> Option<(DVec3, DVec3)> {
-    // Each prototype's box once, children first (they come before their parents), then placed
-    // by its instances' transforms (the box of the transformed corners).
+    let mut acc = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let mut budget = EXACT_BOUNDS_WORK;
+    if exact_bounds(g, 0, DAffine3::IDENTITY, &mut acc, &mut budget) {
+        return (acc.0.cmple(acc.1).all()).then_some(acc);
+    }
+    boxed_bounds(g)
+}
+
+/// Most vertex and instance placements [`geometry_bounds`] computes before it settles for boxes
+/// of boxes.
+pub const EXACT_BOUNDS_WORK: u64 = 20_000_000;
+
+/// Grows `acc` by level `level` placed by `m`; false when `budget` runs out.
+fn exact_bounds(
+    g: &Geometry,
+    level: usize,
+    m: DAffine3,
+    acc: &mut (DVec3, DVec3),
+    budget: &mut u64,
+) -> bool {
+    let l = g.level(level);
+    let mut grow = |p: DVec3| {
+        acc.0 = acc.0.min(p);
+        acc.1 = acc.1.max(p);
+    };
+    let corners = |(a, b): (DVec3, DVec3)| {
+        (0..8).map(move |c| {
+            DVec3::new(
+                if c & 1 == 0 { a.x } else { b.x },
+                if c & 2 == 0 { a.y } else { b.y },
+                if c & 4 == 0 { a.z } else { b.z },
+            )
+        })
+    };
+    let identity = level == 0;
+    for b in l
+        .spheres
+        .iter()
+        .map(|s| s.bounds())
+        .chain(l.quadrics.iter().map(|q| q.bounds()))
+    {
+        if identity {
+            grow(b.0);
+            grow(b.1);
+        } else {
+            corners(b).for_each(|c| grow(m.transform_point3(c)));
+        }
+    }
+    for mesh in l.meshes {
+        let n = mesh.positions().len() as u64;
+        if *budget < n {
+            return false;
+        }
+        *budget -= n;
+        for p in mesh.positions() {
+            grow(m.transform_point3(p.as_dvec3()));
+        }
+    }
+    l.instances.iter().all(|inst| {
+        // Each placement costs one unit, so a deep DAG of shapes without vertices ends too.
+        *budget = budget.saturating_sub(1);
+        *budget > 0
+            && exact_bounds(
+                g,
+                inst.prototype as usize + 1,
+                m * inst.transform.to_world,
+                acc,
+                budget,
+            )
+    })
+}
+
+/// Bounds as boxes of boxes: each prototype's box once, children first, placed by its instances'
+/// transforms.
+fn boxed_bounds(g: &Geometry) -> Option<(DVec3, DVec3)> {
     let mut boxes: Vec<Option<(DVec3, DVec3)>> = Vec::with_capacity(g.level_count());
     let level_box = |level: quadray::Level<'_>, boxes: &[Option<(DVec3, DVec3)>]| {
         let mut lo = DVec3::splat(f64::INFINITY);
@@ -239,7 +341,9 @@ pub fn geometry_bounds(g: &Geometry) -> Option<(DVec3, DVec3)> {
             }
         }
         for inst in level.instances {
-            let Some(Some((a, b))) = boxes.get(inst.prototype as usize) else { continue };
+            let Some(Some((a, b))) = boxes.get(inst.prototype as usize) else {
+                continue;
+            };
             for corner in 0..8 {
                 let pick = |bit: u32, x: f64, y: f64| if corner & bit == 0 { x } else { y };
                 let c = DVec3::new(pick(1, a.x, b.x), pick(2, a.y, b.y), pick(4, a.z, b.z));

@@ -75,7 +75,9 @@ pub fn merge(
         p.instances = p.instances.into_iter().map(shift).collect();
         geometry.prototypes.push(p);
     }
-    geometry.instances.extend(g.instances.into_iter().map(shift));
+    geometry
+        .instances
+        .extend(g.instances.into_iter().map(shift));
     imported.notes = imported
         .notes
         .into_iter()

@@ -15,6 +15,7 @@ pub mod gltf;
 pub mod gltf_accessor;
 pub mod gltf_camera;
 pub mod gltf_document;
+pub mod gltf_graph;
 pub mod gltf_light;
 pub mod gltf_material;
 pub mod gltf_mesh;

@@ -118,5 +118,4 @@ impl Builder<'_> {
             .unwrap_or(Vec3::ZERO);
         Ok((s, background))
     }
-
 }

@@ -121,7 +121,12 @@ impl Builder<'_> {
             }
             for (i, g) in c.groups.iter().enumerate() {
                 let key = format!("{}group[{i}]", c.key);
-                self.define(&mut st.defs, &Some(g.get_ref().name.clone()), Def::Group(g), key.clone())?;
+                self.define(
+                    &mut st.defs,
+                    &Some(g.get_ref().name.clone()),
+                    Def::Group(g),
+                    key.clone(),
+                )?;
                 todo.push(Contents::group(g.get_ref(), key));
             }
         }
@@ -160,7 +165,14 @@ impl Builder<'_> {
         let k = &c.key;
         for (i, s) in c.spheres.iter().enumerate() {
             let key = format!("{k}sphere[{i}]");
-            if self.place_named(st, names, &s.get_ref().name, &s.get_ref().transform, &key, out)? {
+            if self.place_named(
+                st,
+                names,
+                &s.get_ref().name,
+                &s.get_ref().transform,
+                &key,
+                out,
+            )? {
                 continue;
             }
             self.sphere(s, &key, names, false, out)?;
@@ -178,14 +190,28 @@ impl Builder<'_> {
         }
         for (i, q) in c.quadrics.iter().enumerate() {
             let key = format!("{k}quadric[{i}]");
-            if self.place_named(st, names, &q.get_ref().name, &q.get_ref().transform, &key, out)? {
+            if self.place_named(
+                st,
+                names,
+                &q.get_ref().name,
+                &q.get_ref().transform,
+                &key,
+                out,
+            )? {
                 continue;
             }
             out.quadrics.push(self.quadric(q, &key, names)?);
         }
         for (i, m) in c.meshes.iter().enumerate() {
             let key = format!("{k}mesh[{i}]");
-            if self.place_named(st, names, &m.get_ref().name, &m.get_ref().transform, &key, out)? {
+            if self.place_named(
+                st,
+                names,
+                &m.get_ref().name,
+                &m.get_ref().transform,
+                &key,
+                out,
+            )? {
                 continue;
             }
             self.mesh_into(st, names, m, &key, out, planes.as_deref_mut())?;
@@ -231,7 +257,10 @@ impl Builder<'_> {
         key: &str,
         out: &mut Prototype,
     ) -> Result<bool, LoadError> {
-        let Some(name) = name.as_ref().filter(|n| st.referenced.contains(n.get_ref())) else {
+        let Some(name) = name
+            .as_ref()
+            .filter(|n| st.referenced.contains(n.get_ref()))
+        else {
             return Ok(false);
         };
         let prototype = self.prototype(st, names, name.get_ref(), name.span())?;
@@ -259,13 +288,20 @@ impl Builder<'_> {
                 "of",
                 format!(
                     "no group or named shape \"{name}\" (defined: {})",
-                    if known.is_empty() { "none".into() } else { known.join(", ") }
+                    if known.is_empty() {
+                        "none".into()
+                    } else {
+                        known.join(", ")
+                    }
                 ),
             ));
         };
         let key = key.clone();
         if let Some(start) = st.visiting.iter().position(|v| v == name) {
-            let mut cycle: Vec<String> = st.visiting[start..].iter().map(|n| format!("\"{n}\"")).collect();
+            let mut cycle: Vec<String> = st.visiting[start..]
+                .iter()
+                .map(|n| format!("\"{n}\""))
+                .collect();
             cycle.push(format!("\"{name}\""));
             return Err(self.err(
                 span,
@@ -352,7 +388,9 @@ impl Builder<'_> {
         }
         let transform = self.transform(&s.transform, &format!("{key}.transform"))?;
         let to_parent = transform.to_world * glam::DAffine3::from_translation(center);
-        match placed_sphere(to_parent, radius, material).map_err(|e| self.err(spec.span(), key, e))? {
+        match placed_sphere(to_parent, radius, material)
+            .map_err(|e| self.err(spec.span(), key, e))?
+        {
             crate::import::PlacedShape::Sphere(s) => out.spheres.push(s),
             crate::import::PlacedShape::Quadric(q) => out.quadrics.push(*q),
             crate::import::PlacedShape::Plane(_) => unreachable!("a sphere is never a plane"),
@@ -371,7 +409,9 @@ impl Builder<'_> {
         let t = self.transform(&p.transform, &format!("{key}.transform"))?;
         let normal = self.unit(&p.normal, &format!("{key}.normal"))?;
         Ok(Plane {
-            point: t.to_world.transform_point3(self.vec3(&p.point, &format!("{key}.point"))?),
+            point: t
+                .to_world
+                .transform_point3(self.vec3(&p.point, &format!("{key}.point"))?),
             normal: (t.normal_to_world * normal).normalize(),
             material: self.material_id(names, &p.material, &format!("{key}.material"))?,
         })

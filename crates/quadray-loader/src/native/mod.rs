@@ -22,7 +22,6 @@ use std::path::Path;
 use toml::Spanned;
 
 /// The scene format version this loader reads.
-
 mod camera;
 mod groups;
 mod light;
@@ -363,5 +362,4 @@ impl Builder<'_> {
             },
         )
     }
-
 }

@@ -4,7 +4,11 @@
 use super::*;
 
 impl Builder<'_> {
-    pub(super) fn selector(&self, s: &Spanned<SelectorSpec>, key: &str) -> Result<Selector, LoadError> {
+    pub(super) fn selector(
+        &self,
+        s: &Spanned<SelectorSpec>,
+        key: &str,
+    ) -> Result<Selector, LoadError> {
         match s.get_ref() {
             SelectorSpec::Index(i) if *i >= 0 => Ok(Selector::Index(*i as usize)),
             SelectorSpec::Index(i) => Err(self.err(
@@ -16,7 +20,11 @@ impl Builder<'_> {
         }
     }
 
-    pub(super) fn up_axis(&self, up: &Option<Spanned<String>>, key: &str) -> Result<UpAxis, LoadError> {
+    pub(super) fn up_axis(
+        &self,
+        up: &Option<Spanned<String>>,
+        key: &str,
+    ) -> Result<UpAxis, LoadError> {
         match up.as_ref().map(|u| (u.get_ref().as_str(), u.span())) {
             None | Some(("y", _)) => Ok(UpAxis::Y),
             Some(("z", _)) => Ok(UpAxis::Z),
@@ -71,7 +79,6 @@ impl Builder<'_> {
             .map_err(|e| self.include_err(Some(path_spec), &format!("{key}.path"), e))?;
         Ok((imported, (path, replace)))
     }
-
 
     pub(super) fn quadric(
         &self,
@@ -225,5 +232,4 @@ impl Builder<'_> {
         Mesh::new(positions, indices, normals, material)
             .map_err(|e| self.err(spec.span(), key, e.to_string()))
     }
-
 }

@@ -5,7 +5,6 @@ use super::V3;
 use serde::Deserialize;
 use toml::Spanned;
 
-
 #[derive(Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct SceneFile {
@@ -218,4 +217,3 @@ pub(super) struct LightSpec {
     pub(super) outer_angle: Option<Spanned<f64>>,
     pub(super) falloff: Option<Spanned<bool>>,
 }
-

@@ -1,9 +1,8 @@
 //! Unit tests of the native format: values, errors and their locations.
 
+use super::*;
 
-    use super::*;
-
-    const MINIMAL: &str = r#"
+const MINIMAL: &str = r#"
 version = 1
 [camera]
 from = [0, -5, 1]
@@ -13,18 +12,18 @@ name = "red"
 color = [0.8, 0.1, 0.1]
 "#;
 
-    fn parse(extra: &str) -> Result<LoadedScene, LoadError> {
-        parse_scene(&format!("{MINIMAL}{extra}"), Path::new("t.toml"))
-    }
+fn parse(extra: &str) -> Result<LoadedScene, LoadError> {
+    parse_scene(&format!("{MINIMAL}{extra}"), Path::new("t.toml"))
+}
 
-    fn error(extra: &str) -> String {
-        parse(extra).unwrap_err().to_string()
-    }
+fn error(extra: &str) -> String {
+    parse(extra).unwrap_err().to_string()
+}
 
-    #[test]
-    fn loads_every_kind_of_item() {
-        let s = parse(
-            r#"
+#[test]
+fn loads_every_kind_of_item() {
+    let s = parse(
+        r#"
 [render]
 resolution = [320, 200]
 spp = 4
@@ -63,264 +62,259 @@ intensity = 10
 type = "directional"
 direction = [0, 0, -1]
 "#,
-        )
-        .unwrap();
-        let g = &s.description.geometry;
-        assert_eq!(
-            (
-                g.spheres.len(),
-                g.planes.len(),
-                g.quadrics.len(),
-                g.meshes.len()
-            ),
-            (1, 1, 2, 1)
-        );
-        assert_eq!(
-            s.settings,
-            SceneSettings {
-                width: 320,
-                height: 200,
-                spp: 4,
-                max_depth: 8
-            }
-        );
-        assert_eq!(g.planes[0].normal, DVec3::Z);
-        assert_eq!(s.description.lights.len(), 2);
-        assert_eq!(s.material_names, ["red", "ramp"]);
-        quadray::Scene::new(s.description).unwrap();
-    }
+    )
+    .unwrap();
+    let g = &s.description.geometry;
+    assert_eq!(
+        (
+            g.spheres.len(),
+            g.planes.len(),
+            g.quadrics.len(),
+            g.meshes.len()
+        ),
+        (1, 1, 2, 1)
+    );
+    assert_eq!(
+        s.settings,
+        SceneSettings {
+            width: 320,
+            height: 200,
+            spp: 4,
+            max_depth: 8
+        }
+    );
+    assert_eq!(g.planes[0].normal, DVec3::Z);
+    assert_eq!(s.description.lights.len(), 2);
+    assert_eq!(s.material_names, ["red", "ramp"]);
+    quadray::Scene::new(s.description).unwrap();
+}
 
-    #[test]
-    fn errors_name_file_line_column_and_key() {
-        let e = error("[[sphere]]\ncenter = [0, 0, 0]\nradius = -1\nmaterial = \"red\"\n");
-        assert!(
-            e.starts_with("t.toml:11:10: `sphere[0].radius`: must be positive"),
-            "{e}"
-        );
-        let e = error("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"blue\"\n");
-        assert!(
-            e.contains(":12:12: `sphere[0].material`: unknown material \"blue\""),
-            "{e}"
-        );
-    }
+#[test]
+fn errors_name_file_line_column_and_key() {
+    let e = error("[[sphere]]\ncenter = [0, 0, 0]\nradius = -1\nmaterial = \"red\"\n");
+    assert!(
+        e.starts_with("t.toml:11:10: `sphere[0].radius`: must be positive"),
+        "{e}"
+    );
+    let e = error("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"blue\"\n");
+    assert!(
+        e.contains(":12:12: `sphere[0].material`: unknown material \"blue\""),
+        "{e}"
+    );
+}
 
-    #[test]
-    fn syntax_and_unknown_keys_are_located() {
-        let e = error("[[sphere]]\ncentre = [0, 0, 0]\n");
-        assert!(
-            e.starts_with("t.toml:10:1:") && e.contains("unknown field `centre`"),
-            "{e}"
-        );
-        let e = parse_scene("version = 1\n[camera\n", Path::new("bad.toml"))
-            .unwrap_err()
-            .to_string();
-        assert!(e.starts_with("bad.toml:2:"), "{e}");
-    }
+#[test]
+fn syntax_and_unknown_keys_are_located() {
+    let e = error("[[sphere]]\ncentre = [0, 0, 0]\n");
+    assert!(
+        e.starts_with("t.toml:10:1:") && e.contains("unknown field `centre`"),
+        "{e}"
+    );
+    let e = parse_scene("version = 1\n[camera\n", Path::new("bad.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("bad.toml:2:"), "{e}");
+}
 
-    #[test]
-    fn rejects_nan_degenerate_and_absurd_values() {
-        assert!(
-            error("[[sphere]]\ncenter = [nan, 0, 0]\nradius = 1\nmaterial = \"red\"\n")
-                .contains("finite")
-        );
-        let e = error(
-            "[[quadric]]\nkind = \"general\"\ncoefficients = [0,0,0,0,0,0,0,0,0,0]\nclip = 1\nmaterial = \"red\"\n",
-        );
-        assert!(
-            e.contains("degenerate quadric: all coefficients are zero"),
-            "{e}"
-        );
-        let e = error(
-            "[[quadric]]\nkind = \"general\"\ncoefficients = [1,1,1,0,0,0,0,0,0,1]\nclip = 1\nmaterial = \"red\"\n",
-        );
-        assert!(e.contains("empty"), "{e}");
-        let e = error(
-            "[[quadric]]\nkind = \"ellipsoid\"\nclip = { min = [0, 0, 0], max = [1, 1, 0] }\nmaterial = \"red\"\n",
-        );
-        assert!(
-            e.contains(":11:8:") && e.contains("clip box is empty"),
-            "{e}"
-        );
-        assert!(error("[render]\nresolution = [100000, 10]\n").contains("render.resolution"));
-        assert!(error("[render]\nspp = 0\n").contains("render.spp"));
-        let e = error(
-            "[[mesh]]\nvertices = [[0,0,0],[1,0,0],[0,1,0]]\nindices = [[0,1,3]]\nmaterial = \"red\"\n",
-        );
-        assert!(
-            e.contains("mesh[0].indices[0]") && e.contains("out of range"),
-            "{e}"
-        );
-        assert!(
-            error("[[quadric]]\nkind = \"torus\"\nclip = 1\nmaterial = \"red\"\n")
-                .contains("unknown kind \"torus\"")
-        );
-    }
+#[test]
+fn rejects_nan_degenerate_and_absurd_values() {
+    assert!(
+        error("[[sphere]]\ncenter = [nan, 0, 0]\nradius = 1\nmaterial = \"red\"\n")
+            .contains("finite")
+    );
+    let e = error(
+        "[[quadric]]\nkind = \"general\"\ncoefficients = [0,0,0,0,0,0,0,0,0,0]\nclip = 1\nmaterial = \"red\"\n",
+    );
+    assert!(
+        e.contains("degenerate quadric: all coefficients are zero"),
+        "{e}"
+    );
+    let e = error(
+        "[[quadric]]\nkind = \"general\"\ncoefficients = [1,1,1,0,0,0,0,0,0,1]\nclip = 1\nmaterial = \"red\"\n",
+    );
+    assert!(e.contains("empty"), "{e}");
+    let e = error(
+        "[[quadric]]\nkind = \"ellipsoid\"\nclip = { min = [0, 0, 0], max = [1, 1, 0] }\nmaterial = \"red\"\n",
+    );
+    assert!(
+        e.contains(":11:8:") && e.contains("clip box is empty"),
+        "{e}"
+    );
+    assert!(error("[render]\nresolution = [100000, 10]\n").contains("render.resolution"));
+    assert!(error("[render]\nspp = 0\n").contains("render.spp"));
+    let e = error(
+        "[[mesh]]\nvertices = [[0,0,0],[1,0,0],[0,1,0]]\nindices = [[0,1,3]]\nmaterial = \"red\"\n",
+    );
+    assert!(
+        e.contains("mesh[0].indices[0]") && e.contains("out of range"),
+        "{e}"
+    );
+    assert!(
+        error("[[quadric]]\nkind = \"torus\"\nclip = 1\nmaterial = \"red\"\n")
+            .contains("unknown kind \"torus\"")
+    );
+}
 
-    #[test]
-    fn point_lights_can_drop_their_falloff() {
-        let s = parse(
-            "[[light]]\ntype = \"point\"\nposition = [0, 0, 5]\nfalloff = false\nintensity = 0.5\n",
-        )
-        .unwrap();
-        assert_eq!(
-            s.description.lights[0],
-            Light::PointNoFalloff {
-                position: DVec3::new(0.0, 0.0, 5.0),
-                irradiance: Vec3::splat(0.5),
-            }
-        );
-        let s =
-            parse("[[light]]\ntype = \"point\"\nposition = [0, 0, 5]\nfalloff = true\n").unwrap();
-        assert!(matches!(s.description.lights[0], Light::Point { .. }));
-        let e =
-            error("[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\nfalloff = false\n");
-        assert!(e.contains("a directional light has no falloff"), "{e}");
-    }
+#[test]
+fn point_lights_can_drop_their_falloff() {
+    let s = parse(
+        "[[light]]\ntype = \"point\"\nposition = [0, 0, 5]\nfalloff = false\nintensity = 0.5\n",
+    )
+    .unwrap();
+    assert_eq!(
+        s.description.lights[0],
+        Light::PointNoFalloff {
+            position: DVec3::new(0.0, 0.0, 5.0),
+            irradiance: Vec3::splat(0.5),
+        }
+    );
+    let s = parse("[[light]]\ntype = \"point\"\nposition = [0, 0, 5]\nfalloff = true\n").unwrap();
+    assert!(matches!(s.description.lights[0], Light::Point { .. }));
+    let e = error("[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\nfalloff = false\n");
+    assert!(e.contains("a directional light has no falloff"), "{e}");
+}
 
-    #[test]
-    fn camera_variants() {
-        let orbit = "version = 1\n[camera]\norbit = { yaw = 30, pitch = 20, distance = 8 }\n";
-        let s = parse_scene(orbit, Path::new("o.toml")).unwrap();
-        assert!(((s.description.camera.from).length() - 8.0).abs() < 1e-12);
-        let ortho = "version = 1\n[camera]\nprojection = \"orthographic\"\nfrom = [0,0,5]\nto = [0,0,0]\nup = [0,1,0]\nheight = 3\n";
-        let s = parse_scene(ortho, Path::new("o.toml")).unwrap();
-        assert_eq!(
-            s.description.camera.projection,
-            Projection::Orthographic { height: 3.0 }
-        );
-        let e = parse_scene(
-            "version = 2\n[camera]\nfrom=[0,0,1]\nto=[0,0,0]\n",
-            Path::new("v.toml"),
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("version"));
-    }
+#[test]
+fn camera_variants() {
+    let orbit = "version = 1\n[camera]\norbit = { yaw = 30, pitch = 20, distance = 8 }\n";
+    let s = parse_scene(orbit, Path::new("o.toml")).unwrap();
+    assert!(((s.description.camera.from).length() - 8.0).abs() < 1e-12);
+    let ortho = "version = 1\n[camera]\nprojection = \"orthographic\"\nfrom = [0,0,5]\nto = [0,0,0]\nup = [0,1,0]\nheight = 3\n";
+    let s = parse_scene(ortho, Path::new("o.toml")).unwrap();
+    assert_eq!(
+        s.description.camera.projection,
+        Projection::Orthographic { height: 3.0 }
+    );
+    let e = parse_scene(
+        "version = 2\n[camera]\nfrom=[0,0,1]\nto=[0,0,0]\n",
+        Path::new("v.toml"),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("version"));
+}
 
-    fn temp_dir(name: &str) -> std::path::PathBuf {
-        let d = std::env::temp_dir().join(format!("quadray-native-{name}-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("quadray-native-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
 
-    const TRIANGLE_OBJ: &str = "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl blue\nf 1 2 3\n";
+const TRIANGLE_OBJ: &str = "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl blue\nf 1 2 3\n";
 
-    #[test]
-    fn mesh_files_resolve_against_the_scene_and_take_transforms_and_overrides() {
-        let dir = temp_dir("meshfile");
-        std::fs::create_dir_all(dir.join("models")).unwrap();
-        std::fs::write(dir.join("models/tri.obj"), TRIANGLE_OBJ).unwrap();
-        std::fs::write(dir.join("models/tri.mtl"), "newmtl blue\nKd 0 0 1\n").unwrap();
-        let text = format!(
-            "{MINIMAL}[[mesh]]\npath = \"models\\\\tri.obj\"\ntransform = {{ translate = [0, 0, 5] }}\n\
+#[test]
+fn mesh_files_resolve_against_the_scene_and_take_transforms_and_overrides() {
+    let dir = temp_dir("meshfile");
+    std::fs::create_dir_all(dir.join("models")).unwrap();
+    std::fs::write(dir.join("models/tri.obj"), TRIANGLE_OBJ).unwrap();
+    std::fs::write(dir.join("models/tri.mtl"), "newmtl blue\nKd 0 0 1\n").unwrap();
+    let text = format!(
+        "{MINIMAL}[[mesh]]\npath = \"models\\\\tri.obj\"\ntransform = {{ translate = [0, 0, 5] }}\n\
              [[mesh]]\npath = \"models/tri.obj\"\nup = \"z\"\nmaterial = \"red\"\n"
-        );
-        let s = parse_scene(&text, &dir.join("scene.toml")).unwrap();
-        let g = &s.description.geometry;
-        assert_eq!(g.meshes.len(), 2);
-        // y-up file rotated to z-up, then moved up by 5: (0, 1, 0) lands at (0, 0, 6).
-        assert!(g.meshes[0].positions().contains(&Vec3::new(0.0, 0.0, 6.0)));
-        assert_eq!(s.material_names, ["red", "tri.obj:blue"]);
-        assert_eq!(g.meshes[0].material(), 1);
-        assert_eq!(
-            s.description.materials[1].texture,
-            Texture::Constant(Vec3::Z)
-        );
-        // The override takes the scene's material, and `up = "z"` keeps coordinates.
-        assert_eq!(g.meshes[1].material(), 0);
-        assert!(g.meshes[1].positions().contains(&Vec3::new(0.0, 1.0, 0.0)));
-        quadray::Scene::new(s.description).unwrap();
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
+    );
+    let s = parse_scene(&text, &dir.join("scene.toml")).unwrap();
+    let g = &s.description.geometry;
+    assert_eq!(g.meshes.len(), 2);
+    // y-up file rotated to z-up, then moved up by 5: (0, 1, 0) lands at (0, 0, 6).
+    assert!(g.meshes[0].positions().contains(&Vec3::new(0.0, 0.0, 6.0)));
+    assert_eq!(s.material_names, ["red", "tri.obj:blue"]);
+    assert_eq!(g.meshes[0].material(), 1);
+    assert_eq!(
+        s.description.materials[1].texture,
+        Texture::Constant(Vec3::Z)
+    );
+    // The override takes the scene's material, and `up = "z"` keeps coordinates.
+    assert_eq!(g.meshes[1].material(), 0);
+    assert!(g.meshes[1].positions().contains(&Vec3::new(0.0, 1.0, 0.0)));
+    quadray::Scene::new(s.description).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
 
-    #[test]
-    fn includes_bring_lights_and_camera_and_errors_name_both_files() {
-        let dir = temp_dir("include");
-        let inner = parse_scene(
+#[test]
+fn includes_bring_lights_and_camera_and_errors_name_both_files() {
+    let dir = temp_dir("include");
+    let inner = parse_scene(
             "version = 1\n[camera]\nfrom = [0, -4, 1]\nto = [0, 0, 0]\n[render]\nresolution = [400, 200]\n\
              [[material]]\nname = \"m\"\n[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n\
              [[light]]\ntype = \"point\"\nposition = [0, 0, 3]\n",
             Path::new("inner.toml"),
         )
         .unwrap();
-        crate::export::export_gltf(&inner, &dir.join("part.gltf")).unwrap();
-        let text = "version = 1\n[[material]]\nname = \"red\"\n\
+    crate::export::export_gltf(&inner, &dir.join("part.gltf")).unwrap();
+    let text = "version = 1\n[[material]]\nname = \"red\"\n\
                     [[include]]\npath = \"part.gltf\"\ntransform = { translate = [10, 0, 0] }\n\
                     [[sphere]]\ncenter = [0, 0, 0]\nradius = 0.5\nmaterial = \"red\"\n";
-        let s = parse_scene(text, &dir.join("scene.toml")).unwrap();
-        let g = &s.description.geometry;
-        assert_eq!(g.spheres.len(), 2);
-        assert!((g.spheres[1].center - DVec3::new(10.0, 0.0, 0.0)).length() < 1e-12);
-        assert_eq!(s.description.lights.len(), 1);
-        // No [camera]: the included one, moved with the include, and its aspect.
-        assert!((s.description.camera.from - DVec3::new(10.0, -4.0, 1.0)).length() < 1e-9);
-        assert_eq!((s.settings.width, s.settings.height), (640, 320));
-        assert!(
-            s.notes.iter().any(|n| n.contains("included file's camera")),
-            "{:?}",
-            s.notes
-        );
-        let no_lights = text.replace("[[sphere]]", "lights = false\n[[sphere]]");
-        let s = parse_scene(&no_lights, &dir.join("scene.toml")).unwrap();
-        assert!(s.description.lights.is_empty());
-        // A missing file: the scene, the line of `path`, and the file that is missing.
-        let e = parse_scene(
-            &text.replace("part.gltf", "gone.glb"),
-            &dir.join("scene.toml"),
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(
-            e.contains("scene.toml:5:8: `include[0].path`") && e.contains("gone.glb"),
-            "{e}"
-        );
-        let e = parse_scene(
-            "version = 1\n[[include]]\npath = \"part.gltf\"\ncamera = \"nope\"\n",
-            &dir.join("scene.toml"),
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(
-            e.contains("include[0].camera") && e.contains("no camera \"nope\""),
-            "{e}"
-        );
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
+    let s = parse_scene(text, &dir.join("scene.toml")).unwrap();
+    let g = &s.description.geometry;
+    assert_eq!(g.spheres.len(), 2);
+    assert!((g.spheres[1].center - DVec3::new(10.0, 0.0, 0.0)).length() < 1e-12);
+    assert_eq!(s.description.lights.len(), 1);
+    // No [camera]: the included one, moved with the include, and its aspect.
+    assert!((s.description.camera.from - DVec3::new(10.0, -4.0, 1.0)).length() < 1e-9);
+    assert_eq!((s.settings.width, s.settings.height), (640, 320));
+    assert!(
+        s.notes.iter().any(|n| n.contains("included file's camera")),
+        "{:?}",
+        s.notes
+    );
+    let no_lights = text.replace("[[sphere]]", "lights = false\n[[sphere]]");
+    let s = parse_scene(&no_lights, &dir.join("scene.toml")).unwrap();
+    assert!(s.description.lights.is_empty());
+    // A missing file: the scene, the line of `path`, and the file that is missing.
+    let e = parse_scene(
+        &text.replace("part.gltf", "gone.glb"),
+        &dir.join("scene.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("scene.toml:5:8: `include[0].path`") && e.contains("gone.glb"),
+        "{e}"
+    );
+    let e = parse_scene(
+        "version = 1\n[[include]]\npath = \"part.gltf\"\ncamera = \"nope\"\n",
+        &dir.join("scene.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("include[0].camera") && e.contains("no camera \"nope\""),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
 
-    #[test]
-    fn spot_lights_and_mesh_form_errors() {
-        let s = parse(
+#[test]
+fn spot_lights_and_mesh_form_errors() {
+    let s = parse(
             "[[light]]\ntype = \"spot\"\nposition = [0, 0, 5]\ndirection = [0, 0, -1]\ninner_angle = 10\nouter_angle = 20\n",
         )
         .unwrap();
-        let Light::Spot {
-            cos_inner,
-            cos_outer,
-            ..
-        } = s.description.lights[0]
-        else {
-            panic!("not a spot light")
-        };
-        assert!((cos_inner - 10f64.to_radians().cos()).abs() < 1e-15);
-        assert!((cos_outer - 20f64.to_radians().cos()).abs() < 1e-15);
-        assert!(
-            error("[[light]]\ntype = \"spot\"\nposition = [0, 0, 5]\n")
-                .contains("needs `direction`")
-        );
-        assert!(error("[[light]]\ntype = \"spot\"\nposition = [0,0,5]\ndirection = [0,0,-1]\ninner_angle = 30\nouter_angle = 20\n").contains("must not exceed"));
-        assert!(
-            error("[[light]]\ntype = \"point\"\nposition = [0,0,5]\nouter_angle = 20\n")
-                .contains("only spot lights")
-        );
-        let e = error("[[mesh]]\npath = \"a.obj\"\nvertices = [[0,0,0]]\n");
-        assert!(e.contains("either read from `path` or given inline"), "{e}");
-        assert!(
-            error("[[mesh]]\nvertices = [[0,0,0]]\nindices = [[0,0,0]]\n")
-                .contains("needs `material`")
-        );
-        let e = error("[[mesh]]\npath = \"model.ply\"\n");
-        assert!(
-            e.contains("`mesh[0].path`") && e.contains("only .obj, .gltf and .glb"),
-            "{e}"
-        );
-    }
-
+    let Light::Spot {
+        cos_inner,
+        cos_outer,
+        ..
+    } = s.description.lights[0]
+    else {
+        panic!("not a spot light")
+    };
+    assert!((cos_inner - 10f64.to_radians().cos()).abs() < 1e-15);
+    assert!((cos_outer - 20f64.to_radians().cos()).abs() < 1e-15);
+    assert!(
+        error("[[light]]\ntype = \"spot\"\nposition = [0, 0, 5]\n").contains("needs `direction`")
+    );
+    assert!(error("[[light]]\ntype = \"spot\"\nposition = [0,0,5]\ndirection = [0,0,-1]\ninner_angle = 30\nouter_angle = 20\n").contains("must not exceed"));
+    assert!(
+        error("[[light]]\ntype = \"point\"\nposition = [0,0,5]\nouter_angle = 20\n")
+            .contains("only spot lights")
+    );
+    let e = error("[[mesh]]\npath = \"a.obj\"\nvertices = [[0,0,0]]\n");
+    assert!(e.contains("either read from `path` or given inline"), "{e}");
+    assert!(
+        error("[[mesh]]\nvertices = [[0,0,0]]\nindices = [[0,0,0]]\n").contains("needs `material`")
+    );
+    let e = error("[[mesh]]\npath = \"model.ply\"\n");
+    assert!(
+        e.contains("`mesh[0].path`") && e.contains("only .obj, .gltf and .glb"),
+        "{e}"
+    );
+}

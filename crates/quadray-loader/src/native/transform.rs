@@ -86,7 +86,10 @@ impl Builder<'_> {
             return Err(self.err(
                 q.span(),
                 key,
-                format!("must be a finite, nonzero quaternion [x, y, z, w], got {q:?}", q = q.get_ref()),
+                format!(
+                    "must be a finite, nonzero quaternion [x, y, z, w], got {q:?}",
+                    q = q.get_ref()
+                ),
             ));
         }
         Ok(quat / length)
@@ -96,7 +99,11 @@ impl Builder<'_> {
     fn matrix(&self, m: &Spanned<[[f64; 4]; 4]>, key: &str) -> Result<Transform, LoadError> {
         let rows = m.get_ref();
         if rows.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(self.err(m.span(), key, "must be finite numbers (found NaN or infinity)"));
+            return Err(self.err(
+                m.span(),
+                key,
+                "must be finite numbers (found NaN or infinity)",
+            ));
         }
         if rows[3] != [0.0, 0.0, 0.0, 1.0] {
             return Err(self.err(

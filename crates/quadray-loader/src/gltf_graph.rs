@@ -1,0 +1,552 @@
+//! A glTF scene's node graph turned into quadray's levels, without expanding it.
+//!
+//! - A node referenced more than once (glTF asks for trees, but files reuse nodes) becomes one
+//!   [`Prototype`] holding its subtree in its own frame, placed by an [`Instance`] per reference:
+//!   a node DAG that expands to millions of placements loads in the time of its own size.
+//! - A mesh, or a `QUADRAY_quadrics` shape, used by several nodes becomes a prototype of its own,
+//!   placed by each node; one used once is placed in its level directly (baked), as before.
+//! - Cameras and lights are placed on every path that reaches them (their subtrees are walked
+//!   expanded, and only those).
+
+use crate::error::LoadError;
+use crate::gltf_document::GltfFile;
+use crate::gltf_material::{MaterialUse, Materials};
+use crate::import::{Imported, PlacedShape};
+use crate::quadrics_ext::{self, NodeExtension, RootExtension};
+use crate::{gltf_camera, gltf_light, gltf_mesh};
+use glam::DAffine3;
+use quadray::{Instance, Plane, Prototype, Transform};
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+/// Deepest node hierarchy accepted; deeper means a cycle (which glTF forbids) or an absurd file.
+pub const MAX_DEPTH: usize = 1024;
+/// Most camera and light placements one scene may expand to.
+pub const MAX_INSTANCES: usize = 1 << 20;
+/// Most triangles one import may store (about 20 GB of meshes and BVH).
+pub const MAX_TRIANGLES: usize = 200_000_000;
+
+/// Who references whom among the nodes the chosen roots reach.
+struct NodeGraph {
+    /// References to each node from reached parents and from the roots.
+    refs: Vec<u32>,
+    /// Nodes using each mesh (without a `QUADRAY_quadrics` shape, which replaces the mesh).
+    mesh_users: Vec<u32>,
+    /// Nodes using each `QUADRAY_quadrics` shape.
+    shape_users: HashMap<usize, u32>,
+    /// Whether a node's subtree holds a camera or a light.
+    has_camera_or_light: Vec<bool>,
+    /// Placements of each node once the graph is expanded (saturating).
+    placements: Vec<u64>,
+    /// Placements of each mesh: its nodes' placements summed.
+    mesh_placements: Vec<u64>,
+}
+
+/// The `QUADRAY_quadrics` shape a node carries, if any.
+fn node_shape(node: &gltf::Node<'_>, path: &Path) -> Result<Option<NodeExtension>, LoadError> {
+    node.extension_value(quadrics_ext::EXTENSION)
+        .map(|v| {
+            serde_json::from_value::<NodeExtension>(v.clone()).map_err(|e| {
+                LoadError::invalid(
+                    path,
+                    None,
+                    format!(
+                        "nodes[{}].extensions.{}",
+                        node.index(),
+                        quadrics_ext::EXTENSION
+                    ),
+                    e.to_string(),
+                )
+            })
+        })
+        .transpose()
+}
+
+impl NodeGraph {
+    /// Walks the graph from `roots` once per node (not per path), rejecting cycles and depth
+    /// beyond [`MAX_DEPTH`].
+    fn new(
+        doc: &gltf::Document,
+        roots: &[gltf::Node<'_>],
+        path: &Path,
+    ) -> Result<NodeGraph, LoadError> {
+        let n = doc.nodes().len();
+        let mut g = NodeGraph {
+            refs: vec![0; n],
+            mesh_users: vec![0; doc.meshes().len()],
+            shape_users: HashMap::new(),
+            has_camera_or_light: vec![false; n],
+            placements: vec![0; n],
+            mesh_placements: vec![0; doc.meshes().len()],
+        };
+        // Iterative depth-first search: 0 unseen, 1 on the current path, 2 done. `order` lists
+        // nodes finished, children before parents.
+        let mut state = vec![0u8; n];
+        let mut order = Vec::new();
+        for root in roots {
+            g.refs[root.index()] += 1;
+            g.placements[root.index()] = g.placements[root.index()].saturating_add(1);
+            if state[root.index()] != 0 {
+                continue;
+            }
+            let mut stack: Vec<(gltf::Node<'_>, bool)> = vec![(root.clone(), false)];
+            while let Some((node, finished)) = stack.pop() {
+                let i = node.index();
+                if finished {
+                    state[i] = 2;
+                    order.push(i);
+                    continue;
+                }
+                if state[i] != 0 {
+                    continue;
+                }
+                state[i] = 1;
+                if stack.len() > MAX_DEPTH * 2 + 1 {
+                    return Err(LoadError::invalid(
+                        path,
+                        None,
+                        format!("nodes[{i}]"),
+                        format!("the node hierarchy is deeper than {MAX_DEPTH} levels"),
+                    ));
+                }
+                stack.push((node.clone(), true));
+                match node_shape(&node, path)? {
+                    Some(ext) => *g.shape_users.entry(ext.shape).or_default() += 1,
+                    None => {
+                        if let Some(mesh) = node.mesh() {
+                            g.mesh_users[mesh.index()] += 1;
+                        }
+                    }
+                }
+                g.has_camera_or_light[i] = node.camera().is_some() || node.light().is_some();
+                for child in node.children() {
+                    let c = child.index();
+                    g.refs[c] += 1;
+                    if state[c] == 1 {
+                        return Err(LoadError::invalid(
+                            path,
+                            None,
+                            format!("nodes[{i}].children"),
+                            format!("node {c} contains itself (through node {i}): a cycle"),
+                        ));
+                    }
+                    stack.push((child, false));
+                }
+            }
+        }
+        // Parents after children in `order`: walk it backwards to push placements down, and
+        // forwards to pull "holds a camera or light" up.
+        for &i in order.iter().rev() {
+            let node = doc.nodes().nth(i).expect("reached nodes exist");
+            for child in node.children() {
+                let c = child.index();
+                g.placements[c] = g.placements[c].saturating_add(g.placements[i]);
+            }
+        }
+        for &i in &order {
+            let node = doc.nodes().nth(i).expect("reached nodes exist");
+            if let (Some(mesh), None) = (node.mesh(), node_shape(&node, path)?) {
+                let p = &mut g.mesh_placements[mesh.index()];
+                *p = p.saturating_add(g.placements[i]);
+            }
+            if node.children().any(|c| g.has_camera_or_light[c.index()]) {
+                g.has_camera_or_light[i] = true;
+            }
+        }
+        Ok(g)
+    }
+}
+
+/// The build of one scene's levels.
+pub(crate) struct GraphBuild<'a> {
+    file: &'a GltfFile,
+    path: &'a Path,
+    shapes: &'a RootExtension,
+    skip_materials: bool,
+    graph: NodeGraph,
+    /// Node, mesh and shape prototypes built so far.
+    node_protos: HashMap<usize, Option<u32>>,
+    mesh_protos: HashMap<usize, u32>,
+    shape_protos: HashMap<usize, u32>,
+    /// The materials met so far.
+    pub(crate) materials: Materials<'a>,
+    /// Notes for the user.
+    pub(crate) notes: Vec<String>,
+    /// Primitives skipped by mode.
+    pub(crate) skipped_modes: BTreeMap<&'static str, usize>,
+    /// What was not evaluated (skins, morph targets).
+    pub(crate) rest_pose: Vec<&'static str>,
+    /// Triangles dropped for a repeated vertex index, as instanced.
+    pub(crate) degenerate: usize,
+    triangles: usize,
+    camera_light_placements: usize,
+    /// Brightest light intensity, and whether a light's range was ignored.
+    pub(crate) brightest: f32,
+    /// Whether some light's `range` was ignored.
+    pub(crate) range_ignored: bool,
+}
+
+impl<'a> GraphBuild<'a> {
+    /// Prepares the build of the scene with `roots`.
+    pub(crate) fn new(
+        file: &'a GltfFile,
+        path: &'a Path,
+        roots: &[gltf::Node<'_>],
+        shapes: &'a RootExtension,
+        skip_materials: bool,
+    ) -> Result<GraphBuild<'a>, LoadError> {
+        Ok(GraphBuild {
+            file,
+            path,
+            shapes,
+            skip_materials,
+            graph: NodeGraph::new(&file.document, roots, path)?,
+            node_protos: HashMap::new(),
+            mesh_protos: HashMap::new(),
+            shape_protos: HashMap::new(),
+            materials: Materials::new(file),
+            notes: Vec::new(),
+            skipped_modes: BTreeMap::new(),
+            rest_pose: Vec::new(),
+            degenerate: 0,
+            triangles: 0,
+            camera_light_placements: 0,
+            brightest: 0.0,
+            range_ignored: false,
+        })
+    }
+
+    fn invalid(&self, key: String, message: impl Into<String>) -> LoadError {
+        LoadError::invalid(self.path, None, key, message.into())
+    }
+
+    /// Node placements once the graph is expanded (what the file stands for, saturating).
+    pub(crate) fn node_placements(&self) -> u64 {
+        self.graph
+            .placements
+            .iter()
+            .fold(0u64, |s, &p| s.saturating_add(p))
+    }
+
+    /// Places `roots` under `root` into `out`'s world.
+    pub(crate) fn place_roots(
+        &mut self,
+        roots: &[gltf::Node<'_>],
+        root: DAffine3,
+        out: &mut Imported,
+    ) -> Result<(), LoadError> {
+        let mut world = Prototype::default();
+        let mut planes = Vec::new();
+        let mut prototypes = Vec::new();
+        for node in roots {
+            self.place_node(
+                node,
+                root,
+                &mut world,
+                Some(&mut planes),
+                &mut prototypes,
+                0,
+            )?;
+            self.place_cameras_and_lights(node, root, out, 0)?;
+        }
+        let g = &mut out.geometry;
+        g.spheres.append(&mut world.spheres);
+        g.quadrics.append(&mut world.quadrics);
+        g.meshes.append(&mut world.meshes);
+        g.instances.append(&mut world.instances);
+        g.planes.append(&mut planes);
+        g.prototypes = prototypes;
+        Ok(())
+    }
+
+    /// Places `node`, whose parent frame `to_level` maps into the level `out` belongs to.
+    fn place_node(
+        &mut self,
+        node: &gltf::Node<'_>,
+        to_level: DAffine3,
+        out: &mut Prototype,
+        planes: Option<&mut Vec<Plane>>,
+        prototypes: &mut Vec<Prototype>,
+        depth: usize,
+    ) -> Result<(), LoadError> {
+        let key = format!("nodes[{}]", node.index());
+        let local = self
+            .file
+            .node_transforms
+            .get(node.index())
+            .cloned()
+            .unwrap_or(Ok(DAffine3::IDENTITY))
+            .map_err(|m| self.invalid(key.clone(), m))?;
+        let placed = to_level * local;
+        if self.graph.refs[node.index()] > 1 {
+            let proto = match self.node_protos.get(&node.index()) {
+                Some(&p) => p,
+                None => {
+                    let mut p = Prototype::default();
+                    self.place_contents(node, DAffine3::IDENTITY, &mut p, None, prototypes, depth)?;
+                    let index = (!is_empty(&p)).then(|| {
+                        prototypes.push(p);
+                        prototypes.len() as u32 - 1
+                    });
+                    self.node_protos.insert(node.index(), index);
+                    index
+                }
+            };
+            if let Some(proto) = proto {
+                self.instance(proto, placed, &key, out);
+            }
+            return Ok(());
+        }
+        self.place_contents(node, placed, out, planes, prototypes, depth)
+    }
+
+    /// An instance of `proto` placed by `m` (a singular map hides it, as it would a baked mesh).
+    fn instance(&mut self, proto: u32, m: DAffine3, key: &str, out: &mut Prototype) {
+        match Transform::new(m) {
+            Some(t) => out.instances.push(Instance::new(proto, t)),
+            None => self.notes.push(format!(
+                "{key}: a singular transform (a zero scale) hides what the node places"
+            )),
+        }
+    }
+
+    /// The node's own shape or mesh placed by `m`, and its children below it.
+    fn place_contents(
+        &mut self,
+        node: &gltf::Node<'_>,
+        m: DAffine3,
+        out: &mut Prototype,
+        mut planes: Option<&mut Vec<Plane>>,
+        prototypes: &mut Vec<Prototype>,
+        depth: usize,
+    ) -> Result<(), LoadError> {
+        let key = format!("nodes[{}]", node.index());
+        if depth >= MAX_DEPTH {
+            return Err(self.invalid(
+                key,
+                format!("the node hierarchy is deeper than {MAX_DEPTH} levels"),
+            ));
+        }
+        if let Some(ext) = node_shape(node, self.path)? {
+            self.place_shape(ext.shape, m, &key, out, planes.as_deref_mut(), prototypes)?;
+        } else if let Some(mesh) = node.mesh() {
+            if node.skin().is_some() {
+                self.rest_pose.push("skins");
+            }
+            if self.graph.mesh_users[mesh.index()] > 1 {
+                let proto = match self.mesh_protos.get(&mesh.index()) {
+                    Some(&p) => p,
+                    None => {
+                        let mut p = Prototype::default();
+                        let copies = self.graph.mesh_placements[mesh.index()];
+                        self.build_mesh(&mesh, DAffine3::IDENTITY, &mut p, copies)?;
+                        prototypes.push(p);
+                        let index = prototypes.len() as u32 - 1;
+                        self.mesh_protos.insert(mesh.index(), index);
+                        index
+                    }
+                };
+                self.instance(proto, m, &key, out);
+            } else {
+                let copies = self.graph.placements[node.index()];
+                self.build_mesh(&mesh, m, out, copies)?;
+            }
+        }
+        for child in node.children() {
+            self.place_node(&child, m, out, planes.as_deref_mut(), prototypes, depth + 1)?;
+        }
+        Ok(())
+    }
+
+    /// `QUADRAY_quadrics` shape `shape` placed by `m`: an instance of its prototype when several
+    /// nodes use it (a plane, unbounded, is always placed in the world).
+    fn place_shape(
+        &mut self,
+        shape: usize,
+        m: DAffine3,
+        key: &str,
+        out: &mut Prototype,
+        planes: Option<&mut Vec<Plane>>,
+        prototypes: &mut Vec<Prototype>,
+    ) -> Result<(), LoadError> {
+        let ext_key = format!("{key}.extensions.{}.shape", quadrics_ext::EXTENSION);
+        let def = self.shapes.shapes.get(shape).ok_or_else(|| {
+            self.invalid(
+                ext_key.clone(),
+                format!(
+                    "shape {shape} does not exist ({} defined)",
+                    self.shapes.shapes.len()
+                ),
+            )
+        })?;
+        let material = match def.material {
+            _ if self.skip_materials => 0,
+            Some(i) => {
+                let doc = &self.file.document;
+                let mat = doc.materials().nth(i).ok_or_else(|| {
+                    self.invalid(
+                        ext_key.clone(),
+                        format!("shape {shape} uses material {i}, which does not exist"),
+                    )
+                })?;
+                self.materials
+                    .get(&mat, &mut self.notes)
+                    .map_err(|m| self.invalid(ext_key.clone(), m))?
+                    .id
+            }
+            None => self.materials.default_material().id,
+        };
+        let def_key = format!("extensions.{}.shapes[{shape}]", quadrics_ext::EXTENSION);
+        let shared = self.graph.shape_users.get(&shape).is_some_and(|&n| n > 1);
+        let is_plane = def.kind == "plane";
+        if shared && !is_plane {
+            let proto = match self.shape_protos.get(&shape) {
+                Some(&p) => p,
+                None => {
+                    let mut p = Prototype::default();
+                    let placed = quadrics_ext::place(def, DAffine3::IDENTITY, material)
+                        .map_err(|e| self.invalid(def_key.clone(), e))?;
+                    add_shape(placed, &mut p, None).map_err(|e| self.invalid(def_key, e))?;
+                    prototypes.push(p);
+                    let index = prototypes.len() as u32 - 1;
+                    self.shape_protos.insert(shape, index);
+                    index
+                }
+            };
+            self.instance(proto, m, key, out);
+            return Ok(());
+        }
+        let placed = quadrics_ext::place(def, m, material).map_err(|e| self.invalid(def_key, e))?;
+        add_shape(placed, out, planes).map_err(|e| self.invalid(key.to_string(), e))
+    }
+
+    /// Every surface primitive of `mesh`, placed by `m`, into `out`, which the expanded scene
+    /// holds `copies` times (for the count of dropped triangles).
+    fn build_mesh(
+        &mut self,
+        mesh: &gltf::Mesh<'_>,
+        m: DAffine3,
+        out: &mut Prototype,
+        copies: u64,
+    ) -> Result<(), LoadError> {
+        if mesh
+            .primitives()
+            .any(|p| p.morph_targets().next().is_some())
+        {
+            self.rest_pose.push("morph targets");
+        }
+        for primitive in mesh.primitives() {
+            let pkey = format!("meshes[{}].primitives[{}]", mesh.index(), primitive.index());
+            if !gltf_mesh::is_surface(primitive.mode()) {
+                *self
+                    .skipped_modes
+                    .entry(gltf_mesh::mode_name(primitive.mode()))
+                    .or_default() += 1;
+                continue;
+            }
+            let material = if self.skip_materials {
+                MaterialUse {
+                    id: 0,
+                    mask: None,
+                    uv_transform: None,
+                }
+            } else {
+                self.materials
+                    .get(&primitive.material(), &mut self.notes)
+                    .map_err(|e| self.invalid(pkey.clone(), e))?
+            };
+            let built = gltf_mesh::build(&primitive, self.file, m, &material)
+                .map_err(|e| self.invalid(pkey.clone(), e))?;
+            let dropped = (built.degenerate as u64).saturating_mul(copies);
+            self.degenerate = self
+                .degenerate
+                .saturating_add(usize::try_from(dropped).unwrap_or(usize::MAX));
+            if let Some(mesh) = built.mesh {
+                self.triangles += mesh.triangle_count();
+                if self.triangles > MAX_TRIANGLES {
+                    return Err(self.invalid(
+                        pkey,
+                        format!("the scene stores more than {MAX_TRIANGLES} triangles"),
+                    ));
+                }
+                out.meshes.push(mesh);
+            }
+        }
+        Ok(())
+    }
+
+    /// Cameras and lights of `node`'s subtree, on every path that reaches them.
+    fn place_cameras_and_lights(
+        &mut self,
+        node: &gltf::Node<'_>,
+        to_world: DAffine3,
+        out: &mut Imported,
+        depth: usize,
+    ) -> Result<(), LoadError> {
+        if !self.graph.has_camera_or_light[node.index()] || depth >= MAX_DEPTH {
+            return Ok(());
+        }
+        self.camera_light_placements += 1;
+        if self.camera_light_placements > MAX_INSTANCES {
+            return Err(self.invalid(
+                format!("nodes[{}]", node.index()),
+                format!("cameras and lights expand to more than {MAX_INSTANCES} placements"),
+            ));
+        }
+        let local = self
+            .file
+            .node_transforms
+            .get(node.index())
+            .cloned()
+            .unwrap_or(Ok(DAffine3::IDENTITY))
+            .map_err(|m| self.invalid(format!("nodes[{}]", node.index()), m))?;
+        let world = to_world * local;
+        if let Some(camera) = node.camera() {
+            let c = gltf_camera::convert(&camera, self.file.cameras.get(camera.index()), world)
+                .map_err(|m| self.invalid(format!("cameras[{}]", camera.index()), m))?;
+            out.cameras.push(c);
+        }
+        if let Some(light) = node.light() {
+            let l = gltf_light::convert(&light, world).map_err(|m| {
+                self.invalid(
+                    format!("extensions.KHR_lights_punctual.lights[{}]", light.index()),
+                    m,
+                )
+            })?;
+            self.range_ignored |= light.range().is_some();
+            self.brightest = self.brightest.max(light.intensity());
+            out.lights.push(l);
+        }
+        for child in node.children() {
+            self.place_cameras_and_lights(&child, world, out, depth + 1)?;
+        }
+        Ok(())
+    }
+}
+
+/// Whether a prototype places nothing.
+fn is_empty(p: &Prototype) -> bool {
+    p.spheres.is_empty() && p.quadrics.is_empty() && p.meshes.is_empty() && p.instances.is_empty()
+}
+
+/// Adds a placed shape to a level; a plane goes to `planes`, which only the world has.
+fn add_shape(
+    shape: PlacedShape,
+    out: &mut Prototype,
+    planes: Option<&mut Vec<Plane>>,
+) -> Result<(), String> {
+    match shape {
+        PlacedShape::Quadric(q) => out.quadrics.push(*q),
+        PlacedShape::Sphere(s) => out.spheres.push(s),
+        PlacedShape::Plane(p) => match planes {
+            Some(planes) => planes.push(p),
+            None => {
+                return Err(
+                    "a plane is unbounded and cannot be under a node that is placed more than once"
+                        .into(),
+                );
+            }
+        },
+    }
+    Ok(())
+}
