@@ -39,5 +39,23 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         settings.spp,
         settings.max_depth
     );
+    println!("{}", structure_line(&scene));
     Ok(())
+}
+
+/// What the scene stores against what it stands for once instances are expanded, and the
+/// acceleration structure's memory per level: for `check` and `render --stats`.
+pub(crate) fn structure_line(scene: &Scene) -> String {
+    let s = scene.accel().stats(scene.geometry());
+    format!(
+        "structure: {} prototypes, {} instances ({} placements); {} shapes stored ({} triangles), {} triangles instanced; BVH bottom level {:.1} MB, top level {:.3} MB",
+        s.prototypes,
+        s.instances,
+        s.placements,
+        s.primitives_stored,
+        s.triangles_stored,
+        s.triangles_instanced,
+        s.bottom_bytes as f64 / 1e6,
+        s.top_bytes as f64 / 1e6,
+    )
 }

@@ -72,6 +72,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 scene.accel().traversal_path(),
                 pool.current_num_threads(),
             );
+            eprintln!("{}", crate::check::structure_line(&scene));
         }
         eprintln!(
             "{}x{}, {} spp: {} camera + {} shadow + {} reflection rays in {:.3} s ({:.2} Mrays/s) -> {}",

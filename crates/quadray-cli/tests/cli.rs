@@ -117,6 +117,17 @@ fn check_validates_without_rendering() {
         text.contains("ok: 2 spheres, 1 planes, 4 quadrics, 1 meshes (20 triangles), 2 lights"),
         "{text}"
     );
+    assert!(
+        text.contains("structure: 0 prototypes, 0 instances (0 placements); 26 shapes stored (20 triangles), 20 triangles instanced"),
+        "{text}"
+    );
+    // The colonnade: one column (3 shapes) and one orb stored; 6 columns and 3 orbs placed.
+    let o = quadray(&["check", &scene("columns.toml")]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("structure: 3 prototypes, 8 instances (11 placements); 4 shapes stored (0 triangles)"),
+        "{text}"
+    );
 }
 
 /// A unit sphere (material colour 0.2, 0.4, 0.6) over a plane at z = -2, seen straight down by an
