@@ -125,7 +125,9 @@ fn check_validates_without_rendering() {
     let o = quadray(&["check", &scene("columns.toml")]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(
-        text.contains("structure: 3 prototypes, 8 instances (11 placements); 4 shapes stored (0 triangles)"),
+        text.contains(
+            "structure: 3 prototypes, 8 instances (11 placements); 4 shapes stored (0 triangles)"
+        ),
         "{text}"
     );
 }
