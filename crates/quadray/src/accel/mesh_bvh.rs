@@ -72,21 +72,18 @@ pub(crate) struct MeshRay {
 /// 1 + 2γ(3) in f32: the factor that makes a slab's exit distance conservative.
 const ROBUST_EXIT: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
-/// Reciprocal clamped to ±1e20, keeping the sign of zero.
+/// Reciprocals clamped to ±1e20, keeping the sign of zero: three lanes in one division.
 #[inline(always)]
-fn safe_recip(x: f32) -> f32 {
-    if x.abs() < 1e-20 {
-        1e20f32.copysign(x)
-    } else {
-        1.0 / x
-    }
+fn safe_recip(x: Vec3A) -> Vec3A {
+    let tiny = x.abs().cmplt(Vec3A::splat(1e-20));
+    Vec3A::select(tiny, Vec3A::splat(1e20).copysign(x), Vec3A::ONE / x)
 }
 
 impl MeshRay {
     /// Prepares `origin + t·dir` for traversal (a ray that is not finite in f32 meets nothing).
     #[inline]
     pub(crate) fn new(origin: Vec3, dir: Vec3) -> MeshRay {
-        let inv = Vec3A::new(safe_recip(dir.x), safe_recip(dir.y), safe_recip(dir.z));
+        let inv = safe_recip(dir.into());
         MeshRay {
             origin: origin.into(),
             inv_dir: inv,
@@ -319,6 +316,31 @@ impl MeshBvh {
         bvh.nodes = nodes;
         bvh.blocks = blocks;
         bvh
+    }
+
+    /// The boxes of the root's children's children (at most 16): their union holds every
+    /// triangle, and they hug the mesh far closer than one box once rotated.
+    pub(crate) fn covering_boxes(&self) -> Vec<(glam::DVec3, glam::DVec3)> {
+        let slot = |n: &Node4, lane: usize| {
+            let b = &n.bounds;
+            let lo = glam::DVec3::new(b[0][lane] as f64, b[2][lane] as f64, b[4][lane] as f64);
+            let hi = glam::DVec3::new(b[1][lane] as f64, b[3][lane] as f64, b[5][lane] as f64);
+            lo.cmple(hi).all().then_some((lo, hi))
+        };
+        let Some(root) = self.nodes.first() else {
+            return Vec::new();
+        };
+        let mut boxes = Vec::new();
+        for lane in 0..4 {
+            let child = root.children[lane];
+            if child & LEAF != 0 {
+                boxes.extend(slot(root, lane));
+                continue;
+            }
+            let node = &self.nodes[child as usize];
+            boxes.extend((0..4).filter_map(|l| slot(node, l)));
+        }
+        boxes
     }
 
     /// Bytes of the wide nodes, the triangle blocks and the id table.

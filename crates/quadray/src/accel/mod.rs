@@ -65,6 +65,10 @@ struct LevelAccel {
     top: Option<Bvh2>,
     /// The items' boxes, for a top without a BVH.
     item_boxes: Vec<Aabb>,
+    /// A few boxes (at most [`MAX_COVERING`], in the level's space) whose union holds all its
+    /// content, tighter than one box: an instance's box is theirs, placed (a rotated bunny's
+    /// box of its box overlapped its neighbours' and cost 2x in traversal).
+    covering: Vec<Bounds>,
 }
 
 impl LevelAccel {
@@ -130,6 +134,14 @@ pub struct AccelStats {
     pub bottom_bytes: usize,
     /// Bytes of the tops (over each level's shape BVHs and instances).
     pub top_bytes: usize,
+}
+
+/// Most boxes a level offers its instances' bounds ([`LevelAccel::covering`]).
+const MAX_COVERING: usize = 16;
+
+/// An obvhs box as an f64 box.
+fn f64_box(b: &Aabb) -> Bounds {
+    (b.min.as_dvec3(), b.max.as_dvec3())
 }
 
 /// Most top-level items tested box by box, without a top-level BVH.
@@ -254,12 +266,15 @@ impl Accel {
     /// ([`Placements::new`] succeeds); otherwise the scene is built without them.
     pub fn build(geometry: &Geometry, origin_extent: f64) -> Accel {
         let placements = Placements::new(geometry).unwrap_or_default();
-        let (bounds, instance_boxes) = level_bounds(geometry);
+        let (bounds, _) = level_bounds(geometry);
         let world = bounds[0].map_or(0.0, magnitude).max(origin_extent.abs());
         let extents = level_extents(geometry, &bounds, world);
-        let mut levels = Vec::with_capacity(geometry.level_count());
+        let n = geometry.level_count();
+        let mut levels: Vec<Option<LevelAccel>> = vec![None; n];
         let (mut triangles, mut analytic_count) = (0, 0);
-        for (level, boxes) in instance_boxes.iter().enumerate() {
+        // Children first (prototypes place only earlier ones), the world last: an instance's box
+        // is made of its prototype's covering boxes, placed.
+        for level in (1..n).chain([0]) {
             let l = geometry.level(level);
             let extent = extents[level] as f32;
             let analytic = AnalyticBvh::build(l, extent);
@@ -270,11 +285,13 @@ impl Accel {
 
             let mut items = Vec::new();
             let mut item_boxes = Vec::new();
+            let mut covering = Vec::new();
             if let Some(a) = &analytic {
                 items.push(TopItem::Analytic);
                 item_boxes.push(a.bounds());
+                covering.push(f64_box(&a.bounds()));
             }
-            if meshes.is_some() {
+            if let Some(bvh) = &meshes {
                 let b = l
                     .meshes
                     .iter()
@@ -282,17 +299,36 @@ impl Accel {
                     .fold(None, |b, m| union(b, mesh_bounds(m)));
                 items.push(TopItem::Meshes);
                 item_boxes.push(padded_aabb(b.expect("meshes have triangles"), extent));
+                covering.extend(bvh.covering_boxes());
             }
             if placements.count() > 0 {
-                for (k, (inst, b)) in l.instances.iter().zip(boxes).enumerate() {
-                    if let Some(b) = b {
-                        items.push(TopItem::Instance {
-                            index: k as u32,
-                            level: inst.prototype + 1,
-                        });
-                        item_boxes.push(padded_aabb(*b, extent));
-                    }
+                for (k, inst) in l.instances.iter().enumerate() {
+                    let child = levels[inst.prototype as usize + 1]
+                        .as_ref()
+                        .expect("children are built first");
+                    let Some(b) = child
+                        .covering
+                        .iter()
+                        .map(|&c| transformed_bounds(c, inst))
+                        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+                    else {
+                        continue;
+                    };
+                    items.push(TopItem::Instance {
+                        index: k as u32,
+                        level: inst.prototype + 1,
+                    });
+                    item_boxes.push(padded_aabb(b, extent));
+                    covering.push(b);
                 }
+            }
+            if covering.len() > MAX_COVERING {
+                // Many instances: the parent gets one box of them all.
+                let all = covering
+                    .iter()
+                    .copied()
+                    .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
+                covering = all.into_iter().collect();
             }
             let top = (items.len() > FLAT_TOP).then(|| {
                 let mut build_time = Duration::ZERO;
@@ -310,16 +346,20 @@ impl Accel {
                     .collect();
                 item_boxes = Vec::new();
             }
-            levels.push(LevelAccel {
+            levels[level] = Some(LevelAccel {
                 analytic,
                 meshes,
                 items,
                 top,
                 item_boxes,
+                covering,
             });
         }
         Accel {
-            levels,
+            levels: levels
+                .into_iter()
+                .map(|l| l.expect("every level is built"))
+                .collect(),
             placements,
             planes: geometry.planes.len() as u32,
             avx2: simd_path() == SimdPath::Avx2 && triangles > 4 * analytic_count,
@@ -838,17 +878,21 @@ pub(crate) fn with_stack<T, R>(
 
 /// The f32 ray obvhs traverses with. Built field by field: obvhs' constructor debug-asserts a
 /// finite origin, while a ray beyond f32's range (an origin at 10³⁹) must simply meet nothing.
+/// The reciprocal is obvhs' `safe_inverse` (components within f32::EPSILON of zero become
+/// ±1/EPSILON) computed for three lanes at once: one division instead of three, the same bits.
 #[inline]
 fn to_obvhs(ray: &Ray, t_max: f64) -> obvhs::ray::Ray {
     let direction = ray.dir.as_vec3a();
+    let tiny = direction.abs().cmple(Vec3A::splat(f32::EPSILON));
+    let inv_direction = Vec3A::select(
+        tiny,
+        direction.signum() * (1.0 / f32::EPSILON),
+        Vec3A::ONE / direction,
+    );
     obvhs::ray::Ray {
         origin: ray.origin.as_vec3a(),
         direction,
-        inv_direction: Vec3A::new(
-            obvhs::ray::safe_inverse(direction.x),
-            obvhs::ray::safe_inverse(direction.y),
-            obvhs::ray::safe_inverse(direction.z),
-        ),
+        inv_direction,
         tmin: 0.0,
         tmax: round_up(t_max),
     }
