@@ -6,7 +6,8 @@
 //! origin to f32 and obvhs' clamped inverse direction), and the t handed back to obvhs for culling
 //! is rounded up.
 
-use super::{padded_aabb, round_up, to_obvhs, with_stack};
+use super::build::padded_aabb;
+use super::{round_up, to_obvhs, with_stack};
 use crate::geometry::Level;
 use crate::math::Ray;
 use crate::shape::LocalPrim;

@@ -27,20 +27,24 @@
 //! operations are introduced: Rust never contracts a·b+c).
 
 mod analytic;
+mod build;
 mod mesh_bvh;
+mod simd;
+mod top;
 mod tri4;
 
 use crate::geometry::Geometry;
-use crate::instance::{Instance, Placements};
+use crate::instance::Placements;
 use crate::math::Ray;
 use crate::shape::{LocalPrim, PrimRef};
 use analytic::AnalyticBvh;
+use build::Bounds;
 use glam::{DVec3, Vec3A};
 use mesh_bvh::{MeshBvh, MeshRay};
-use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, bvh2::builder::build_bvh2};
+use obvhs::{aabb::Aabb, bvh2::Bvh2};
+pub use simd::{SimdPath, simd_path};
 use std::cell::RefCell;
-use std::sync::OnceLock;
-use std::time::Duration;
+use top::TopLeaves;
 
 /// One leaf item of a level's top.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -136,237 +140,10 @@ pub struct AccelStats {
     pub top_bytes: usize,
 }
 
-/// Most boxes a level offers its instances' bounds ([`LevelAccel::covering`]).
-const MAX_COVERING: usize = 16;
-
-/// An obvhs box as an f64 box.
-fn f64_box(b: &Aabb) -> Bounds {
-    (b.min.as_dvec3(), b.max.as_dvec3())
-}
-
 /// Most top-level items tested box by box, without a top-level BVH.
 const FLAT_TOP: usize = 8;
 
-/// Relative padding applied to f32 boxes: 8 ulps of the magnitude involved.
-const PAD_ULPS: f32 = 8.0 * f32::EPSILON;
-
-/// An f64 box as an f32 box, padded by [`PAD_ULPS`] of its own coordinates and of `extent`.
-fn padded_aabb((lo, hi): (DVec3, DVec3), extent: f32) -> Aabb {
-    let (lo, hi) = (lo.as_vec3a(), hi.as_vec3a());
-    let pad = Vec3A::splat(extent * PAD_ULPS);
-    Aabb::new(
-        lo - lo.abs() * PAD_ULPS - pad,
-        hi + hi.abs() * PAD_ULPS + pad,
-    )
-}
-
-/// An f64 box.
-type Bounds = (DVec3, DVec3);
-
-fn union(a: Option<Bounds>, b: Bounds) -> Option<Bounds> {
-    Some(match a {
-        None => b,
-        Some((lo, hi)) => (lo.min(b.0), hi.max(b.1)),
-    })
-}
-
-/// The box of `b`'s eight corners through an instance's transform, widened by the transform's own
-/// rounding (a few ulps of the magnitudes it combines).
-fn transformed_bounds((lo, hi): Bounds, inst: &Instance) -> Bounds {
-    let (mut wlo, mut whi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    for corner in 0..8 {
-        let pick = |bit: u32, a: f64, b: f64| if corner & bit == 0 { a } else { b };
-        let c = DVec3::new(
-            pick(1, lo.x, hi.x),
-            pick(2, lo.y, hi.y),
-            pick(4, lo.z, hi.z),
-        );
-        let w = inst.transform.to_world.transform_point3(c);
-        wlo = wlo.min(w);
-        whi = whi.max(w);
-    }
-    let slack = (wlo.abs().max(whi.abs()).max_element()) * 1e-12;
-    (wlo - DVec3::splat(slack), whi + DVec3::splat(slack))
-}
-
-/// Largest coordinate magnitude of a box.
-fn magnitude((lo, hi): Bounds) -> f64 {
-    lo.abs().max(hi.abs()).max_element()
-}
-
-/// Bounds of every level in its own space (children before parents), and each level's instance
-/// boxes; `None` for a level with nothing bounded.
-fn level_bounds(g: &Geometry) -> (Vec<Option<Bounds>>, Vec<Vec<Option<Bounds>>>) {
-    let n = g.level_count();
-    let mut bounds: Vec<Option<Bounds>> = vec![None; n];
-    let mut instance_boxes = vec![Vec::new(); n];
-    for level in (1..n).chain([0]) {
-        let l = g.level(level);
-        let mut b = None;
-        for s in l.spheres {
-            b = union(b, s.bounds());
-        }
-        for q in l.quadrics {
-            b = union(b, q.bounds());
-        }
-        for m in l.meshes.iter().filter(|m| m.triangle_count() > 0) {
-            b = union(b, mesh_bounds(m));
-        }
-        let boxes: Vec<Option<Bounds>> = l
-            .instances
-            .iter()
-            .map(|inst| bounds[inst.prototype as usize + 1].map(|c| transformed_bounds(c, inst)))
-            .collect();
-        for ib in boxes.iter().flatten() {
-            b = union(b, *ib);
-        }
-        bounds[level] = b;
-        instance_boxes[level] = boxes;
-    }
-    (bounds, instance_boxes)
-}
-
-/// Bounds of a mesh's vertices.
-fn mesh_bounds(m: &crate::mesh::Mesh) -> Bounds {
-    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    for p in m.positions() {
-        lo = lo.min(p.as_dvec3());
-        hi = hi.max(p.as_dvec3());
-    }
-    (lo, hi)
-}
-
-/// Per level, a bound on the magnitude of every coordinate a ray in that level's space may start
-/// at: the world's is `world`; a prototype's is its own bounds' or what its placements map the
-/// parent's bound to, whichever is larger (parents are numbered after their children).
-fn level_extents(g: &Geometry, bounds: &[Option<Bounds>], world: f64) -> Vec<f64> {
-    let n = g.level_count();
-    let mut extents: Vec<f64> = bounds.iter().map(|b| b.map_or(0.0, magnitude)).collect();
-    extents[0] = extents[0].max(world);
-    for level in [0].into_iter().chain((1..n).rev()) {
-        for inst in g.level(level).instances {
-            let m = &inst.transform.from_world;
-            // ‖x‖∞ ≤ e maps to ‖Mx + t‖∞ ≤ ‖M‖∞·e + ‖t‖∞ (‖M‖∞: the largest absolute row sum).
-            let rows = m.matrix3.transpose().abs();
-            let norm = [rows.x_axis, rows.y_axis, rows.z_axis]
-                .iter()
-                .map(|r| r.element_sum())
-                .fold(0.0, f64::max);
-            let e = (norm * extents[level] + m.translation.abs().max_element()) * (1.0 + 1e-12);
-            let child = inst.prototype as usize + 1;
-            extents[child] = extents[child].max(e);
-        }
-    }
-    extents
-}
-
 impl Accel {
-    /// Builds every level. `origin_extent` bounds the magnitude of every coordinate a ray may
-    /// start at outside the primitives' own bounds (the camera). The instances must be numbered
-    /// ([`Placements::new`] succeeds); otherwise the scene is built without them.
-    pub fn build(geometry: &Geometry, origin_extent: f64) -> Accel {
-        let placements = Placements::new(geometry).unwrap_or_default();
-        let (bounds, _) = level_bounds(geometry);
-        let world = bounds[0].map_or(0.0, magnitude).max(origin_extent.abs());
-        let extents = level_extents(geometry, &bounds, world);
-        let n = geometry.level_count();
-        let mut levels: Vec<Option<LevelAccel>> = vec![None; n];
-        let (mut triangles, mut analytic_count) = (0, 0);
-        // Children first (prototypes place only earlier ones), the world last: an instance's box
-        // is made of its prototype's covering boxes, placed.
-        for level in (1..n).chain([0]) {
-            let l = geometry.level(level);
-            let extent = extents[level] as f32;
-            let analytic = AnalyticBvh::build(l, extent);
-            analytic_count += analytic.as_ref().map_or(0, AnalyticBvh::len);
-            let mesh_triangles: usize = l.meshes.iter().map(|m| m.triangle_count()).sum();
-            triangles += mesh_triangles;
-            let meshes = (mesh_triangles > 0).then(|| MeshBvh::build(l.meshes));
-
-            let mut items = Vec::new();
-            let mut item_boxes = Vec::new();
-            let mut covering = Vec::new();
-            if let Some(a) = &analytic {
-                items.push(TopItem::Analytic);
-                item_boxes.push(a.bounds());
-                covering.push(f64_box(&a.bounds()));
-            }
-            if let Some(bvh) = &meshes {
-                let b = l
-                    .meshes
-                    .iter()
-                    .filter(|m| m.triangle_count() > 0)
-                    .fold(None, |b, m| union(b, mesh_bounds(m)));
-                items.push(TopItem::Meshes);
-                item_boxes.push(padded_aabb(b.expect("meshes have triangles"), extent));
-                covering.extend(bvh.covering_boxes());
-            }
-            if placements.count() > 0 {
-                for (k, inst) in l.instances.iter().enumerate() {
-                    let child = levels[inst.prototype as usize + 1]
-                        .as_ref()
-                        .expect("children are built first");
-                    let Some(b) = child
-                        .covering
-                        .iter()
-                        .map(|&c| transformed_bounds(c, inst))
-                        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
-                    else {
-                        continue;
-                    };
-                    items.push(TopItem::Instance {
-                        index: k as u32,
-                        level: inst.prototype + 1,
-                    });
-                    item_boxes.push(padded_aabb(b, extent));
-                    covering.push(b);
-                }
-            }
-            if covering.len() > MAX_COVERING {
-                // Many instances: the parent gets one box of them all.
-                let all = covering
-                    .iter()
-                    .copied()
-                    .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
-                covering = all.into_iter().collect();
-            }
-            let top = (items.len() > FLAT_TOP).then(|| {
-                let mut build_time = Duration::ZERO;
-                let params = BvhBuildParams {
-                    max_prims_per_leaf: 1,
-                    ..BvhBuildParams::medium_build()
-                };
-                build_bvh2(&item_boxes, params, &mut build_time)
-            });
-            if let Some(top) = &top {
-                items = top
-                    .primitive_indices
-                    .iter()
-                    .map(|&i| items[i as usize])
-                    .collect();
-                item_boxes = Vec::new();
-            }
-            levels[level] = Some(LevelAccel {
-                analytic,
-                meshes,
-                items,
-                top,
-                item_boxes,
-                covering,
-            });
-        }
-        Accel {
-            levels: levels
-                .into_iter()
-                .map(|l| l.expect("every level is built"))
-                .collect(),
-            placements,
-            planes: geometry.planes.len() as u32,
-            avx2: simd_path() == SimdPath::Avx2 && triangles > 4 * analytic_count,
-            triangles,
-        }
-    }
-
     /// Bytes the acceleration structure keeps allocated: every level's BVHs and index lists (memory
     /// reports; the build's transient buffers are not counted).
     pub fn memory_bytes(&self) -> usize {
@@ -746,53 +523,6 @@ impl Accel {
     }
 }
 
-/// Front-to-back iteration over the leaves of the top-level BVH2 that a ray enters, written out
-/// (rather than obvhs' closure-taking traversal) so the whole query inlines into one function and
-/// the AVX2 path covers it.
-struct TopLeaves<'a> {
-    bvh: &'a Bvh2,
-    ray: &'a obvhs::ray::Ray,
-    stack: &'a mut Vec<u32>,
-}
-
-impl<'a> TopLeaves<'a> {
-    #[inline(always)]
-    fn new(bvh: &'a Bvh2, ray: &'a obvhs::ray::Ray, stack: &'a mut Vec<u32>) -> TopLeaves<'a> {
-        stack.clear();
-        if !bvh.nodes.is_empty() {
-            stack.push(0);
-        }
-        TopLeaves { bvh, ray, stack }
-    }
-
-    /// The item range of the next leaf whose box the ray enters before `t_max`.
-    #[inline(always)]
-    fn next(&mut self, t_max: f32) -> Option<std::ops::Range<usize>> {
-        while let Some(index) = self.stack.pop() {
-            let node = &self.bvh.nodes[index as usize];
-            if node.aabb().intersect_ray(self.ray) >= t_max {
-                continue;
-            }
-            if node.is_leaf() {
-                let first = node.first_index as usize;
-                return Some(first..first + node.prim_count as usize);
-            }
-            // Children are stored as a pair at first_index; visit the nearer one first.
-            let (a, b) = (node.first_index, node.first_index + 1);
-            let ta = self.bvh.nodes[a as usize].aabb().intersect_ray(self.ray);
-            let tb = self.bvh.nodes[b as usize].aabb().intersect_ray(self.ray);
-            if ta <= tb {
-                self.stack.push(b);
-                self.stack.push(a);
-            } else {
-                self.stack.push(a);
-                self.stack.push(b);
-            }
-        }
-        None
-    }
-}
-
 /// A ray in one level's space, with what that level's items need.
 struct Query<'a> {
     g: &'a Geometry,
@@ -815,42 +545,6 @@ impl Query<'_> {
             _ => None,
         }
     }
-}
-
-/// Which compiled traversal path runs on this machine.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SimdPath {
-    /// The target's baseline instruction set (SSE2 on x86-64, NEON on aarch64).
-    Baseline,
-    /// x86-64 with AVX2 and FMA, detected at run time.
-    Avx2,
-}
-
-impl std::fmt::Display for SimdPath {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            SimdPath::Baseline if cfg!(target_arch = "aarch64") => "NEON",
-            SimdPath::Baseline if cfg!(target_arch = "x86_64") => "SSE2",
-            SimdPath::Baseline => "scalar",
-            SimdPath::Avx2 => "AVX2+FMA",
-        })
-    }
-}
-
-/// The traversal path chosen for this process: AVX2+FMA where the CPU has them, unless the
-/// environment variable `QUADRAY_SIMD=baseline` asks for the baseline.
-pub fn simd_path() -> SimdPath {
-    static PATH: OnceLock<SimdPath> = OnceLock::new();
-    *PATH.get_or_init(|| {
-        if std::env::var("QUADRAY_SIMD").is_ok_and(|v| v == "baseline") {
-            return SimdPath::Baseline;
-        }
-        #[cfg(target_arch = "x86_64")]
-        if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
-            return SimdPath::Avx2;
-        }
-        SimdPath::Baseline
-    })
 }
 
 thread_local! {
