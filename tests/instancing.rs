@@ -97,6 +97,7 @@ name = "b"
     assert!(e.contains("\"s\" -> \"s\""), "{e}");
     let e = error("[[instance]]\nof = \"nowhere\"\n");
     assert!(e.contains("no group or named shape \"nowhere\""), "{e}");
+    assert!(e.contains("`instance[0].of`"), "{e}");
     assert!(e.starts_with("graph.toml:9:"), "{e}");
     let sphere = "[[sphere]]\nname = \"s\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n";
     for (matrix, expected) in [
@@ -419,4 +420,105 @@ fn converted_instances_stay_instances_and_render_the_same() {
         share <= 0.001,
         "{share} of pixels differ (largest {largest}/255)"
     );
+}
+
+/// A minimal glTF (one triangle in an embedded buffer) with the given nodes and scene roots.
+fn triangle_gltf(nodes: serde_json::Value, roots: serde_json::Value) -> serde_json::Value {
+    let mut bin = Vec::new();
+    for v in [0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        bin.extend_from_slice(&v.to_le_bytes());
+    }
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64_encode(&bin)
+    );
+    serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": roots}],
+        "nodes": nodes,
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "buffers": [{"byteLength": bin.len(), "uri": uri}],
+        "bufferViews": [{"buffer": 0, "byteLength": bin.len()}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "extensionsUsed": ["QUADRAY_quadrics"],
+        "extensions": {"QUADRAY_quadrics": {"shapes": [{"type": "plane"}]}}
+    })
+}
+
+/// Standard base64, for data URIs in the tests.
+fn base64_encode(bytes: &[u8]) -> String {
+    const TABLE: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+        for i in 0..4 {
+            if i <= chunk.len() {
+                out.push(TABLE[(n >> (18 - 6 * i) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+fn load_gltf_json(doc: &serde_json::Value) -> Result<quadray_loader::LoadedScene, String> {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("graph.gltf");
+    std::fs::write(&path, serde_json::to_string(doc).unwrap()).unwrap();
+    quadray_loader::load_any(&path).map_err(|e| e.to_string())
+}
+
+/// Review findings kept fixed: a node with thousands of children is wide, not deep; a chain of
+/// 1000 nodes loads on a test thread's stack; a `QUADRAY_quadrics` plane under a node placed
+/// twice is placed on both paths (it cannot be instanced).
+#[test]
+fn gltf_graphs_wide_deep_and_with_planes_under_shared_nodes() {
+    let children: Vec<serde_json::Value> = (1..=3000)
+        .map(|i| serde_json::json!({"mesh": 0, "translation": [i as f64, 0.0, 0.0]}))
+        .collect();
+    let mut nodes = vec![serde_json::json!({"children": (1..=3000).collect::<Vec<_>>()})];
+    nodes.extend(children);
+    let wide = load_gltf_json(&triangle_gltf(
+        serde_json::json!(nodes),
+        serde_json::json!([0]),
+    ))
+    .expect("a wide node loads");
+    assert_eq!(wide.description.geometry.prototypes.len(), 1);
+    assert_eq!(wide.description.geometry.instances.len(), 3000);
+
+    let chain: Vec<serde_json::Value> = (0..1000)
+        .map(|i| match i {
+            999 => serde_json::json!({"mesh": 0}),
+            _ => serde_json::json!({"children": [i + 1], "translation": [0.001, 0.0, 0.0]}),
+        })
+        .collect();
+    let doc = triangle_gltf(serde_json::json!(chain), serde_json::json!([0]));
+    let deep = std::thread::Builder::new()
+        .stack_size(2 << 20)
+        .spawn(move || load_gltf_json(&doc).map(|l| l.description.geometry.meshes.len()))
+        .unwrap()
+        .join()
+        .expect("no stack overflow");
+    assert_eq!(deep, Ok(1));
+
+    let nodes = serde_json::json!([
+        {"children": [2], "translation": [0.0, 0.0, 0.0]},
+        {"children": [2], "translation": [0.0, 0.0, 5.0]},
+        {"children": [3, 4]},
+        {"mesh": 0},
+        {"extensions": {"QUADRAY_quadrics": {"shape": 0}}}
+    ]);
+    let planes = load_gltf_json(&triangle_gltf(nodes, serde_json::json!([0, 1])))
+        .expect("planes under a shared node load");
+    let g = &planes.description.geometry;
+    assert_eq!(g.planes.len(), 2, "one plane per path");
+    assert_eq!((g.prototypes.len(), g.instances.len()), (1, 2));
 }

@@ -67,12 +67,28 @@ impl<'g> ShapeWriter<'g> {
         level: usize,
         material: Option<MaterialId>,
     ) -> Result<Vec<usize>, ExportError> {
-        let l = self.g.level(level);
         let prefix = match level {
             0 => String::new(),
             _ => format!("prototype {} ", level - 1),
         };
         let mut nodes = Vec::new();
+        self.mesh_nodes(doc, level, &prefix, material, &mut nodes)?;
+        self.quadric_nodes(doc, level, &prefix, material, &mut nodes)?;
+        self.sphere_nodes(doc, level, &prefix, material, &mut nodes)?;
+        self.instance_nodes(doc, level, &prefix, material, &mut nodes)?;
+        Ok(nodes)
+    }
+
+    /// Nodes for the level's meshes, each glTF mesh written once per material.
+    fn mesh_nodes(
+        &mut self,
+        doc: &mut Document,
+        level: usize,
+        prefix: &str,
+        material: Option<MaterialId>,
+        nodes: &mut Vec<usize>,
+    ) -> Result<(), ExportError> {
+        let l = self.g.level(level);
         for (i, m) in l.meshes.iter().enumerate() {
             let id = material.unwrap_or(m.material());
             let key = Key::Mesh {
@@ -101,6 +117,19 @@ impl<'g> ShapeWriter<'g> {
                 json!({"name": format!("{prefix}mesh {i}"), "mesh": mesh}),
             )?);
         }
+        Ok(())
+    }
+
+    /// Nodes for the level's quadrics, each shape written once per material.
+    fn quadric_nodes(
+        &mut self,
+        doc: &mut Document,
+        level: usize,
+        prefix: &str,
+        material: Option<MaterialId>,
+        nodes: &mut Vec<usize>,
+    ) -> Result<(), ExportError> {
+        let l = self.g.level(level);
         for (i, q) in l.quadrics.iter().enumerate() {
             let id = material.unwrap_or(q.material());
             let name = format!("{prefix}quadric {i} ({})", crate::export::describe(q));
@@ -132,6 +161,19 @@ impl<'g> ShapeWriter<'g> {
             set_matrix(&mut node, &q.transform().to_world);
             nodes.push(self.node(doc, node)?);
         }
+        Ok(())
+    }
+
+    /// Nodes for the level's spheres, each shape written once per material.
+    fn sphere_nodes(
+        &mut self,
+        doc: &mut Document,
+        level: usize,
+        prefix: &str,
+        material: Option<MaterialId>,
+        nodes: &mut Vec<usize>,
+    ) -> Result<(), ExportError> {
+        let l = self.g.level(level);
         for (i, s) in l.spheres.iter().enumerate() {
             let id = material.unwrap_or(s.material);
             let name = format!("{prefix}sphere {i}");
@@ -166,6 +208,19 @@ impl<'g> ShapeWriter<'g> {
             }
             nodes.push(self.node(doc, node)?);
         }
+        Ok(())
+    }
+
+    /// Nodes for the level's instances, their prototypes' contents as children.
+    fn instance_nodes(
+        &mut self,
+        doc: &mut Document,
+        level: usize,
+        prefix: &str,
+        material: Option<MaterialId>,
+        nodes: &mut Vec<usize>,
+    ) -> Result<(), ExportError> {
+        let l = self.g.level(level);
         for (k, inst) in l.instances.iter().enumerate() {
             // The outermost override wins, as when rendering.
             let inner = material.or(inst.material);
@@ -178,7 +233,7 @@ impl<'g> ShapeWriter<'g> {
             }
             nodes.push(self.node(doc, node)?);
         }
-        Ok(nodes)
+        Ok(())
     }
 
     /// Adds a node, counting it against [`MAX_EXPORT_NODES`].

@@ -162,5 +162,9 @@ pub fn convert(
             .push(("default".into(), quadray::Material::default()));
     }
     out.notes = notes;
+    // The instance limits (nesting, expanded placements), said here with the file's name rather
+    // than later in prototype numbers.
+    quadray::Placements::new(&out.geometry)
+        .map_err(|e| invalid("nodes".into(), format!("the node graph is too large: {e}")))?;
     Ok(out)
 }

@@ -34,7 +34,8 @@ struct NodeGraph {
     mesh_users: Vec<u32>,
     /// Nodes using each `QUADRAY_quadrics` shape.
     shape_users: HashMap<usize, u32>,
-    /// Whether a node's subtree holds a camera or a light.
+    /// Whether a node's subtree holds a camera, a light or a `QUADRAY_quadrics` plane: what is
+    /// placed on every path that reaches it.
     has_camera_or_light: Vec<bool>,
     /// Placements of each node once the graph is expanded (saturating).
     placements: Vec<u64>,
@@ -68,6 +69,7 @@ impl NodeGraph {
     fn new(
         doc: &gltf::Document,
         roots: &[gltf::Node<'_>],
+        shapes: &RootExtension,
         path: &Path,
     ) -> Result<NodeGraph, LoadError> {
         let n = doc.nodes().len();
@@ -83,6 +85,8 @@ impl NodeGraph {
         // nodes finished, children before parents.
         let mut state = vec![0u8; n];
         let mut order = Vec::new();
+        // Nodes in state 1: the depth of the current path (waiting siblings do not count).
+        let mut open = 0usize;
         for root in roots {
             g.refs[root.index()] += 1;
             g.placements[root.index()] = g.placements[root.index()].saturating_add(1);
@@ -94,6 +98,7 @@ impl NodeGraph {
                 let i = node.index();
                 if finished {
                     state[i] = 2;
+                    open -= 1;
                     order.push(i);
                     continue;
                 }
@@ -101,7 +106,8 @@ impl NodeGraph {
                     continue;
                 }
                 state[i] = 1;
-                if stack.len() > MAX_DEPTH * 2 + 1 {
+                open += 1;
+                if open > MAX_DEPTH {
                     return Err(LoadError::invalid(
                         path,
                         None,
@@ -110,15 +116,23 @@ impl NodeGraph {
                     ));
                 }
                 stack.push((node.clone(), true));
+                let mut has_plane = false;
                 match node_shape(&node, path)? {
-                    Some(ext) => *g.shape_users.entry(ext.shape).or_default() += 1,
+                    Some(ext) => {
+                        *g.shape_users.entry(ext.shape).or_default() += 1;
+                        has_plane = shapes
+                            .shapes
+                            .get(ext.shape)
+                            .is_some_and(|d| d.kind == "plane");
+                    }
                     None => {
                         if let Some(mesh) = node.mesh() {
                             g.mesh_users[mesh.index()] += 1;
                         }
                     }
                 }
-                g.has_camera_or_light[i] = node.camera().is_some() || node.light().is_some();
+                g.has_camera_or_light[i] =
+                    node.camera().is_some() || node.light().is_some() || has_plane;
                 for child in node.children() {
                     let c = child.index();
                     g.refs[c] += 1;
@@ -200,7 +214,7 @@ impl<'a> GraphBuild<'a> {
             path,
             shapes,
             skip_materials,
-            graph: NodeGraph::new(&file.document, roots, path)?,
+            graph: NodeGraph::new(&file.document, roots, shapes, path)?,
             node_protos: HashMap::new(),
             mesh_protos: HashMap::new(),
             shape_protos: HashMap::new(),
@@ -247,7 +261,7 @@ impl<'a> GraphBuild<'a> {
                 &mut prototypes,
                 0,
             )?;
-            self.place_cameras_and_lights(node, root, out, 0)?;
+            self.place_cameras_and_lights(node, root, out, 0, false)?;
         }
         let g = &mut out.geometry;
         g.spheres.append(&mut world.spheres);
@@ -399,6 +413,10 @@ impl<'a> GraphBuild<'a> {
         let def_key = format!("extensions.{}.shapes[{shape}]", quadrics_ext::EXTENSION);
         let shared = self.graph.shape_users.get(&shape).is_some_and(|&n| n > 1);
         let is_plane = def.kind == "plane";
+        if is_plane && planes.is_none() {
+            // Under a node placed more than once: the expanded walk places it on every path.
+            return Ok(());
+        }
         if shared && !is_plane {
             let proto = match self.shape_protos.get(&shape) {
                 Some(&p) => p,
@@ -475,13 +493,15 @@ impl<'a> GraphBuild<'a> {
         Ok(())
     }
 
-    /// Cameras and lights of `node`'s subtree, on every path that reaches them.
+    /// Cameras and lights of `node`'s subtree, on every path that reaches them, and the planes
+    /// under nodes placed more than once (`shared_above`: a node on the path is).
     fn place_cameras_and_lights(
         &mut self,
         node: &gltf::Node<'_>,
         to_world: DAffine3,
         out: &mut Imported,
         depth: usize,
+        shared_above: bool,
     ) -> Result<(), LoadError> {
         if !self.graph.has_camera_or_light[node.index()] || depth >= MAX_DEPTH {
             return Ok(());
@@ -501,6 +521,22 @@ impl<'a> GraphBuild<'a> {
             .unwrap_or(Ok(DAffine3::IDENTITY))
             .map_err(|m| self.invalid(format!("nodes[{}]", node.index()), m))?;
         let world = to_world * local;
+        let shared = shared_above || self.graph.refs[node.index()] > 1;
+        if let (true, Some(ext)) = (shared, node_shape(node, self.path)?) {
+            let key = format!("nodes[{}]", node.index());
+            if self
+                .shapes
+                .shapes
+                .get(ext.shape)
+                .is_some_and(|d| d.kind == "plane")
+            {
+                let mut p = Prototype::default();
+                let mut planes = Vec::new();
+                let mut none = Vec::new();
+                self.place_shape(ext.shape, world, &key, &mut p, Some(&mut planes), &mut none)?;
+                out.geometry.planes.append(&mut planes);
+            }
+        }
         if let Some(camera) = node.camera() {
             let c = gltf_camera::convert(&camera, self.file.cameras.get(camera.index()), world)
                 .map_err(|m| self.invalid(format!("cameras[{}]", camera.index()), m))?;
@@ -518,7 +554,7 @@ impl<'a> GraphBuild<'a> {
             out.lights.push(l);
         }
         for child in node.children() {
-            self.place_cameras_and_lights(&child, world, out, depth + 1)?;
+            self.place_cameras_and_lights(&child, world, out, depth + 1, shared)?;
         }
         Ok(())
     }

@@ -160,8 +160,9 @@ impl Aovs {
 impl Geometry {
     /// A primitive's 1-based object index: the world's spheres, then planes, then quadrics, then
     /// meshes (a whole mesh is one object), each in the order they were given, then one index per
-    /// placement of a prototype (a whole placed copy is one object), in placement order; 0 is left
-    /// for "no object". Saturates at `u32::MAX`.
+    /// placement of a prototype, in placement order (a placed copy's own shapes are one object;
+    /// instances nested inside it are placements of their own); 0 is left for "no object".
+    /// Saturates at `u32::MAX`.
     pub fn object_index(&self, prim: crate::shape::PrimRef) -> u32 {
         use crate::shape::LocalPrim;
         let (s, p, q) = (

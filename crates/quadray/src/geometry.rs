@@ -1,5 +1,5 @@
-//! All primitives of a scene, grouped in levels (the world and the prototypes it places), with
-//! the one `match` that dispatches over [`LocalPrim`].
+//! All primitives of a scene, grouped in levels (the world and the prototypes it places), and the
+//! dispatch over [`LocalPrim`] for each phase of intersection.
 
 use crate::instance::{Instance, InstancePath};
 use crate::material::MaterialId;
@@ -86,13 +86,6 @@ impl Level<'_> {
             }
             LocalPrim::Plane(_) => None,
         }
-    }
-
-    /// Number of bounded primitives: spheres, quadrics and triangles (instances not counted).
-    pub fn primitive_count(&self) -> usize {
-        self.spheres.len()
-            + self.quadrics.len()
-            + self.meshes.iter().map(Mesh::triangle_count).sum::<usize>()
     }
 }
 

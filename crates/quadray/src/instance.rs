@@ -218,9 +218,9 @@ impl Placements {
         Ok(p)
     }
 
-    /// Number of placements, the world included.
+    /// Number of placements, the world included (1, the world alone, for the empty numbering).
     pub fn count(&self) -> u64 {
-        self.sizes[0]
+        self.sizes.first().copied().unwrap_or(1)
     }
 
     /// Instance `k` of `level` placed below placement `base` of that level.

@@ -7,7 +7,6 @@
 //! core requires; a group that reaches itself through its instances is an error naming the cycle.
 
 use super::*;
-use crate::import::placed_sphere;
 use quadray::{Instance, MAX_NESTING, Prototype};
 use std::collections::HashSet;
 
@@ -220,7 +219,8 @@ impl Builder<'_> {
             let key = format!("{k}group[{i}]");
             let spec = g.get_ref();
             // A template is built (so its errors show) but placed only by instances.
-            let prototype = self.prototype(st, names, spec.name.get_ref(), spec.name.span())?;
+            let prototype =
+                self.prototype(st, names, spec.name.get_ref(), spec.name.span(), &key)?;
             if spec.template.as_ref().is_some_and(|t| *t.get_ref()) {
                 continue;
             }
@@ -230,7 +230,13 @@ impl Builder<'_> {
         for (i, inst) in c.instances.iter().enumerate() {
             let key = format!("{k}instance[{i}]");
             let spec = inst.get_ref();
-            let prototype = self.prototype(st, names, spec.of.get_ref(), spec.of.span())?;
+            let prototype = self.prototype(
+                st,
+                names,
+                spec.of.get_ref(),
+                spec.of.span(),
+                &format!("{key}.of"),
+            )?;
             let transform = self.transform(&spec.transform, &format!("{key}.transform"))?;
             let material = spec
                 .material
@@ -263,7 +269,7 @@ impl Builder<'_> {
         else {
             return Ok(false);
         };
-        let prototype = self.prototype(st, names, name.get_ref(), name.span())?;
+        let prototype = self.prototype(st, names, name.get_ref(), name.span(), key)?;
         let transform = self.transform(transform, &format!("{key}.transform"))?;
         out.instances.push(Instance::new(prototype, transform));
         Ok(true)
@@ -276,6 +282,7 @@ impl Builder<'_> {
         names: &HashMap<String, u32>,
         name: &str,
         span: Range<usize>,
+        at_key: &str,
     ) -> Result<u32, LoadError> {
         if let Some(&p) = st.built.get(name) {
             return Ok(p);
@@ -285,7 +292,7 @@ impl Builder<'_> {
             known.sort_unstable();
             return Err(self.err(
                 span,
-                "of",
+                at_key,
                 format!(
                     "no group or named shape \"{name}\" (defined: {})",
                     if known.is_empty() {
@@ -362,59 +369,6 @@ impl Builder<'_> {
         st.prototypes.push(prototype);
         st.built.insert(name.to_string(), index);
         Ok(index)
-    }
-
-    /// A sphere, through its `transform` unless `local` (a non-uniform scale makes it the
-    /// ellipsoid it is, as a clipped quadric).
-    fn sphere(
-        &self,
-        spec: &Spanned<SphereSpec>,
-        key: &str,
-        names: &HashMap<String, u32>,
-        local: bool,
-        out: &mut Prototype,
-    ) -> Result<(), LoadError> {
-        let s = spec.get_ref();
-        let center = self.vec3(&s.center, &format!("{key}.center"))?;
-        let radius = self.positive(&s.radius, &format!("{key}.radius"))?;
-        let material = self.material_id(names, &s.material, &format!("{key}.material"))?;
-        if local || s.transform.is_none() {
-            out.spheres.push(Sphere {
-                center,
-                radius,
-                material,
-            });
-            return Ok(());
-        }
-        let transform = self.transform(&s.transform, &format!("{key}.transform"))?;
-        let to_parent = transform.to_world * glam::DAffine3::from_translation(center);
-        match placed_sphere(to_parent, radius, material)
-            .map_err(|e| self.err(spec.span(), key, e))?
-        {
-            crate::import::PlacedShape::Sphere(s) => out.spheres.push(s),
-            crate::import::PlacedShape::Quadric(q) => out.quadrics.push(*q),
-            crate::import::PlacedShape::Plane(_) => unreachable!("a sphere is never a plane"),
-        }
-        Ok(())
-    }
-
-    /// A plane, through its `transform` (the normal by the inverse transpose).
-    fn plane(
-        &self,
-        spec: &Spanned<PlaneSpec>,
-        key: &str,
-        names: &HashMap<String, u32>,
-    ) -> Result<Plane, LoadError> {
-        let p = spec.get_ref();
-        let t = self.transform(&p.transform, &format!("{key}.transform"))?;
-        let normal = self.unit(&p.normal, &format!("{key}.normal"))?;
-        Ok(Plane {
-            point: t
-                .to_world
-                .transform_point3(self.vec3(&p.point, &format!("{key}.point"))?),
-            normal: (t.normal_to_world * normal).normalize(),
-            material: self.material_id(names, &p.material, &format!("{key}.material"))?,
-        })
     }
 
     /// A `[[mesh]]`, inline or read from a file, into `out`; an imported file's planes go to

@@ -269,6 +269,16 @@ impl Builder<'_> {
             prototypes: graph.prototypes,
             instances: top.instances,
         };
+        // Nesting and expansion limits over groups and imported files together; each group's
+        // own depth was checked where it is defined.
+        quadray::Placements::new(&geometry).map_err(|e| {
+            LoadError::invalid(
+                self.path,
+                None,
+                "instance",
+                format!("the scene graph is too large: {e}"),
+            )
+        })?;
         let mut lights = Vec::new();
         for (i, l) in file.lights.iter().enumerate() {
             lights.push(self.light(l.get_ref(), &format!("light[{i}]"))?);

@@ -1,7 +1,9 @@
-//! `[[quadric]]` and `[[mesh]]` (inline or from an OBJ/glTF file), and the glTF selectors the
+//! `[[sphere]]`, `[[plane]]`, `[[quadric]]` and `[[mesh]]` (inline or from an OBJ/glTF file), and the glTF selectors the
 //! latter take.
 
 use super::*;
+use crate::import::placed_sphere;
+use quadray::Prototype;
 
 impl Builder<'_> {
     pub(super) fn selector(
@@ -231,5 +233,58 @@ impl Builder<'_> {
         let material = self.material_id(names, material_spec, &format!("{key}.material"))?;
         Mesh::new(positions, indices, normals, material)
             .map_err(|e| self.err(spec.span(), key, e.to_string()))
+    }
+
+    /// A sphere, through its `transform` unless `local` (a non-uniform scale makes it the
+    /// ellipsoid it is, as a clipped quadric).
+    pub(super) fn sphere(
+        &self,
+        spec: &Spanned<SphereSpec>,
+        key: &str,
+        names: &HashMap<String, u32>,
+        local: bool,
+        out: &mut Prototype,
+    ) -> Result<(), LoadError> {
+        let s = spec.get_ref();
+        let center = self.vec3(&s.center, &format!("{key}.center"))?;
+        let radius = self.positive(&s.radius, &format!("{key}.radius"))?;
+        let material = self.material_id(names, &s.material, &format!("{key}.material"))?;
+        if local || s.transform.is_none() {
+            out.spheres.push(Sphere {
+                center,
+                radius,
+                material,
+            });
+            return Ok(());
+        }
+        let transform = self.transform(&s.transform, &format!("{key}.transform"))?;
+        let to_parent = transform.to_world * glam::DAffine3::from_translation(center);
+        match placed_sphere(to_parent, radius, material)
+            .map_err(|e| self.err(spec.span(), key, e))?
+        {
+            crate::import::PlacedShape::Sphere(s) => out.spheres.push(s),
+            crate::import::PlacedShape::Quadric(q) => out.quadrics.push(*q),
+            crate::import::PlacedShape::Plane(_) => unreachable!("a sphere is never a plane"),
+        }
+        Ok(())
+    }
+
+    /// A plane, through its `transform` (the normal by the inverse transpose).
+    pub(super) fn plane(
+        &self,
+        spec: &Spanned<PlaneSpec>,
+        key: &str,
+        names: &HashMap<String, u32>,
+    ) -> Result<Plane, LoadError> {
+        let p = spec.get_ref();
+        let t = self.transform(&p.transform, &format!("{key}.transform"))?;
+        let normal = self.unit(&p.normal, &format!("{key}.normal"))?;
+        Ok(Plane {
+            point: t
+                .to_world
+                .transform_point3(self.vec3(&p.point, &format!("{key}.point"))?),
+            normal: (t.normal_to_world * normal).normalize(),
+            material: self.material_id(names, &p.material, &format!("{key}.material"))?,
+        })
     }
 }

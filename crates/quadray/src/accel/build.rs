@@ -83,7 +83,7 @@ fn level_bounds(g: &Geometry) -> Vec<Option<Bounds>> {
             b = union(b, mesh_bounds(m));
         }
         for inst in l.instances {
-            if let Some(c) = bounds[inst.prototype as usize + 1] {
+            if let Some(&Some(c)) = bounds.get(inst.prototype as usize + 1) {
                 b = union(b, transformed_bounds(c, inst));
             }
         }
@@ -119,8 +119,9 @@ fn level_extents(g: &Geometry, bounds: &[Option<Bounds>], world: f64) -> Vec<f64
                 .map(|r| r.element_sum())
                 .fold(0.0, f64::max);
             let e = (norm * extents[level] + m.translation.abs().max_element()) * (1.0 + 1e-12);
-            let child = inst.prototype as usize + 1;
-            extents[child] = extents[child].max(e);
+            if let Some(child) = extents.get_mut(inst.prototype as usize + 1) {
+                *child = child.max(e);
+            }
         }
     }
     extents
@@ -131,105 +132,122 @@ impl Accel {
     /// start at outside the primitives' own bounds (the camera). The instances must be numbered
     /// ([`Placements::new`] succeeds); otherwise the scene is built without them.
     pub fn build(geometry: &Geometry, origin_extent: f64) -> Accel {
-        let placements = Placements::new(geometry).unwrap_or_default();
+        let numbered = Placements::new(geometry);
+        let valid = numbered.is_ok();
+        let placements = numbered.unwrap_or_default();
         let bounds = level_bounds(geometry);
         let world = bounds[0].map_or(0.0, magnitude).max(origin_extent.abs());
         let extents = level_extents(geometry, &bounds, world);
         let n = geometry.level_count();
         let mut levels: Vec<Option<LevelAccel>> = vec![None; n];
-        let (mut triangles, mut analytic_count) = (0, 0);
         // Children first (prototypes place only earlier ones), the world last: an instance's box
         // is made of its prototype's covering boxes, placed.
         for level in (1..n).chain([0]) {
-            let l = geometry.level(level);
-            let extent = extents[level] as f32;
-            let analytic = AnalyticBvh::build(l, extent);
-            analytic_count += analytic.as_ref().map_or(0, AnalyticBvh::len);
-            let mesh_triangles: usize = l.meshes.iter().map(|m| m.triangle_count()).sum();
-            triangles += mesh_triangles;
-            let meshes = (mesh_triangles > 0).then(|| MeshBvh::build(l.meshes));
-
-            let mut items = Vec::new();
-            let mut item_boxes = Vec::new();
-            let mut covering = Vec::new();
-            if let Some(a) = &analytic {
-                items.push(TopItem::Analytic);
-                item_boxes.push(a.bounds());
-                covering.push(f64_box(&a.bounds()));
-            }
-            if let Some(bvh) = &meshes {
-                let b = l
-                    .meshes
-                    .iter()
-                    .filter(|m| m.triangle_count() > 0)
-                    .fold(None, |b, m| union(b, mesh_bounds(m)));
-                items.push(TopItem::Meshes);
-                item_boxes.push(padded_aabb(b.expect("meshes have triangles"), extent));
-                covering.extend(bvh.covering_boxes());
-            }
-            if placements.count() > 0 {
-                for (k, inst) in l.instances.iter().enumerate() {
-                    let child = levels[inst.prototype as usize + 1]
-                        .as_ref()
-                        .expect("children are built first");
-                    let Some(b) = child
-                        .covering
-                        .iter()
-                        .map(|&c| transformed_bounds(c, inst))
-                        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
-                    else {
-                        continue;
-                    };
-                    items.push(TopItem::Instance {
-                        index: k as u32,
-                        level: inst.prototype + 1,
-                    });
-                    item_boxes.push(padded_aabb(b, extent));
-                    covering.push(b);
-                }
-            }
-            if covering.len() > MAX_COVERING {
-                // Many instances: the parent gets one box of them all.
-                let all = covering
-                    .iter()
-                    .copied()
-                    .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
-                covering = all.into_iter().collect();
-            }
-            let top = (items.len() > FLAT_TOP).then(|| {
-                let mut build_time = Duration::ZERO;
-                let params = BvhBuildParams {
-                    max_prims_per_leaf: 1,
-                    ..BvhBuildParams::medium_build()
-                };
-                build_bvh2(&item_boxes, params, &mut build_time)
-            });
-            if let Some(top) = &top {
-                items = top
-                    .primitive_indices
-                    .iter()
-                    .map(|&i| items[i as usize])
-                    .collect();
-                item_boxes = Vec::new();
-            }
-            levels[level] = Some(LevelAccel {
-                analytic,
-                meshes,
-                items,
-                top,
-                item_boxes,
-                covering,
-            });
+            let built = build_level(geometry, level, extents[level] as f32, valid, &levels);
+            levels[level] = Some(built);
         }
+        let levels: Vec<LevelAccel> = levels
+            .into_iter()
+            .map(|l| l.expect("every level is built"))
+            .collect();
+        let triangles: usize = (0..n)
+            .flat_map(|l| geometry.level(l).meshes)
+            .map(|m| m.triangle_count())
+            .sum();
+        let analytic_count: usize = levels
+            .iter()
+            .map(|l| l.analytic.as_ref().map_or(0, AnalyticBvh::len))
+            .sum();
         Accel {
-            levels: levels
-                .into_iter()
-                .map(|l| l.expect("every level is built"))
-                .collect(),
+            levels,
             placements,
             planes: geometry.planes.len() as u32,
             avx2: simd_path() == SimdPath::Avx2 && triangles > 4 * analytic_count,
             triangles,
         }
+    }
+}
+
+/// One level's bottom-level BVHs and its top; its instances (when `with_instances`) are boxed by
+/// their prototypes' covering boxes, from `built` (every child level is built before).
+fn build_level(
+    geometry: &Geometry,
+    level: usize,
+    extent: f32,
+    with_instances: bool,
+    built: &[Option<LevelAccel>],
+) -> LevelAccel {
+    let l = geometry.level(level);
+    let analytic = AnalyticBvh::build(l, extent);
+    let has_triangles = l.meshes.iter().any(|m| m.triangle_count() > 0);
+    let meshes = has_triangles.then(|| MeshBvh::build(l.meshes));
+    let mut items = Vec::new();
+    let mut item_boxes = Vec::new();
+    let mut covering = Vec::new();
+    if let Some(a) = &analytic {
+        items.push(TopItem::Analytic);
+        item_boxes.push(a.bounds());
+        covering.push(f64_box(&a.bounds()));
+    }
+    if let Some(bvh) = &meshes {
+        let b = l
+            .meshes
+            .iter()
+            .filter(|m| m.triangle_count() > 0)
+            .fold(None, |b, m| union(b, mesh_bounds(m)));
+        items.push(TopItem::Meshes);
+        item_boxes.push(padded_aabb(b.expect("meshes have triangles"), extent));
+        covering.extend(bvh.covering_boxes());
+    }
+    for (k, inst) in l.instances.iter().enumerate().filter(|_| with_instances) {
+        let child = built[inst.prototype as usize + 1]
+            .as_ref()
+            .expect("children are built first");
+        let Some(b) = child
+            .covering
+            .iter()
+            .map(|&c| transformed_bounds(c, inst))
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+        else {
+            continue;
+        };
+        items.push(TopItem::Instance {
+            index: k as u32,
+            level: inst.prototype + 1,
+        });
+        item_boxes.push(padded_aabb(b, extent));
+        covering.push(b);
+    }
+    if covering.len() > MAX_COVERING {
+        // Many instances: the parent gets one box of them all.
+        let all = covering
+            .iter()
+            .copied()
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
+        covering = all.into_iter().collect();
+    }
+    let top = (items.len() > FLAT_TOP).then(|| {
+        let mut build_time = Duration::ZERO;
+        let params = BvhBuildParams {
+            max_prims_per_leaf: 1,
+            ..BvhBuildParams::medium_build()
+        };
+        build_bvh2(&item_boxes, params, &mut build_time)
+    });
+    if let Some(top) = &top {
+        items = top
+            .primitive_indices
+            .iter()
+            .map(|&i| items[i as usize])
+            .collect();
+        item_boxes = Vec::new();
+    }
+    LevelAccel {
+        analytic,
+        meshes,
+        items,
+        top,
+        item_boxes,
+        covering,
     }
 }

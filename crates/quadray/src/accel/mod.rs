@@ -394,7 +394,7 @@ impl Accel {
                     }
                 }
             }
-            Some(top) => with_stack(&TOP_STACK, |stack| {
+            Some(top) => with_top_stack(|stack| {
                 let fray = to_obvhs(ray, *best_t);
                 let mut leaves = TopLeaves::new(top, &fray, stack);
                 while let Some(range) = leaves.next(round_up(*best_t)) {
@@ -483,7 +483,7 @@ impl Accel {
             }
             Some(top) => {
                 let mut blocked = false;
-                with_stack(&TOP_STACK, |stack| {
+                with_top_stack(|stack| {
                     let fray = to_obvhs(ray, t_max);
                     let mut leaves = TopLeaves::new(top, &fray, stack);
                     'search: while let Some(range) = leaves.next(fray.tmax) {
@@ -551,6 +551,29 @@ thread_local! {
     /// The tops' traversal stack, reused: obvhs' own stacks are zeroed on every traversal, which
     /// showed up as 5% of all instructions in profiles.
     static TOP_STACK: RefCell<Vec<u32>> = const { RefCell::new(Vec::new()) };
+    /// Stacks for tops reached inside another top's traversal (nested instances), reused.
+    static NESTED_TOP_STACKS: RefCell<Vec<Vec<u32>>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Runs `f` with an empty top-level stack: this thread's own, or for a top nested in another
+/// one's traversal, one from a pool (taken and returned, so nested tops never allocate per ray).
+#[inline]
+fn with_top_stack<R>(f: impl FnOnce(&mut Vec<u32>) -> R) -> R {
+    TOP_STACK.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut stack) => {
+            stack.clear();
+            f(&mut stack)
+        }
+        Err(_) => {
+            let mut stack = NESTED_TOP_STACKS
+                .with(|pool| pool.borrow_mut().pop())
+                .unwrap_or_default();
+            stack.clear();
+            let result = f(&mut stack);
+            NESTED_TOP_STACKS.with(|pool| pool.borrow_mut().push(stack));
+            result
+        }
+    })
 }
 
 /// Runs `f` with this thread's empty stack from `key`, or with a fresh one when it is in use: a
