@@ -89,7 +89,7 @@ pub use quadric::{
 pub use render::{
     NoProgress, Progress, RenderError, RenderSettings, Rendered, render, render_with_aovs,
 };
-pub use scene::{Scene, SceneDescription, SceneError};
+pub use scene::{MAX_COORDINATE, Scene, SceneDescription, SceneError};
 pub use shape::{LocalPrim, PrimRef, SurfaceGeometry, SurfaceHit};
 pub use sphere::Sphere;
 pub use texture::{ImageTexture, Texture, TexturePoint, VertexAttributes};

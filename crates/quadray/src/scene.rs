@@ -10,6 +10,10 @@ use crate::math::Ray;
 use crate::shape::{PrimRef, SurfaceHit};
 use glam::Vec3;
 
+/// Largest coordinate magnitude a scene may reach, shapes as placed and camera alike (f32's range
+/// is 3.4·10³⁸; the margin covers box padding and ray spans).
+pub const MAX_COORDINATE: f64 = 1e30;
+
 /// Everything a scene holds, before validation.
 #[derive(Clone, Debug)]
 pub struct SceneDescription {
@@ -116,7 +120,19 @@ impl Scene {
             origins
                 .push(d.camera.from.abs() + glam::DVec3::splat(height * crate::render::MAX_ASPECT));
         }
-        let accel = Accel::build(&d.geometry, max_abs_coordinate(&origins));
+        let origin_extent = max_abs_coordinate(&origins);
+        // The BVHs hold f32 boxes: coordinates of shapes (in their level and as placed) and of the
+        // camera must stay well inside f32's range, or boxes become infinite.
+        let extent = crate::accel::coordinate_extent(&d.geometry, origin_extent);
+        if extent.is_nan() || extent > MAX_COORDINATE {
+            return Err(invalid(
+                "geometry",
+                format!(
+                    "coordinates reach {extent:e}; quadray supports magnitudes up to {MAX_COORDINATE:e} (its BVHs use f32 boxes)"
+                ),
+            ));
+        }
+        let accel = Accel::build(&d.geometry, origin_extent);
         Ok(Scene {
             camera: d.camera,
             background: d.background,

@@ -127,6 +127,19 @@ fn level_extents(g: &Geometry, bounds: &[Option<Bounds>], world: f64) -> Vec<f64
     extents
 }
 
+/// The largest coordinate magnitude of any shape, in its level's own space or placed by an
+/// instance in its parent's, and of the camera (`origin_extent`); infinite when one is not finite.
+pub fn coordinate_extent(geometry: &Geometry, origin_extent: f64) -> f64 {
+    level_bounds(geometry)
+        .iter()
+        .flatten()
+        .map(|&b| match b.0.is_finite() && b.1.is_finite() {
+            true => magnitude(b),
+            false => f64::INFINITY,
+        })
+        .fold(origin_extent.abs(), f64::max)
+}
+
 impl Accel {
     /// Builds every level. `origin_extent` bounds the magnitude of every coordinate a ray may
     /// start at outside the primitives' own bounds (the camera). The instances must be numbered
@@ -143,7 +156,9 @@ impl Accel {
         // Children first (prototypes place only earlier ones), the world last: an instance's box
         // is made of its prototype's covering boxes, placed.
         for level in (1..n).chain([0]) {
-            let built = build_level(geometry, level, extents[level] as f32, valid, &levels);
+            // A ray origin beyond f32's range meets nothing anyway: the padding stays finite.
+            let extent = extents[level].min(crate::scene::MAX_COORDINATE) as f32;
+            let built = build_level(geometry, level, extent, valid, &levels);
             levels[level] = Some(built);
         }
         let levels: Vec<LevelAccel> = levels

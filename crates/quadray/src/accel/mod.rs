@@ -39,6 +39,7 @@ use crate::math::Ray;
 use crate::shape::{LocalPrim, PrimRef};
 use analytic::AnalyticBvh;
 use build::Bounds;
+pub use build::coordinate_extent;
 use glam::{DVec3, Vec3A};
 use mesh_bvh::{MeshBvh, MeshRay};
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
