@@ -512,15 +512,32 @@ fn gltf_graphs_wide_deep_and_with_planes_under_shared_nodes() {
     let nodes = serde_json::json!([
         {"children": [2], "translation": [0.0, 0.0, 0.0]},
         {"children": [2], "translation": [0.0, 0.0, 5.0]},
-        {"children": [3, 4]},
+        {"children": [3, 4, 5], "translation": [1.0, 0.0, 0.0]},
         {"mesh": 0},
-        {"extensions": {"QUADRAY_quadrics": {"shape": 0}}}
+        {"extensions": {"QUADRAY_quadrics": {"shape": 0}}},
+        {"translation": [0.0, 2.0, 0.0], "extensions": {"KHR_lights_punctual": {"light": 0}}}
     ]);
-    let planes = load_gltf_json(&triangle_gltf(nodes, serde_json::json!([0, 1])))
-        .expect("planes under a shared node load");
+    let mut doc = triangle_gltf(nodes, serde_json::json!([0, 1]));
+    doc["extensionsUsed"] = serde_json::json!(["QUADRAY_quadrics", "KHR_lights_punctual"]);
+    doc["extensions"]["KHR_lights_punctual"] =
+        serde_json::json!({"lights": [{"type": "point", "intensity": 100.0}]});
+    let planes = load_gltf_json(&doc).expect("planes under a shared node load");
     let g = &planes.description.geometry;
     assert_eq!(g.planes.len(), 2, "one plane per path");
     assert_eq!((g.prototypes.len(), g.instances.len()), (1, 2));
+    // The light under the shared node is placed on both paths, its transforms composed: glTF
+    // (x, y, z) = (1, 2, 0) and (1, 2, 5) become quadray's z-up (x, -z, y).
+    let mut at: Vec<[f64; 3]> = planes
+        .description
+        .lights
+        .iter()
+        .map(|l| match l {
+            quadray::Light::Point { position, .. } => position.to_array(),
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    at.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    assert_eq!(at, vec![[1.0, -5.0, 2.0], [1.0, 0.0, 2.0]]);
 }
 
 /// Coordinates beyond the documented limit (shapes as placed, in any level) are a clear error,
