@@ -6,13 +6,12 @@
 //! origin to f32 and obvhs' clamped inverse direction), and the t handed back to obvhs for culling
 //! is rounded up.
 
-use super::build::padded_aabb;
+use super::build::{build_single_leaves, padded_aabb};
 use super::{round_up, to_obvhs, with_stack};
 use crate::geometry::Level;
 use crate::math::Ray;
 use crate::shape::LocalPrim;
-use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, bvh2::builder::build_bvh2, ray::RayHit};
-use std::time::Duration;
+use obvhs::{aabb::Aabb, bvh2::Bvh2, ray::RayHit};
 
 /// A BVH over the spheres and quadrics of one level.
 #[derive(Clone)]
@@ -47,15 +46,8 @@ impl AnalyticBvh {
         // obvhs' collapse treats every primitive as equally costly. An f64 quadric or sphere test
         // costs several triangle tests, so leaves keep one primitive (measured: 6% faster on
         // scenes/reflective.toml than leaves of up to 8).
-        let params = BvhBuildParams {
-            max_prims_per_leaf: 1,
-            ..BvhBuildParams::medium_build()
-        };
-        let mut build_time = Duration::ZERO;
-        let bvh = build_bvh2(&aabbs, params, &mut build_time);
-        let prims = bvh
-            .primitive_indices
-            .iter()
+        let bvh = build_single_leaves(&aabbs);
+        let prims = (bvh.primitive_indices.iter())
             .map(|&i| prims[i as usize])
             .collect();
         Some(AnalyticBvh { bvh, prims })

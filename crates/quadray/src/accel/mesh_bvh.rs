@@ -17,11 +17,9 @@ use super::tri4::Tri4;
 use crate::mesh::Mesh;
 use crate::triangle::{ShearedRay, TriangleHit};
 use glam::{Vec3, Vec3A, Vec4};
-use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::{Bvh2, builder::build_bvh2};
+use obvhs::bvh2::Bvh2;
 use std::cell::RefCell;
-use std::time::Duration;
 
 /// A triangle of a [`MeshBvh`]: index of the mesh among those it was built over, and the triangle.
 pub(crate) type TriId = (u32, u32);
@@ -301,12 +299,7 @@ impl MeshBvh {
         // one SIMD test, so obvhs' SAH leaf collapse, which counts every triangle, would leave the
         // blocks 60% full). Measured on the kitchen: obvhs' slow build (wider PLOC search, more
         // reinsertion) and spatial pre-splits change throughput by under 2% at 1.2-2x the time.
-        let params = BvhBuildParams {
-            max_prims_per_leaf: 1,
-            ..BvhBuildParams::medium_build()
-        };
-        let mut build_time = Duration::ZERO;
-        let bvh2 = build_bvh2(&aabbs, params, &mut build_time);
+        let bvh2 = super::build::build_single_leaves(&aabbs);
         let (nodes, blocks) = collapse(&bvh2, &triangles);
         let nodes = nodes.into_boxed_slice().into_vec();
         let blocks = blocks.into_boxed_slice().into_vec();
