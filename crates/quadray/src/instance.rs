@@ -223,6 +223,12 @@ impl Placements {
         self.sizes.first().copied().unwrap_or(1)
     }
 
+    /// How far instance `k` of `level` is numbered from the level's own placement.
+    #[inline]
+    pub fn offset(&self, level: usize, k: usize) -> u64 {
+        self.offsets[level][k]
+    }
+
     /// Instance `k` of `level` placed below placement `base` of that level.
     #[inline]
     pub fn child(&self, level: usize, k: usize, base: u64) -> u64 {

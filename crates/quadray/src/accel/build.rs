@@ -3,7 +3,7 @@
 
 use super::analytic::AnalyticBvh;
 use super::mesh_bvh::MeshBvh;
-use super::{Accel, FLAT_TOP, LevelAccel, SimdPath, TopItem, simd_path};
+use super::{Accel, FLAT_TOP, LevelAccel, Placed, SimdPath, TopItem, simd_path};
 use crate::geometry::Geometry;
 use crate::instance::{Instance, Placements};
 use glam::{DVec3, Vec3A};
@@ -43,7 +43,12 @@ fn union(a: Option<Bounds>, b: Bounds) -> Option<Bounds> {
 
 /// The box of `b`'s eight corners through an instance's transform, widened by the transform's own
 /// rounding (a few ulps of the magnitudes it combines).
-fn transformed_bounds((lo, hi): Bounds, inst: &Instance) -> Bounds {
+fn transformed_bounds(b: Bounds, inst: &Instance) -> Bounds {
+    placed_bounds(b, &inst.transform.to_world)
+}
+
+/// The box of `b`'s eight corners through `to_parent`, widened by the map's own rounding.
+fn placed_bounds((lo, hi): Bounds, to_parent: &glam::DAffine3) -> Bounds {
     let (mut wlo, mut whi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for corner in 0..8 {
         let pick = |bit: u32, a: f64, b: f64| if corner & bit == 0 { a } else { b };
@@ -52,7 +57,7 @@ fn transformed_bounds((lo, hi): Bounds, inst: &Instance) -> Bounds {
             pick(2, lo.y, hi.y),
             pick(4, lo.z, hi.z),
         );
-        let w = inst.transform.to_world.transform_point3(c);
+        let w = to_parent.transform_point3(c);
         wlo = wlo.min(w);
         whi = whi.max(w);
     }
@@ -268,7 +273,8 @@ impl Accel {
         for level in (1..n).chain([0]) {
             // A ray origin beyond f32's range meets nothing anyway: the padding stays finite.
             let extent = extents[level].min(crate::scene::MAX_COORDINATE) as f32;
-            let built = build_level(geometry, level, extent, valid, &levels);
+            let numbering = valid.then_some(&placements);
+            let built = build_level(geometry, level, extent, numbering, &levels);
             levels[level] = Some(built);
         }
         let levels: Vec<LevelAccel> = levels
@@ -299,7 +305,7 @@ fn build_level(
     geometry: &Geometry,
     level: usize,
     extent: f32,
-    with_instances: bool,
+    placements: Option<&Placements>,
     built: &[Option<LevelAccel>],
 ) -> LevelAccel {
     let l = geometry.level(level);
@@ -324,16 +330,31 @@ fn build_level(
         item_boxes.push(padded_aabb(b.expect("meshes have triangles"), extent));
         covering.extend(bvh.covering_boxes());
     }
-    for (k, inst) in l.instances.iter().enumerate().filter(|_| with_instances) {
-        let child = built[inst.prototype as usize + 1]
-            .as_ref()
-            .expect("children are built first");
-        let Some(b) = child
-            .covering
-            .iter()
-            .map(|&c| transformed_bounds(c, inst))
-            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
-        else {
+    let mut placed = Vec::new();
+    for (k, inst) in l.instances.iter().enumerate() {
+        let Some(placements) = placements else { break };
+        let child = inst.prototype as usize + 1;
+        if hoistable(geometry, child) {
+            // An instance of a level that only places others: its instances join this top with
+            // composed transforms, saving a level on every ray (3 levels of columns cost 1.43x
+            // the flat scene).
+            for (j, inner) in geometry.level(child).instances.iter().enumerate() {
+                let to_parent = inst.transform.to_world * inner.transform.to_world;
+                let Some(b) = cover(built, inner.prototype as usize + 1, &to_parent) else {
+                    continue;
+                };
+                items.push(TopItem::Placed(placed.len() as u32));
+                placed.push(Placed {
+                    from_parent: inner.transform.from_world * inst.transform.from_world,
+                    offset: placements.offset(level, k) + placements.offset(child, j),
+                    level: inner.prototype + 1,
+                });
+                item_boxes.push(padded_aabb(b, extent));
+                covering.push(b);
+            }
+            continue;
+        }
+        let Some(b) = cover(built, child, &inst.transform.to_world) else {
             continue;
         };
         items.push(TopItem::Instance {
@@ -366,7 +387,31 @@ fn build_level(
         top,
         item_boxes,
         covering,
+        placed,
     }
+}
+
+/// Most instances a level may hold, and nothing else, for its own instances to be hoisted into
+/// the top of each level placing it.
+const HOIST_MAX: usize = 8;
+
+/// Whether `level` only places a few other levels (its instances can join its parents' tops).
+fn hoistable(geometry: &Geometry, level: usize) -> bool {
+    let l = geometry.level(level);
+    l.spheres.is_empty()
+        && l.quadrics.is_empty()
+        && l.meshes.iter().all(|m| m.triangle_count() == 0)
+        && (1..=HOIST_MAX).contains(&l.instances.len())
+}
+
+/// The box of built level `level`'s covering boxes placed by `to_parent`, if it has content.
+fn cover(built: &[Option<LevelAccel>], level: usize, to_parent: &glam::DAffine3) -> Option<Bounds> {
+    let child = built[level].as_ref().expect("children are built first");
+    child
+        .covering
+        .iter()
+        .map(|&c| placed_bounds(c, to_parent))
+        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
 }
 
 #[cfg(test)]

@@ -56,6 +56,20 @@ enum TopItem {
     Meshes,
     /// Instance `index` of the level, placing level `level` (`1 +` its prototype).
     Instance { index: u32, level: u32 },
+    /// An instance of an instance, hoisted into this top: [`LevelAccel::placed`]`[i]`.
+    Placed(u32),
+}
+
+/// An instance of an instance placed directly by a level's top (a level that only places others
+/// is skipped: one ray transform instead of two).
+#[derive(Clone, Copy, Debug)]
+struct Placed {
+    /// This level's space to the placed level's: the two inverses composed.
+    from_parent: glam::DAffine3,
+    /// Its placement's offset from this level's placement (the two offsets summed).
+    offset: u64,
+    /// The placed level.
+    level: u32,
 }
 
 /// The structures of one level (the world, or one prototype in its own space): bottom-level BVHs
@@ -74,6 +88,8 @@ struct LevelAccel {
     /// content, tighter than one box: an instance's box is theirs, placed (a rotated bunny's
     /// box of its box overlapped its neighbours' and cost 2x in traversal).
     covering: Vec<Bounds>,
+    /// Hoisted instances of instances ([`TopItem::Placed`]).
+    placed: Vec<Placed>,
 }
 
 impl LevelAccel {
@@ -91,6 +107,7 @@ impl LevelAccel {
         });
         bvh + self.items.capacity() * std::mem::size_of::<TopItem>()
             + self.item_boxes.capacity() * std::mem::size_of::<Aabb>()
+            + self.placed.capacity() * std::mem::size_of::<Placed>()
     }
 }
 
@@ -117,6 +134,15 @@ impl std::fmt::Debug for Accel {
             .field("triangles", &self.triangles)
             .field("planes", &self.planes)
             .finish()
+    }
+}
+
+impl Placed {
+    /// The parent level's ray in the placed level's space.
+    #[inline]
+    fn ray(&self, ray: &Ray) -> Ray {
+        let m = &self.from_parent;
+        Ray::new(m.transform_point3(ray.origin), m.transform_vector3(ray.dir))
     }
 }
 
@@ -452,6 +478,13 @@ impl Accel {
                 let placement = self.placements.child(q.level, index as usize, q.placement);
                 self.closest_level(q.g, level as usize, placement, &local, q.from, best_t, best);
             }
+            TopItem::Placed(i) => {
+                let p = &l.placed[i as usize];
+                let local = p.ray(q.ray);
+                let placement = q.placement + p.offset;
+                let level = p.level as usize;
+                self.closest_level(q.g, level, placement, &local, q.from, best_t, best);
+            }
         }
     }
 
@@ -519,6 +552,12 @@ impl Accel {
                 let local = inst.ray_to_object(q.ray);
                 let placement = self.placements.child(q.level, index as usize, q.placement);
                 self.occluded_level(q.g, level as usize, placement, &local, t_max, q.from)
+            }
+            TopItem::Placed(i) => {
+                let p = &l.placed[i as usize];
+                let local = p.ray(q.ray);
+                let placement = q.placement + p.offset;
+                self.occluded_level(q.g, p.level as usize, placement, &local, t_max, q.from)
             }
         }
     }
