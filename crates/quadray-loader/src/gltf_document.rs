@@ -47,8 +47,8 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 
 /// Reads the glTF or GLB file at `path`, with its buffers.
 pub fn open(path: &Path) -> Result<GltfFile, LoadError> {
-    let bytes =
-        std::fs::read(path).map_err(|e| LoadError::new(path, None, LoadErrorKind::Io(e)))?;
+    let bytes = crate::read_limited::read(path, crate::read_limited::MAX_MESH_BYTES)
+        .map_err(|e| LoadError::new(path, None, LoadErrorKind::Io(e)))?;
     open_bytes(&bytes, path)
 }
 
@@ -377,18 +377,44 @@ pub fn read_uri(base: &Path, uri: &str) -> Result<Vec<u8>, UriError> {
         .decode_utf8()
         .map_err(|_| UriError::Invalid(format!("`{uri}` is not valid percent-encoded UTF-8")))?;
     let file = resolve_reference(base, &decoded);
-    std::fs::read(&file).map_err(|e| UriError::Io(file, e))
+    crate::read_limited::read(&file, crate::read_limited::MAX_MESH_BYTES)
+        .map_err(|e| UriError::Io(file, e))
 }
 
 /// Decodes image `image` of the document as sRGB, or says why it cannot be.
 pub fn read_image(file: &GltfFile, image: &gltf::Image<'_>) -> Result<Image, String> {
+    // The gltf crate's `source` unwraps: an image with a bufferView needs a mimeType, and one
+    // without needs a uri (the spec says so; hostile files do not). Checked here first.
+    let json = file.document.as_json();
+    let raw = json
+        .images
+        .get(image.index())
+        .ok_or_else(|| format!("image {} does not exist", image.index()))?;
+    match (&raw.buffer_view, &raw.mime_type, &raw.uri) {
+        (Some(_), None, _) => {
+            return Err(format!(
+                "image {} reads a bufferView but has no mimeType (glTF requires one)",
+                image.index()
+            ));
+        }
+        (None, _, None) => {
+            return Err(format!(
+                "image {} has neither a uri nor a bufferView",
+                image.index()
+            ));
+        }
+        _ => {}
+    }
     let bytes = match image.source() {
         gltf::image::Source::Uri { uri, .. } => read_uri(&file.base, uri).map_err(|e| match e {
             UriError::Io(p, e) => format!("cannot read `{}`: {e}", p.display()),
             UriError::Invalid(m) => m,
         })?,
         gltf::image::Source::View { view, .. } => {
-            let buffer = &file.buffers[view.buffer().index()];
+            let buffer = file
+                .buffers
+                .get(view.buffer().index())
+                .ok_or_else(|| format!("buffer {} is missing", view.buffer().index()))?;
             buffer
                 .get(view.offset()..)
                 .and_then(|b| b.get(..view.length()))

@@ -34,7 +34,17 @@ impl ImageCache {
 
 /// Decodes an encoded PNG or JPEG image (format guessed from its bytes) into 8-bit RGBA.
 pub fn decode_image(bytes: &[u8], encoding: ColorEncoding) -> Result<Image, String> {
-    let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+    // Limits checked from the header before pixels are allocated (a 1 kB PNG can claim to be
+    // 100 000 pixels square).
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(crate::read_limited::MAX_IMAGE_SIDE);
+    limits.max_image_height = Some(crate::read_limited::MAX_IMAGE_SIDE);
+    limits.max_alloc = Some(crate::read_limited::MAX_IMAGE_ALLOC);
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?;
+    reader.limits(limits);
+    let decoded = reader.decode().map_err(|e| e.to_string())?;
     let rgba = decoded.into_rgba8();
     let (w, h) = rgba.dimensions();
     Image::from_rgba8(w, h, rgba.into_raw(), encoding).map_err(|e| e.to_string())
@@ -42,8 +52,8 @@ pub fn decode_image(bytes: &[u8], encoding: ColorEncoding) -> Result<Image, Stri
 
 /// Reads and decodes the image file at `path`.
 pub fn read_image(path: &Path, encoding: ColorEncoding) -> Result<Image, String> {
-    let bytes =
-        std::fs::read(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+    let bytes = crate::read_limited::read(path, crate::read_limited::MAX_IMAGE_BYTES)
+        .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
     decode_image(&bytes, encoding).map_err(|e| format!("cannot decode `{}`: {e}", path.display()))
 }
 

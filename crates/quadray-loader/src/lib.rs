@@ -28,6 +28,7 @@ pub mod mtl;
 pub mod native;
 pub mod obj;
 pub mod quadrics_ext;
+pub mod read_limited;
 pub mod standalone;
 pub mod tessellate;
 

@@ -21,8 +21,8 @@ use std::path::{Path, PathBuf};
 
 /// Reads the OBJ file at `path` (and the material libraries and textures it names).
 pub fn import_obj(path: &Path, options: &ImportOptions) -> Result<Imported, LoadError> {
-    let bytes =
-        std::fs::read(path).map_err(|e| LoadError::new(path, None, LoadErrorKind::Io(e)))?;
+    let bytes = crate::read_limited::read(path, crate::read_limited::MAX_MESH_BYTES)
+        .map_err(|e| LoadError::new(path, None, LoadErrorKind::Io(e)))?;
     import_obj_bytes(&bytes, path, options)
 }
 
@@ -50,7 +50,10 @@ pub fn import_obj_bytes(
     };
     let result = tobj::load_obj_buf(&mut &bytes[..], &load_options, |reference| {
         let mtl_path = resolve_reference(&folder, &reference.to_string_lossy());
-        let text = match std::fs::read(&mtl_path) {
+        let text = match crate::read_limited::read(
+            &mtl_path,
+            crate::read_limited::MAX_MATERIAL_BYTES,
+        ) {
             Ok(b) => String::from_utf8_lossy(&b).into_owned(),
             Err(e) => {
                 notes.borrow_mut().push(format!(

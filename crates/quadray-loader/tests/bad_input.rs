@@ -281,3 +281,85 @@ fn unknown_file_types_are_refused() {
         "{e}"
     );
 }
+
+/// Files that never end (`/dev/zero`) or are not files are refused by kind and size before they
+/// are read, wherever a scene names them: as the scene, a mesh, a glTF buffer or a texture.
+#[test]
+fn devices_are_never_read() {
+    if !Path::new("/dev/zero").exists() {
+        eprintln!("skipped: no /dev/zero on this system");
+        return;
+    }
+    let d = dir("devices");
+    for name in ["zero.toml", "zero.obj", "zero.glb"] {
+        std::os::unix::fs::symlink("/dev/zero", d.join(name)).unwrap();
+        let e = load_any(&d.join(name)).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{name}: {e}");
+    }
+    let scene = d.join("s.toml");
+    std::fs::write(
+        &scene,
+        "version = 1\n[camera]\nfrom = [0, -5, 1]\nto = [0, 0, 0]\n[[material]]\nname = \"m\"\n\
+         [[mesh]]\npath = \"/dev/zero\"\nmaterial = \"m\"\n",
+    )
+    .unwrap();
+    let e = load_any(&scene).unwrap_err().to_string();
+    assert!(
+        e.contains("not a regular file") || e.contains("only .obj"),
+        "{e}"
+    );
+    let obj = d.join("m.obj");
+    std::fs::write(&obj, "v 0 0 0\n").unwrap();
+    std::fs::write(
+        &scene,
+        std::fs::read_to_string(&scene)
+            .unwrap()
+            .replace("/dev/zero", "zero.obj"),
+    )
+    .unwrap();
+    let e = load_any(&scene).unwrap_err().to_string();
+    assert!(e.contains("not a regular file"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+
+    let (mut gltf, _) = triangle();
+    gltf["buffers"][0]["uri"] = json!("file:///dev/zero");
+    let e = load("devbuffer", &gltf, None).unwrap_err();
+    assert!(e.contains("not a regular file"), "{e}");
+    let (mut gltf, bin) = triangle();
+    gltf["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    gltf["textures"] = json!([{"source": 0}]);
+    gltf["images"] = json!([{"uri": "file:///dev/zero"}]);
+    gltf["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = load("devtexture", &gltf, Some(&bin)).unwrap();
+    assert!(
+        s.notes.iter().any(|n| n.contains("not a regular file")),
+        "{:?}",
+        s.notes
+    );
+}
+
+/// Images the gltf crate would unwrap on (a bufferView without mimeType, no source at all) are
+/// a warning with the base colour kept, never a panic.
+#[test]
+fn images_without_a_source_or_type_do_not_panic() {
+    for (name, image) in [
+        ("nomime", json!({"bufferView": 0})),
+        ("nosource", json!({"name": "nothing"})),
+    ] {
+        let (mut gltf, bin) = triangle();
+        gltf["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+        gltf["textures"] = json!([{"source": 0}]);
+        gltf["images"] = json!([image]);
+        gltf["meshes"][0]["primitives"][0]["material"] = json!(0);
+        match load(name, &gltf, Some(&bin)) {
+            Ok(s) => assert!(
+                s.notes
+                    .iter()
+                    .any(|n| n.contains("mimeType") || n.contains("neither")),
+                "{name}: {:?}",
+                s.notes
+            ),
+            Err(e) => assert!(e.contains("image"), "{name}: {e}"),
+        }
+    }
+}

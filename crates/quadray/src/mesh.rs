@@ -401,14 +401,31 @@ fn barycentrics(e1: DVec3, e2: DVec3, p: DVec3) -> [f64; 3] {
     let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
     let (p1, p2) = (p.dot(e1), p.dot(e2));
     let denom = d11 * d22 - d12 * d12;
-    let b1 = ((d22 * p1 - d12 * p2) / denom).clamp(0.0, 1.0);
-    let b2 = ((d11 * p2 - d12 * p1) / denom).clamp(0.0, 1.0 - b1);
+    // Huge (finite) coordinates can overflow these products into NaN, on which `clamp` panics:
+    // such a point falls back to the first vertex.
+    let within = |x: f64, hi: f64| if x.is_nan() { 0.0 } else { x.clamp(0.0, hi) };
+    let b1 = within((d22 * p1 - d12 * p2) / denom, 1.0);
+    let b2 = within((d11 * p2 - d12 * p1) / denom, 1.0 - b1);
     [1.0 - b1 - b2, b1, b2]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A zero-area triangle gives 0/0 barycentrics: they fall back to a vertex instead of
+    /// panicking inside `clamp` (found by hostile input: a degenerate triangle hit and shaded).
+    #[test]
+    fn degenerate_triangles_have_finite_barycentrics() {
+        for (e1, e2) in [
+            (DVec3::ZERO, DVec3::ZERO),
+            (DVec3::X, DVec3::X * 2.0),
+            (DVec3::splat(1e300), DVec3::splat(-1e300)),
+        ] {
+            let b = barycentrics(e1, e2, DVec3::new(0.3, 0.2, 0.0));
+            assert!(b.iter().all(|x| x.is_finite()), "{b:?}");
+        }
+    }
 
     fn quad() -> Mesh {
         let p = vec![

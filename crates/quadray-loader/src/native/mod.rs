@@ -93,8 +93,15 @@ pub struct LoadedScene {
 }
 /// Reads and validates the scene file at `path`.
 pub fn load_scene(path: &Path) -> Result<LoadedScene, LoadError> {
-    let text = std::fs::read_to_string(path)
+    let bytes = crate::read_limited::read(path, crate::read_limited::MAX_SCENE_BYTES)
         .map_err(|e| LoadError::new(path, None, LoadErrorKind::Io(e)))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        LoadError::new(
+            path,
+            None,
+            LoadErrorKind::Syntax(format!("the file is not UTF-8 text ({e})")),
+        )
+    })?;
     parse_scene(&text, path)
 }
 
