@@ -363,3 +363,27 @@ fn images_without_a_source_or_type_do_not_panic() {
         }
     }
 }
+
+/// A face with more vertices than the documented limit is a located error (its fan of slivers
+/// made the BVH build quadratic: 17 s for 100 000 vertices), read in time linear in the file.
+#[test]
+fn enormous_polygons_are_refused_by_line() {
+    let d = dir("polygon");
+    let n = quadray_loader::obj::MAX_FACE_VERTICES + 1;
+    let mut text = String::from("# one huge face\n");
+    for i in 0..n {
+        let a = i as f64 / n as f64 * std::f64::consts::TAU;
+        text += &format!("v {} {} 0\n", a.cos(), a.sin());
+    }
+    text += "f";
+    for i in 1..=n {
+        text += &format!(" {i}");
+    }
+    text += "\n";
+    let path = d.join("poly.obj");
+    std::fs::write(&path, text).unwrap();
+    let e = load_any(&path).unwrap_err().to_string();
+    assert!(e.contains(&format!("poly.obj:{}:1", n + 2)), "{e}");
+    assert!(e.contains(&format!("a face with {n} vertices")), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
