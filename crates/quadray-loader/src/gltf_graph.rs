@@ -447,6 +447,12 @@ impl<'a> GraphBuild<'a> {
         out: &mut Prototype,
         copies: u64,
     ) -> Result<(), LoadError> {
+        if mesh.primitives().next().is_none() {
+            return Err(self.invalid(
+                format!("meshes[{}].primitives", mesh.index()),
+                "a mesh needs at least one primitive (glTF requires it)",
+            ));
+        }
         if mesh
             .primitives()
             .any(|p| p.morph_targets().next().is_some())

@@ -284,6 +284,12 @@ fn exact_bounds(
         })
     };
     let identity = level == 0;
+    // A shape's box costs its eight corners.
+    let shapes = 8 * (l.spheres.len() + l.quadrics.len()) as u64;
+    if *budget < shapes {
+        return false;
+    }
+    *budget -= shapes;
     for b in l
         .spheres
         .iter()

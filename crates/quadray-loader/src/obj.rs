@@ -33,17 +33,20 @@ pub const MAX_FACE_VERTICES: usize = 16_384;
 
 /// The first face with more than [`MAX_FACE_VERTICES`] vertices: its 1-based line and size.
 fn oversized_face(bytes: &[u8]) -> Option<(usize, usize)> {
-    bytes.split(|&b| b == b'\n').enumerate().find_map(|(i, line)| {
-        let rest = line.strip_prefix(b"f")?;
-        if !rest.first().is_some_and(|b| b.is_ascii_whitespace()) {
-            return None;
-        }
-        let count = rest
-            .split(|b| b.is_ascii_whitespace())
-            .filter(|t| !t.is_empty())
-            .count();
-        (count > MAX_FACE_VERTICES).then_some((i + 1, count))
-    })
+    bytes
+        .split(|&b| b == b'\n')
+        .enumerate()
+        .find_map(|(i, line)| {
+            let rest = line.strip_prefix(b"f")?;
+            if !rest.first().is_some_and(|b| b.is_ascii_whitespace()) {
+                return None;
+            }
+            let count = rest
+                .split(|b| b.is_ascii_whitespace())
+                .filter(|t| !t.is_empty())
+                .count();
+            (count > MAX_FACE_VERTICES).then_some((i + 1, count))
+        })
 }
 
 /// A material library tobj asked for, as this loader found it.
@@ -239,7 +242,16 @@ pub fn import_obj_bytes(
         out.materials.push(("default".into(), Material::default()));
     }
     if out.geometry.meshes.is_empty() {
-        notes.push("the file has no faces".into());
+        // Comments only, binary junk, lines and points, faces of two vertices: nothing renders,
+        // which is worth saying rather than drawing an empty image.
+        return Err(LoadError::new(
+            path,
+            None,
+            LoadErrorKind::Unsupported(
+                "the file has no faces with three or more vertices: nothing to render (is it an OBJ file?)"
+                    .into(),
+            ),
+        ));
     }
     out.notes = notes;
     Ok(out)

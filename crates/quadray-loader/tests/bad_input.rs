@@ -387,3 +387,27 @@ fn enormous_polygons_are_refused_by_line() {
     assert!(e.contains(&format!("a face with {n} vertices")), "{e}");
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// Files that load but hold nothing to render are errors that say so: OBJ files of comments,
+/// binary junk or two-vertex faces, and a glTF mesh without primitives.
+#[test]
+fn files_with_nothing_to_render_say_so() {
+    let d = dir("empty");
+    for (name, bytes) in [
+        ("comments.obj", b"# nothing\n# at all\n".to_vec()),
+        ("junk.obj", (0..=255u8).cycle().take(4096).collect()),
+        ("lines.obj", b"v 0 0 0\nv 1 0 0\nf 1 2\nl 1 2\n".to_vec()),
+        ("vertices.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n".to_vec()),
+    ] {
+        let path = d.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let e = load_any(&path).unwrap_err().to_string();
+        let said = e.contains("no faces") || e.contains("not text");
+        assert!(e.contains(name) && said, "{name}: {e}");
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+    let (mut gltf, bin) = triangle();
+    gltf["meshes"][0]["primitives"] = json!([]);
+    let e = load("noprims", &gltf, Some(&bin)).unwrap_err();
+    assert!(e.contains("primitive"), "{e}");
+}

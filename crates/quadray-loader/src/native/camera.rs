@@ -39,6 +39,13 @@ impl Builder<'_> {
                 let distance = self.positive(&o.distance, "camera.orbit.distance")?;
                 let yaw = self.number(&o.yaw, "camera.orbit.yaw")?;
                 let pitch = self.number(&o.pitch, "camera.orbit.pitch")?;
+                if !(-90.0..=90.0).contains(&pitch) {
+                    return Err(self.err(
+                        o.pitch.span(),
+                        "camera.orbit.pitch",
+                        format!("must be within [-90, 90] degrees (an elevation), got {pitch}"),
+                    ));
+                }
                 Camera::orbit(target, yaw, pitch, distance, vfov)
             }
             (Some(orbit), Some(_)) => {

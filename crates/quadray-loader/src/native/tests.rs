@@ -318,3 +318,17 @@ fn spot_lights_and_mesh_form_errors() {
         "{e}"
     );
 }
+
+#[test]
+fn orbit_pitch_beyond_the_poles_is_refused() {
+    let text = "version = 1\n[camera]\norbit = { yaw = 10, pitch = 120, distance = 5 }\n";
+    let e = parse_scene(text, Path::new("o.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("o.toml:3:") && e.contains("within [-90, 90]"),
+        "{e}"
+    );
+    let ok = "version = 1\n[camera]\norbit = { yaw = 10, pitch = -90, distance = 5 }\n";
+    assert!(parse_scene(ok, Path::new("o.toml")).is_ok());
+}
