@@ -55,45 +55,20 @@ pub fn write_film(film: &Film, path: &Path) -> Result<()> {
     })
 }
 
-/// Writes through `write` into a temporary file beside `path`, then renames it to `path`; on any
-/// failure the temporary file is removed and an older `path` survives. The temporary name keeps
-/// the image extension, since image writers pick their format from it.
+/// Writes through `write` into a temporary file beside `path` (keeping the image extension, which
+/// image writers pick their format from), then renames it to `path`; on any failure the temporary
+/// file is removed and an older `path` survives ([`quadray_loader::atomic_file`]).
 pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let ext = if Format::from_path(path)? == Format::Png {
-        "png"
-    } else {
-        "exr"
-    };
-    replace_via_temp(path, &format!(".tmp.{ext}"), write)
+    Format::from_path(path)?;
+    quadray_loader::atomic_file::replace_with(path, write)
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 /// Writes `contents` (a report, a table, an SVG) to `path` through a temporary file beside it,
 /// renamed once complete; on failure the temporary file is removed and an older `path` survives.
 pub fn write_bytes_atomically(path: &Path, contents: &[u8]) -> Result<()> {
-    replace_via_temp(path, ".tmp", |tmp| {
-        std::fs::write(tmp, contents).with_context(|| format!("writing {}", tmp.display()))
-    })
-}
-
-/// The one temp-file-and-rename mechanism behind both writers: `write` fills
-/// `.NAME.PID<suffix>` beside `path`, which then replaces `path`, or is removed on failure.
-fn replace_via_temp(
-    path: &Path,
-    suffix: &str,
-    write: impl FnOnce(&Path) -> Result<()>,
-) -> Result<()> {
-    let name = path
-        .file_name()
-        .and_then(|n| n.to_str())
-        .unwrap_or("output");
-    let tmp = parent_dir(path).join(format!(".{name}.{}{suffix}", std::process::id()));
-    let result = write(&tmp).and_then(|()| {
-        std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.with_context(|| format!("writing {}", path.display()))
+    quadray_loader::atomic_file::replace(path, contents)
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 /// Writes 8-bit RGB bytes (row-major) as a PNG, atomically.

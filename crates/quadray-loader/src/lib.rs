@@ -9,6 +9,7 @@
 //! - [`export`] writes a scene as glTF 2.0 with the `QUADRAY_quadrics` extension.
 //! - [`LoadError`]: every error names the file, the line and column where known, and the bad key.
 
+pub mod atomic_file;
 pub mod error;
 pub mod export;
 pub mod export_document;
