@@ -101,7 +101,7 @@ impl Builder<'_> {
     pub(super) fn render(&self, r: &RenderSpec) -> Result<(SceneSettings, Vec3), LoadError> {
         let mut s = SceneSettings::default();
         if let Some(res) = &r.resolution {
-            let [w, h] = *res.get_ref();
+            let [w, h] = res.get_ref().0;
             if !(1..=MAX_SIDE as i64).contains(&w) || !(1..=MAX_SIDE as i64).contains(&h) {
                 return Err(self.err(
                     res.span(),

@@ -23,6 +23,7 @@ use toml::Spanned;
 
 /// The scene format version this loader reads.
 mod camera;
+mod exact;
 mod groups;
 mod light;
 mod material;
@@ -36,7 +37,7 @@ use spec::*;
 
 pub const FORMAT_VERSION: i64 = 1;
 
-type V3 = [f64; 3];
+type V3 = exact::Exact<f64, 3>;
 
 /// Render settings a scene file carries (each overridable on the command line).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -139,7 +140,7 @@ impl Builder<'_> {
     }
 
     fn vec3(&self, v: &Spanned<V3>, key: &str) -> Result<DVec3, LoadError> {
-        let d = DVec3::from_array(*v.get_ref());
+        let d = DVec3::from_array(v.get_ref().0);
         if !d.is_finite() {
             return Err(self.err(v.span(), key, format!("must be finite numbers, got {d}")));
         }

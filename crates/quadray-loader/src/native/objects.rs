@@ -148,8 +148,8 @@ impl Builder<'_> {
         let clip = match q.clip.get_ref() {
             ClipSpec::Radius(r) => ClipBox::cube(*r),
             ClipSpec::Box { min, max } => ClipBox {
-                min: DVec3::from_array(*min),
-                max: DVec3::from_array(*max),
+                min: DVec3::from_array(min.0),
+                max: DVec3::from_array(max.0),
             },
         };
         let transform = self.transform(&q.transform, &format!("{key}.transform"))?;
@@ -199,14 +199,14 @@ impl Builder<'_> {
             .map(|v| {
                 transform
                     .to_world
-                    .transform_point3(DVec3::from_array(*v))
+                    .transform_point3(DVec3::from_array(v.0))
                     .as_vec3()
             })
             .collect();
         let vertex_count = positions.len() as i64;
         let mut indices = Vec::with_capacity(indices_spec.get_ref().len());
         let flip = transform.to_world.matrix3.determinant() < 0.0;
-        for (t, tri) in indices_spec.get_ref().iter().enumerate() {
+        for (t, tri) in indices_spec.get_ref().iter().map(|t| t.0).enumerate() {
             if let Some(&bad) = tri.iter().find(|&&i| !(0..vertex_count).contains(&i)) {
                 return Err(self.err(
                     indices_spec.span(),
@@ -224,7 +224,7 @@ impl Builder<'_> {
             n.get_ref()
                 .iter()
                 .map(|v| {
-                    (transform.normal_to_world * DVec3::from_array(*v))
+                    (transform.normal_to_world * DVec3::from_array(v.0))
                         .normalize_or_zero()
                         .as_vec3()
                 })

@@ -2,6 +2,7 @@
 //! a later check may reject keeps its span.
 
 use super::V3;
+use super::exact::Exact;
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -107,7 +108,7 @@ pub(super) struct OrbitSpec {
 #[derive(Clone, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RenderSpec {
-    pub(super) resolution: Option<Spanned<[i64; 2]>>,
+    pub(super) resolution: Option<Spanned<Exact<i64, 2>>>,
     pub(super) spp: Option<Spanned<i64>>,
     pub(super) max_depth: Option<Spanned<i64>>,
     pub(super) background: Option<Spanned<V3>>,
@@ -184,10 +185,10 @@ pub(super) struct TransformSpec {
     pub(super) translate: Option<Spanned<V3>>,
     pub(super) rotate: Option<Spanned<V3>>,
     /// A unit quaternion [x, y, z, w] (glTF's order), instead of `rotate`.
-    pub(super) rotation: Option<Spanned<[f64; 4]>>,
+    pub(super) rotation: Option<Spanned<Exact<f64, 4>>>,
     pub(super) scale: Option<Spanned<ScaleSpec>>,
     /// A 4x4 affine matrix, row-major, instead of the other keys.
-    pub(super) matrix: Option<Spanned<[[f64; 4]; 4]>>,
+    pub(super) matrix: Option<Spanned<Exact<Exact<f64, 4>, 4>>>,
 }
 
 #[derive(Clone, Deserialize)]
@@ -196,7 +197,7 @@ pub(super) struct MeshSpec {
     pub(super) name: Option<Spanned<String>>,
     pub(super) path: Option<Spanned<String>>,
     pub(super) vertices: Option<Spanned<Vec<V3>>>,
-    pub(super) indices: Option<Spanned<Vec<[i64; 3]>>>,
+    pub(super) indices: Option<Spanned<Vec<Exact<i64, 3>>>>,
     pub(super) normals: Option<Spanned<Vec<V3>>>,
     pub(super) transform: Option<Spanned<TransformSpec>>,
     pub(super) material: Option<Spanned<String>>,

@@ -332,3 +332,28 @@ fn orbit_pitch_beyond_the_poles_is_refused() {
     let ok = "version = 1\n[camera]\norbit = { yaw = 10, pitch = -90, distance = 5 }\n";
     assert!(parse_scene(ok, Path::new("o.toml")).is_ok());
 }
+
+/// Lists of the wrong length are errors with their location: serde alone read `[f64; 3]` from a
+/// longer array and dropped the rest.
+#[test]
+fn vectors_and_matrices_of_the_wrong_length_are_refused() {
+    for (body, line) in [
+        (
+            "version = 1\n[camera]\nfrom = [0, -5, 1]\nto = [0, 0, 0, 4]\n",
+            4,
+        ),
+        ("version = 1\n[camera]\nfrom = [0, -5]\nto = [0, 0, 0]\n", 3),
+        ("version = 1\n[render]\nresolution = [64, 48, 3]\n", 3),
+    ] {
+        let e = parse_scene(body, Path::new("v.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with(&format!("v.toml:{line}:")), "{e}");
+        assert!(e.contains("exactly"), "{e}");
+    }
+    let e = error(
+        "[[sphere]]\nname = \"s\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"red\"\n\
+         [[instance]]\nof = \"s\"\ntransform = { matrix = [[1, 0, 0, 0, 9], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]] }\n",
+    );
+    assert!(e.contains("exactly 4 values, got 5"), "{e}");
+}

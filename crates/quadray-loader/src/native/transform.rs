@@ -49,7 +49,7 @@ impl Builder<'_> {
             Some(s) => {
                 let v = match s.get_ref() {
                     ScaleSpec::Uniform(k) => DVec3::splat(*k),
-                    ScaleSpec::PerAxis(v) => DVec3::from_array(*v),
+                    ScaleSpec::PerAxis(v) => DVec3::from_array(v.0),
                 };
                 if !(v.is_finite() && v.cmpne(DVec3::ZERO).all()) {
                     return Err(self.err(
@@ -78,8 +78,12 @@ impl Builder<'_> {
     }
 
     /// A unit quaternion from [x, y, z, w]; other lengths are normalised, zero is an error.
-    fn quaternion(&self, q: &Spanned<[f64; 4]>, key: &str) -> Result<DQuat, LoadError> {
-        let [x, y, z, w] = *q.get_ref();
+    fn quaternion(
+        &self,
+        q: &Spanned<super::exact::Exact<f64, 4>>,
+        key: &str,
+    ) -> Result<DQuat, LoadError> {
+        let [x, y, z, w] = q.get_ref().0;
         let quat = DQuat::from_xyzw(x, y, z, w);
         let length = quat.length();
         if !(quat.is_finite() && length > 0.0 && length.is_finite()) {
@@ -88,7 +92,7 @@ impl Builder<'_> {
                 key,
                 format!(
                     "must be a finite, nonzero quaternion [x, y, z, w], got {q:?}",
-                    q = q.get_ref()
+                    q = q.get_ref().0
                 ),
             ));
         }
@@ -96,8 +100,12 @@ impl Builder<'_> {
     }
 
     /// A 4x4 row-major matrix that must be affine (last row 0 0 0 1), finite and invertible.
-    fn matrix(&self, m: &Spanned<[[f64; 4]; 4]>, key: &str) -> Result<Transform, LoadError> {
-        let rows = m.get_ref();
+    fn matrix(
+        &self,
+        m: &Spanned<super::exact::Exact<super::exact::Exact<f64, 4>, 4>>,
+        key: &str,
+    ) -> Result<Transform, LoadError> {
+        let rows = m.get_ref().0.map(|row| row.0);
         if rows.iter().flatten().any(|v| !v.is_finite()) {
             return Err(self.err(
                 m.span(),
