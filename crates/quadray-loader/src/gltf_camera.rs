@@ -71,7 +71,14 @@ pub fn convert(
         projection,
     };
     camera_out.prepare(1.0).map_err(|e| e.to_string())?;
-    let aspect = aspect.filter(|a| a.is_finite() && *a > 0.0);
+    let limit = quadray::render::MAX_ASPECT;
+    if let Some(a) = aspect
+        && !(a.is_finite() && a > 0.0 && (1.0 / limit..=limit).contains(&a))
+    {
+        return Err(format!(
+            "the aspect ratio {a} is outside what quadray renders (1/{limit} to {limit})"
+        ));
+    }
     Ok(ImportedCamera {
         name: camera.name().map(str::to_string),
         camera: camera_out,

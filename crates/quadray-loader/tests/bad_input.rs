@@ -411,3 +411,20 @@ fn files_with_nothing_to_render_say_so() {
     let e = load("noprims", &gltf, Some(&bin)).unwrap_err();
     assert!(e.contains("primitive"), "{e}");
 }
+
+/// A camera whose aspect ratio no image can have (quadray renders 1/64 to 64) is an error naming
+/// the camera, rather than a 640x1 image.
+#[test]
+fn camera_aspect_ratios_beyond_the_render_limits_are_refused() {
+    for aspect in [1e9, 1e-9] {
+        let (mut gltf, bin) = triangle();
+        gltf["cameras"] = json!([{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1, "aspectRatio": aspect}}]);
+        gltf["nodes"] = json!([{"mesh": 0}, {"camera": 0, "translation": [0, 0, 5]}]);
+        gltf["scenes"] = json!([{"nodes": [0, 1]}]);
+        let e = load("aspect", &gltf, Some(&bin)).unwrap_err();
+        assert!(
+            e.contains("cameras[0]") && e.contains("aspect ratio"),
+            "{e}"
+        );
+    }
+}
