@@ -284,14 +284,7 @@ impl<'a> GraphBuild<'a> {
         depth: usize,
     ) -> Result<(), LoadError> {
         let key = format!("nodes[{}]", node.index());
-        let local = self
-            .file
-            .node_transforms
-            .get(node.index())
-            .cloned()
-            .unwrap_or(Ok(DAffine3::IDENTITY))
-            .map_err(|m| self.invalid(key.clone(), m))?;
-        let placed = to_level * local;
+        let placed = to_level * self.local_transform(node)?;
         if self.graph.refs[node.index()] > 1 {
             let proto = match self.node_protos.get(&node.index()) {
                 Some(&p) => p,
@@ -312,6 +305,16 @@ impl<'a> GraphBuild<'a> {
             return Ok(());
         }
         self.place_contents(node, placed, out, planes, prototypes, depth)
+    }
+
+    /// The node's own transform (its matrix, or translation · rotation · scale).
+    fn local_transform(&self, node: &gltf::Node<'_>) -> Result<DAffine3, LoadError> {
+        self.file
+            .node_transforms
+            .get(node.index())
+            .cloned()
+            .unwrap_or(Ok(DAffine3::IDENTITY))
+            .map_err(|m| self.invalid(format!("nodes[{}]", node.index()), m))
     }
 
     /// An instance of `proto` placed by `m` (a singular map hides it, as it would a baked mesh).
@@ -519,14 +522,7 @@ impl<'a> GraphBuild<'a> {
                 format!("cameras and lights expand to more than {MAX_INSTANCES} placements"),
             ));
         }
-        let local = self
-            .file
-            .node_transforms
-            .get(node.index())
-            .cloned()
-            .unwrap_or(Ok(DAffine3::IDENTITY))
-            .map_err(|m| self.invalid(format!("nodes[{}]", node.index()), m))?;
-        let world = to_world * local;
+        let world = to_world * self.local_transform(node)?;
         let shared = shared_above || self.graph.refs[node.index()] > 1;
         if let (true, Some(ext)) = (shared, node_shape(node, self.path)?) {
             let key = format!("nodes[{}]", node.index());

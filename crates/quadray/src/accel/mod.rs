@@ -385,14 +385,7 @@ impl Accel {
         best: &mut Option<PrimRef>,
     ) {
         let l = &self.levels[level];
-        let q = Query {
-            g,
-            level,
-            placement,
-            ray,
-            skip: from.filter(|f| f.placement == placement).map(|f| f.local),
-            from,
-        };
+        let q = Query::new(g, level, placement, ray, from);
         match &l.top {
             None if l.items.len() == 1 => {
                 // One item tests its own root box.
@@ -499,14 +492,7 @@ impl Accel {
         from: Option<PrimRef>,
     ) -> bool {
         let l = &self.levels[level];
-        let q = Query {
-            g,
-            level,
-            placement,
-            ray,
-            skip: from.filter(|f| f.placement == placement).map(|f| f.local),
-            from,
-        };
+        let q = Query::new(g, level, placement, ray, from);
         match &l.top {
             None if l.items.len() == 1 => self.occluded_in(l, l.items[0], &q, t_max),
             None => {
@@ -576,7 +562,26 @@ struct Query<'a> {
     from: Option<PrimRef>,
 }
 
-impl Query<'_> {
+impl<'a> Query<'a> {
+    /// The query of `ray` in `level`, reached at `placement`.
+    #[inline(always)]
+    fn new(
+        g: &'a Geometry,
+        level: usize,
+        placement: u64,
+        ray: &'a Ray,
+        from: Option<PrimRef>,
+    ) -> Query<'a> {
+        Query {
+            g,
+            level,
+            placement,
+            ray,
+            skip: from.filter(|f| f.placement == placement).map(|f| f.local),
+            from,
+        }
+    }
+
     /// The (mesh, triangle) the ray was spawned on, if in this placement.
     #[inline(always)]
     fn triangle_skip(&self) -> Option<(u32, u32)> {
