@@ -140,6 +140,10 @@ pub struct InstancePath {
     steps: [(u32, u32); MAX_NESTING],
 }
 
+/// The world's path, as a static: a reference to it costs nothing (a constant's temporary was a
+/// 264-byte copy per hit).
+pub static WORLD_PATH: InstancePath = InstancePath::WORLD;
+
 impl InstancePath {
     /// The world itself: no instances.
     pub const WORLD: InstancePath = InstancePath {

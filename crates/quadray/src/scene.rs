@@ -187,7 +187,7 @@ impl Scene {
         let point = hit.geometry.point;
         let decoded;
         let path = match hit.prim.placement {
-            0 => &InstancePath::WORLD,
+            0 => &crate::instance::WORLD_PATH,
             p => {
                 decoded = self.accel.placements().path(&self.geometry, p);
                 &decoded
@@ -228,7 +228,7 @@ impl Scene {
         // The world's primitives (placement 0) need no path decoded.
         let decoded;
         let path = match prim.placement {
-            0 => &InstancePath::WORLD,
+            0 => &crate::instance::WORLD_PATH,
             p => {
                 decoded = self.accel.placements().path(&self.geometry, p);
                 &decoded
