@@ -110,7 +110,7 @@ impl Scene {
                 ));
             }
         }
-        crate::instance::Placements::new(&d.geometry)?;
+        let placements = crate::instance::Placements::new(&d.geometry)?;
         for (i, l) in d.lights.iter().enumerate() {
             l.validate().map_err(|p| invalid(format!("light {i}"), p))?;
         }
@@ -123,7 +123,8 @@ impl Scene {
         let origin_extent = max_abs_coordinate(&origins);
         // The BVHs hold f32 boxes: coordinates of shapes (in their level and as placed) and of the
         // camera must stay well inside f32's range, or boxes become infinite.
-        let extent = crate::accel::coordinate_extent(&d.geometry, origin_extent);
+        let layout = crate::accel::Layout::new(&d.geometry, Some(placements));
+        let extent = layout.coordinate_extent(origin_extent);
         if extent.is_nan() || extent > MAX_COORDINATE {
             return Err(invalid(
                 "geometry",
@@ -132,7 +133,7 @@ impl Scene {
                 ),
             ));
         }
-        let accel = Accel::build(&d.geometry, origin_extent);
+        let accel = Accel::build_with(&d.geometry, layout, origin_extent);
         Ok(Scene {
             camera: d.camera,
             background: d.background,

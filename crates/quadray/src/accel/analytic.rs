@@ -7,7 +7,8 @@
 //! is rounded up.
 
 use super::build::{build_single_leaves, padded_aabb};
-use super::{round_up, to_obvhs, with_stack};
+use super::stack::{Stacks, with_stack};
+use super::{round_up, to_obvhs};
 use crate::geometry::Level;
 use crate::math::Ray;
 use crate::shape::LocalPrim;
@@ -22,8 +23,8 @@ pub(crate) struct AnalyticBvh {
 }
 
 thread_local! {
-    /// The analytic BVHs' traversal stack, reused ([`with_stack`]).
-    static STACK: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// The analytic BVHs' traversal stacks ([`with_stack`]).
+    static STACK: Stacks<u32> = const { Stacks::new() };
 }
 
 impl AnalyticBvh {

@@ -70,31 +70,45 @@ fn magnitude((lo, hi): Bounds) -> f64 {
     lo.abs().max(hi.abs()).max_element()
 }
 
-/// Bounds of every level in its own space (children before parents; an instance's as the box of
-/// its prototype's box placed); `None` for a level with nothing bounded.
-fn level_bounds(g: &Geometry) -> Vec<Option<Bounds>> {
-    let n = g.level_count();
-    let mut bounds: Vec<Option<Bounds>> = vec![None; n];
-    for level in (1..n).chain([0]) {
-        let l = g.level(level);
-        let mut b = None;
-        for s in l.spheres {
-            b = union(b, s.bounds());
-        }
-        for q in l.quadrics {
-            b = union(b, q.bounds());
-        }
-        for m in l.meshes.iter().filter(|m| m.triangle_count() > 0) {
-            b = union(b, mesh_bounds(m));
-        }
-        for inst in l.instances {
-            if let Some(&Some(c)) = bounds.get(inst.prototype as usize + 1) {
-                b = union(b, transformed_bounds(c, inst));
+/// Every level's bounds in its own space, computed once per build: of all its content (an
+/// instance's as its prototype's box placed) and of its meshes alone; `None` for nothing bounded.
+struct LevelBounds {
+    all: Vec<Option<Bounds>>,
+    meshes: Vec<Option<Bounds>>,
+}
+
+impl LevelBounds {
+    /// Children before parents (prototypes place only earlier ones), the world last.
+    fn new(g: &Geometry) -> LevelBounds {
+        let n = g.level_count();
+        let mut lb = LevelBounds {
+            all: vec![None; n],
+            meshes: vec![None; n],
+        };
+        for level in (1..n).chain([0]) {
+            let l = g.level(level);
+            let meshes = l
+                .meshes
+                .iter()
+                .filter(|m| m.triangle_count() > 0)
+                .fold(None, |b, m| union(b, mesh_bounds(m)));
+            let mut b = meshes;
+            for s in l.spheres {
+                b = union(b, s.bounds());
             }
+            for q in l.quadrics {
+                b = union(b, q.bounds());
+            }
+            for inst in l.instances {
+                if let Some(&Some(c)) = lb.all.get(inst.prototype as usize + 1) {
+                    b = union(b, transformed_bounds(c, inst));
+                }
+            }
+            lb.all[level] = b;
+            lb.meshes[level] = meshes;
         }
-        bounds[level] = b;
+        lb
     }
-    bounds
 }
 
 /// Bounds of a mesh's vertices.
@@ -242,39 +256,68 @@ fn split_by_index(bvh: &mut Bvh2, node: usize, items: &[u32], indices: &mut Vec<
     split_by_index(bvh, children + 1, right, indices);
 }
 
-/// The largest coordinate magnitude of any shape, in its level's own space or placed by an
-/// instance in its parent's, and of the camera (`origin_extent`); infinite when one is not finite.
-pub fn coordinate_extent(geometry: &Geometry, origin_extent: f64) -> f64 {
-    level_bounds(geometry)
-        .iter()
-        .flatten()
-        .map(|&b| match b.0.is_finite() && b.1.is_finite() {
-            true => magnitude(b),
-            false => f64::INFINITY,
-        })
-        .fold(origin_extent.abs(), f64::max)
+/// What a build starts from, computed once: the numbering of placements (`None` when the
+/// instances cannot be numbered: they are then left out) and every level's bounds. A scene
+/// validates both before it builds.
+pub struct Layout {
+    placements: Option<Placements>,
+    bounds: LevelBounds,
+}
+
+impl Layout {
+    /// The layout of `geometry`, whose placements are `placements`.
+    pub fn new(geometry: &Geometry, placements: Option<Placements>) -> Layout {
+        Layout {
+            placements,
+            bounds: LevelBounds::new(geometry),
+        }
+    }
+
+    /// The largest coordinate magnitude of any shape, in its level's own space or placed by an
+    /// instance in its parent's, and of the camera (`origin_extent`); infinite when one is not
+    /// finite.
+    pub fn coordinate_extent(&self, origin_extent: f64) -> f64 {
+        self.bounds
+            .all
+            .iter()
+            .flatten()
+            .map(|&b| match b.0.is_finite() && b.1.is_finite() {
+                true => magnitude(b),
+                false => f64::INFINITY,
+            })
+            .fold(origin_extent.abs(), f64::max)
+    }
 }
 
 impl Accel {
     /// Builds every level. `origin_extent` bounds the magnitude of every coordinate a ray may
-    /// start at outside the primitives' own bounds (the camera). The instances must be numbered
-    /// ([`Placements::new`] succeeds); otherwise the scene is built without them.
+    /// start at outside the primitives' own bounds (the camera). Instances that cannot be
+    /// numbered ([`Placements::new`] fails) are left out.
     pub fn build(geometry: &Geometry, origin_extent: f64) -> Accel {
-        let numbered = Placements::new(geometry);
-        let valid = numbered.is_ok();
-        let placements = numbered.unwrap_or_default();
-        let bounds = level_bounds(geometry);
-        let world = bounds[0].map_or(0.0, magnitude).max(origin_extent.abs());
-        let extents = level_extents(geometry, &bounds, world);
+        let layout = Layout::new(geometry, Placements::new(geometry).ok());
+        Accel::build_with(geometry, layout, origin_extent)
+    }
+
+    /// [`Accel::build`] from a layout already computed (and validated) for `geometry`.
+    pub fn build_with(geometry: &Geometry, layout: Layout, origin_extent: f64) -> Accel {
+        let Layout { placements, bounds } = layout;
+        let world = bounds.all[0]
+            .map_or(0.0, magnitude)
+            .max(origin_extent.abs());
+        let extents = level_extents(geometry, &bounds.all, world);
         let n = geometry.level_count();
         let mut levels: Vec<Option<LevelAccel>> = vec![None; n];
         // Children first (prototypes place only earlier ones), the world last: an instance's box
         // is made of its prototype's covering boxes, placed.
         for level in (1..n).chain([0]) {
             // A ray origin beyond f32's range meets nothing anyway: the padding stays finite.
-            let extent = extents[level].min(crate::scene::MAX_COORDINATE) as f32;
-            let numbering = valid.then_some(&placements);
-            let built = build_level(geometry, level, extent, numbering, &levels);
+            let context = LevelContext {
+                extent: extents[level].min(crate::scene::MAX_COORDINATE) as f32,
+                mesh_bounds: bounds.meshes[level],
+                placements: placements.as_ref(),
+                built: &levels,
+            };
+            let built = build_level(geometry, level, context);
             levels[level] = Some(built);
         }
         let levels: Vec<LevelAccel> = levels
@@ -291,7 +334,7 @@ impl Accel {
             .sum();
         Accel {
             levels,
-            placements,
+            placements: placements.unwrap_or_default(),
             planes: geometry.planes.len() as u32,
             avx2: simd_path() == SimdPath::Avx2 && triangles > 4 * analytic_count,
             triangles,
@@ -299,15 +342,27 @@ impl Accel {
     }
 }
 
-/// One level's bottom-level BVHs and its top; its instances (when `with_instances`) are boxed by
-/// their prototypes' covering boxes, from `built` (every child level is built before).
-fn build_level(
-    geometry: &Geometry,
-    level: usize,
+/// What one level's build needs besides its shapes.
+struct LevelContext<'a> {
+    /// Bound on ray-origin coordinates in the level's space (for box padding).
     extent: f32,
-    placements: Option<&Placements>,
-    built: &[Option<LevelAccel>],
-) -> LevelAccel {
+    /// The bounds of the level's meshes, if it has triangles.
+    mesh_bounds: Option<Bounds>,
+    /// The numbering of placements; `None` leaves instances out.
+    placements: Option<&'a Placements>,
+    /// The levels built so far (every child of this one).
+    built: &'a [Option<LevelAccel>],
+}
+
+/// One level's bottom-level BVHs and its top; its instances are boxed by their prototypes'
+/// covering boxes, from the levels already built.
+fn build_level(geometry: &Geometry, level: usize, cx: LevelContext<'_>) -> LevelAccel {
+    let LevelContext {
+        extent,
+        mesh_bounds,
+        placements,
+        built,
+    } = cx;
     let l = geometry.level(level);
     let analytic = AnalyticBvh::build(l, extent);
     let has_triangles = l.meshes.iter().any(|m| m.triangle_count() > 0);
@@ -321,13 +376,9 @@ fn build_level(
         covering.push(f64_box(&a.bounds()));
     }
     if let Some(bvh) = &meshes {
-        let b = l
-            .meshes
-            .iter()
-            .filter(|m| m.triangle_count() > 0)
-            .fold(None, |b, m| union(b, mesh_bounds(m)));
         items.push(TopItem::Meshes);
-        item_boxes.push(padded_aabb(b.expect("meshes have triangles"), extent));
+        let b = mesh_bounds.expect("meshes have triangles");
+        item_boxes.push(padded_aabb(b, extent));
         covering.extend(bvh.covering_boxes());
     }
     let mut placed = Vec::new();

@@ -30,6 +30,8 @@ mod analytic;
 mod build;
 mod mesh_bvh;
 mod simd;
+mod stack;
+mod stats;
 mod top;
 mod tri4;
 
@@ -39,12 +41,13 @@ use crate::math::Ray;
 use crate::shape::{LocalPrim, PrimRef};
 use analytic::AnalyticBvh;
 use build::Bounds;
-pub use build::coordinate_extent;
+pub use build::Layout;
 use glam::{DVec3, Vec3A};
 use mesh_bvh::{MeshBvh, MeshRay};
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
 pub use simd::{SimdPath, simd_path};
-use std::cell::RefCell;
+use stack::{Stacks, with_stack};
+pub use stats::AccelStats;
 use top::TopLeaves;
 
 /// One leaf item of a level's top.
@@ -92,25 +95,6 @@ struct LevelAccel {
     placed: Vec<Placed>,
 }
 
-impl LevelAccel {
-    /// Bytes of the bottom-level BVHs (over shapes).
-    fn bottom_bytes(&self) -> usize {
-        self.analytic.as_ref().map_or(0, AnalyticBvh::memory_bytes)
-            + self.meshes.as_ref().map_or(0, MeshBvh::memory_bytes)
-    }
-
-    /// Bytes of the top (over the level's items).
-    fn top_bytes(&self) -> usize {
-        let bvh = self.top.as_ref().map_or(0, |b| {
-            b.nodes.capacity() * std::mem::size_of::<obvhs::bvh2::node::Bvh2Node>()
-                + b.primitive_indices.capacity() * std::mem::size_of::<u32>()
-        });
-        bvh + self.items.capacity() * std::mem::size_of::<TopItem>()
-            + self.item_boxes.capacity() * std::mem::size_of::<Aabb>()
-            + self.placed.capacity() * std::mem::size_of::<Placed>()
-    }
-}
-
 /// The scene's acceleration structure: one [`LevelAccel`] per level, plus the world's planes.
 #[derive(Clone)]
 pub struct Accel {
@@ -146,65 +130,10 @@ impl Placed {
     }
 }
 
-/// What the acceleration structure stores and what it stands for ([`Accel::stats`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct AccelStats {
-    /// Prototypes (shapes stored once, placed by instances).
-    pub prototypes: usize,
-    /// Instances written in the scene (each one placement of a prototype by its parent).
-    pub instances: usize,
-    /// Placements of prototypes in the expanded instance tree (the world not counted).
-    pub placements: u64,
-    /// Spheres, quadrics and triangles stored, each level's once.
-    pub primitives_stored: usize,
-    /// Triangles stored.
-    pub triangles_stored: usize,
-    /// Triangles as instanced: each placement's triangles counted again (saturating).
-    pub triangles_instanced: u64,
-    /// Bytes of the bottom-level BVHs (over shapes).
-    pub bottom_bytes: usize,
-    /// Bytes of the tops (over each level's shape BVHs and instances).
-    pub top_bytes: usize,
-}
-
 /// Most top-level items tested box by box, without a top-level BVH.
 const FLAT_TOP: usize = 8;
 
 impl Accel {
-    /// Bytes the acceleration structure keeps allocated: every level's BVHs and index lists (memory
-    /// reports; the build's transient buffers are not counted).
-    pub fn memory_bytes(&self) -> usize {
-        self.levels
-            .iter()
-            .map(|l| l.bottom_bytes() + l.top_bytes())
-            .sum()
-    }
-
-    /// Counts and memory of what is stored and what it expands to.
-    pub fn stats(&self, g: &Geometry) -> AccelStats {
-        // Triangles each level stands for once expanded: its own plus its instances' (children
-        // first, saturating: a deep DAG can stand for more than a u64 counts).
-        let n = g.level_count();
-        let mut expanded = vec![0u64; n];
-        for level in (1..n).chain([0]) {
-            let l = g.level(level);
-            let own: u64 = l.meshes.iter().map(|m| m.triangle_count() as u64).sum();
-            expanded[level] = l.instances.iter().fold(own, |sum, inst| {
-                sum.saturating_add(expanded[inst.prototype as usize + 1])
-            });
-        }
-        AccelStats {
-            prototypes: g.prototypes.len(),
-            instances: (0..n).map(|l| g.level(l).instances.len()).sum(),
-            placements: self.placements.count().saturating_sub(1),
-            primitives_stored: self.bounded_count(),
-            triangles_stored: self.triangles,
-            triangles_instanced: expanded[0],
-            bottom_bytes: self.levels.iter().map(LevelAccel::bottom_bytes).sum(),
-            top_bytes: self.levels.iter().map(LevelAccel::top_bytes).sum(),
-        }
-    }
-
     /// The compiled path this scene's queries take.
     pub fn traversal_path(&self) -> SimdPath {
         if self.avx2 {
@@ -414,7 +343,7 @@ impl Accel {
                     }
                 }
             }
-            Some(top) => with_top_stack(|stack| {
+            Some(top) => with_stack(&TOP_STACKS, |stack| {
                 let fray = to_obvhs(ray, *best_t);
                 let mut leaves = TopLeaves::new(top, &fray, stack);
                 while let Some(range) = leaves.next(round_up(*best_t)) {
@@ -503,7 +432,7 @@ impl Accel {
             }
             Some(top) => {
                 let mut blocked = false;
-                with_top_stack(|stack| {
+                with_stack(&TOP_STACKS, |stack| {
                     let fray = to_obvhs(ray, t_max);
                     let mut leaves = TopLeaves::new(top, &fray, stack);
                     'search: while let Some(range) = leaves.next(fray.tmax) {
@@ -601,49 +530,8 @@ impl<'a> Query<'a> {
 }
 
 thread_local! {
-    /// The tops' traversal stack, reused: obvhs' own stacks are zeroed on every traversal, which
-    /// showed up as 5% of all instructions in profiles.
-    static TOP_STACK: RefCell<Vec<u32>> = const { RefCell::new(Vec::new()) };
-    /// Stacks for tops reached inside another top's traversal (nested instances), reused.
-    static NESTED_TOP_STACKS: RefCell<Vec<Vec<u32>>> = const { RefCell::new(Vec::new()) };
-}
-
-/// Runs `f` with an empty top-level stack: this thread's own, or for a top nested in another
-/// one's traversal, one from a pool (taken and returned, so nested tops never allocate per ray).
-#[inline]
-fn with_top_stack<R>(f: impl FnOnce(&mut Vec<u32>) -> R) -> R {
-    TOP_STACK.with(|cell| match cell.try_borrow_mut() {
-        Ok(mut stack) => {
-            stack.clear();
-            f(&mut stack)
-        }
-        Err(_) => {
-            let mut stack = NESTED_TOP_STACKS
-                .with(|pool| pool.borrow_mut().pop())
-                .unwrap_or_default();
-            stack.clear();
-            let result = f(&mut stack);
-            NESTED_TOP_STACKS.with(|pool| pool.borrow_mut().push(stack));
-            result
-        }
-    })
-}
-
-/// Runs `f` with this thread's empty stack from `key`, or with a fresh one when it is in use: a
-/// level's top can reach an instance whose level has a top of its own (measured: a pool of stacks
-/// taken and returned per query cost 15% of a frame of scenes/reflective.toml).
-#[inline]
-pub(crate) fn with_stack<T, R>(
-    key: &'static std::thread::LocalKey<RefCell<Vec<T>>>,
-    f: impl FnOnce(&mut Vec<T>) -> R,
-) -> R {
-    key.with(|cell| match cell.try_borrow_mut() {
-        Ok(mut stack) => {
-            stack.clear();
-            f(&mut stack)
-        }
-        Err(_) => f(&mut Vec::new()),
-    })
+    /// The tops' traversal stacks.
+    static TOP_STACKS: Stacks<u32> = const { Stacks::new() };
 }
 
 /// The f32 ray obvhs traverses with. Built field by field: obvhs' constructor debug-asserts a

@@ -1,0 +1,44 @@
+//! Traversal stacks, reused across rays: obvhs' own stacks are zeroed on every traversal, which
+//! showed up as 5% of all instructions in profiles.
+
+use std::cell::RefCell;
+
+/// One thread's stacks of one kind: the first for a traversal, and spares for traversals that
+/// run inside it (a level's top reaching an instance whose level has a top of its own).
+pub(crate) struct Stacks<T> {
+    first: RefCell<Vec<T>>,
+    nested: RefCell<Vec<Vec<T>>>,
+}
+
+impl<T> Stacks<T> {
+    /// No stacks yet.
+    pub(crate) const fn new() -> Stacks<T> {
+        Stacks {
+            first: RefCell::new(Vec::new()),
+            nested: RefCell::new(Vec::new()),
+        }
+    }
+}
+
+/// Runs `f` with an empty stack of this thread's `key`: the first one, or for a nested traversal
+/// a spare taken and returned, so no traversal allocates once the stacks have grown (measured:
+/// taking every stack from a pool instead cost 15% of a frame of scenes/reflective.toml).
+#[inline]
+pub(crate) fn with_stack<T, R>(
+    key: &'static std::thread::LocalKey<Stacks<T>>,
+    f: impl FnOnce(&mut Vec<T>) -> R,
+) -> R {
+    key.with(|stacks| match stacks.first.try_borrow_mut() {
+        Ok(mut stack) => {
+            stack.clear();
+            f(&mut stack)
+        }
+        Err(_) => {
+            let mut stack = stacks.nested.borrow_mut().pop().unwrap_or_default();
+            stack.clear();
+            let result = f(&mut stack);
+            stacks.nested.borrow_mut().push(stack);
+            result
+        }
+    })
+}
