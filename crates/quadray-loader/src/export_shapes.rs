@@ -138,26 +138,15 @@ impl<'g> ShapeWriter<'g> {
                 index: i,
                 material: id,
             };
-            let (shape, mesh) = match self.written.get(&key) {
-                Some(&w) => w,
-                None => {
-                    let fallback = tessellate::quadric(
-                        &q.surface_description().coefficients(),
-                        q.clip(),
-                        QUADRIC_CELLS,
-                    );
-                    let mesh = doc.fallback(&name, &fallback, id as usize);
-                    doc.shapes.push(quadrics_ext::quadric_def(
-                        q,
-                        Some(id as usize),
-                        Some(name.clone()),
-                    ));
-                    let w = (doc.shapes.len() - 1, mesh);
-                    self.written.insert(key, w);
-                    w
-                }
-            };
-            let mut node = shape_node(&name, shape, mesh);
+            let mut node = self.shape_once(doc, key, &name, || {
+                let fallback = tessellate::quadric(
+                    &q.surface_description().coefficients(),
+                    q.clip(),
+                    QUADRIC_CELLS,
+                );
+                let def = quadrics_ext::quadric_def(q, Some(id as usize), Some(name.clone()));
+                (def, fallback)
+            });
             set_matrix(&mut node, &q.transform().to_world);
             nodes.push(self.node(doc, node)?);
         }
@@ -182,27 +171,19 @@ impl<'g> ShapeWriter<'g> {
                 index: i,
                 material: id,
             };
-            let (shape, mesh) = match self.written.get(&key) {
-                Some(&w) => w,
-                None => {
-                    let mesh = doc.fallback(
-                        &name,
-                        &tessellate::sphere(s.radius, SPHERE_SEGMENTS, SPHERE_SEGMENTS / 2),
-                        id as usize,
-                    );
-                    doc.shapes.push(ShapeDef {
-                        kind: "sphere".into(),
-                        name: Some(name.clone()),
-                        sphere: Some(SphereDef { radius: s.radius }),
-                        material: Some(id as usize),
-                        ..ShapeDef::default()
-                    });
-                    let w = (doc.shapes.len() - 1, mesh);
-                    self.written.insert(key, w);
-                    w
-                }
-            };
-            let mut node = shape_node(&name, shape, mesh);
+            let mut node = self.shape_once(doc, key, &name, || {
+                let def = ShapeDef {
+                    kind: "sphere".into(),
+                    name: Some(name.clone()),
+                    sphere: Some(SphereDef { radius: s.radius }),
+                    material: Some(id as usize),
+                    ..ShapeDef::default()
+                };
+                (
+                    def,
+                    tessellate::sphere(s.radius, SPHERE_SEGMENTS, SPHERE_SEGMENTS / 2),
+                )
+            });
             if s.center != glam::DVec3::ZERO {
                 node["translation"] = json!(s.center.to_array());
             }
@@ -234,6 +215,25 @@ impl<'g> ShapeWriter<'g> {
             nodes.push(self.node(doc, node)?);
         }
         Ok(())
+    }
+
+    /// A node naming the `QUADRAY_quadrics` shape of `key`, whose definition and fallback mesh
+    /// (from `make`) are written the first time the key is met and shared after.
+    fn shape_once(
+        &mut self,
+        doc: &mut Document,
+        key: Key,
+        name: &str,
+        make: impl FnOnce() -> (ShapeDef, tessellate::TriMesh),
+    ) -> Value {
+        let (shape, mesh) = *self.written.entry(key).or_insert_with(|| {
+            let (def, fallback) = make();
+            let material = def.material.unwrap_or(0);
+            let mesh = doc.fallback(name, &fallback, material);
+            doc.shapes.push(def);
+            (doc.shapes.len() - 1, mesh)
+        });
+        shape_node(name, shape, mesh)
     }
 
     /// Adds a node, counting it against [`MAX_EXPORT_NODES`].
