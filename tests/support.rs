@@ -1,6 +1,6 @@
 //! Shared helpers for the end-to-end tests: locating the repository's scenes and rendering them.
 
-use quadray::{NoProgress, RenderSettings, Rendered, Scene};
+use quadray::{AccelStats, Film, NoProgress, RenderSettings, Rendered, Scene};
 use std::path::{Path, PathBuf};
 
 /// The repository root.
@@ -34,4 +34,26 @@ pub fn render_with_threads(scene: &Scene, settings: &RenderSettings, threads: us
         .expect("thread pool");
     pool.install(|| quadray::render(scene, settings, &NoProgress))
         .expect("render succeeds")
+}
+
+/// Renders a native scene file at its own settings; returns the film and the stats of its
+/// acceleration structure.
+pub fn render_file(path: &Path) -> (Film, AccelStats) {
+    let loaded = quadray_loader::load_scene(path).expect("scene loads");
+    let settings = loaded.settings.render_settings();
+    let scene = Scene::new(loaded.description).expect("scene is valid");
+    let film = quadray::render(&scene, &settings, &NoProgress)
+        .unwrap()
+        .film;
+    (film, scene.accel().stats(scene.geometry()))
+}
+
+/// Share of pixels whose display values (8-bit sRGB) differ by more than 2/255 in some channel,
+/// and the largest difference in 8-bit steps: the measure of `quadray compare`, on both films
+/// quantised as their PNGs would be.
+pub fn display_difference(a: &Film, b: &Film) -> (f64, f32) {
+    use quadray_cli::compare::{LinearImage, Thresholds, compare};
+    let image = |f: &Film| LinearImage::from_srgb8(f.width(), f.height(), &f.to_srgb8());
+    let c = compare(&image(a), &image(b), &Thresholds::default()).expect("same size");
+    (c.over_share, c.max_display)
 }
