@@ -41,6 +41,8 @@ struct NodeGraph {
     placements: Vec<u64>,
     /// Placements of each mesh: its nodes' placements summed.
     mesh_placements: Vec<u64>,
+    /// The `QUADRAY_quadrics` shape each reached node carries, read once.
+    node_shapes: Vec<Option<usize>>,
 }
 
 /// The `QUADRAY_quadrics` shape a node carries, if any.
@@ -80,6 +82,7 @@ impl NodeGraph {
             has_camera_or_light: vec![false; n],
             placements: vec![0; n],
             mesh_placements: vec![0; doc.meshes().len()],
+            node_shapes: vec![None; n],
         };
         // Iterative depth-first search: 0 unseen, 1 on the current path, 2 done. `order` lists
         // nodes finished, children before parents.
@@ -117,13 +120,11 @@ impl NodeGraph {
                 }
                 stack.push((node.clone(), true));
                 let mut has_plane = false;
-                match node_shape(&node, path)? {
-                    Some(ext) => {
-                        *g.shape_users.entry(ext.shape).or_default() += 1;
-                        has_plane = shapes
-                            .shapes
-                            .get(ext.shape)
-                            .is_some_and(|d| d.kind == "plane");
+                g.node_shapes[i] = node_shape(&node, path)?.map(|ext| ext.shape);
+                match g.node_shapes[i] {
+                    Some(shape) => {
+                        *g.shape_users.entry(shape).or_default() += 1;
+                        has_plane = shapes.shapes.get(shape).is_some_and(|d| d.kind == "plane");
                     }
                     None => {
                         if let Some(mesh) = node.mesh() {
@@ -159,7 +160,7 @@ impl NodeGraph {
         }
         for &i in &order {
             let node = doc.nodes().nth(i).expect("reached nodes exist");
-            if let (Some(mesh), None) = (node.mesh(), node_shape(&node, path)?) {
+            if let (Some(mesh), None) = (node.mesh(), g.node_shapes[i]) {
                 let p = &mut g.mesh_placements[mesh.index()];
                 *p = p.saturating_add(g.placements[i]);
             }
@@ -344,8 +345,8 @@ impl<'a> GraphBuild<'a> {
                 format!("the node hierarchy is deeper than {MAX_DEPTH} levels"),
             ));
         }
-        if let Some(ext) = node_shape(node, self.path)? {
-            self.place_shape(ext.shape, m, &key, out, planes.as_deref_mut(), prototypes)?;
+        if let Some(shape) = self.graph.node_shapes[node.index()] {
+            self.place_shape(shape, m, &key, out, planes.as_deref_mut(), prototypes)?;
         } else if let Some(mesh) = node.mesh() {
             if node.skin().is_some() {
                 self.rest_pose.push("skins");
@@ -524,18 +525,18 @@ impl<'a> GraphBuild<'a> {
         }
         let world = to_world * self.local_transform(node)?;
         let shared = shared_above || self.graph.refs[node.index()] > 1;
-        if let (true, Some(ext)) = (shared, node_shape(node, self.path)?) {
+        if let (true, Some(shape)) = (shared, self.graph.node_shapes[node.index()]) {
             let key = format!("nodes[{}]", node.index());
             if self
                 .shapes
                 .shapes
-                .get(ext.shape)
+                .get(shape)
                 .is_some_and(|d| d.kind == "plane")
             {
                 let mut p = Prototype::default();
                 let mut planes = Vec::new();
                 let mut none = Vec::new();
-                self.place_shape(ext.shape, world, &key, &mut p, Some(&mut planes), &mut none)?;
+                self.place_shape(shape, world, &key, &mut p, Some(&mut planes), &mut none)?;
                 out.geometry.planes.append(&mut planes);
             }
         }

@@ -274,15 +274,6 @@ fn exact_bounds(
         acc.0 = acc.0.min(p);
         acc.1 = acc.1.max(p);
     };
-    let corners = |(a, b): (DVec3, DVec3)| {
-        (0..8).map(move |c| {
-            DVec3::new(
-                if c & 1 == 0 { a.x } else { b.x },
-                if c & 2 == 0 { a.y } else { b.y },
-                if c & 4 == 0 { a.z } else { b.z },
-            )
-        })
-    };
     let identity = level == 0;
     // A shape's box costs its eight corners.
     let shapes = 8 * (l.spheres.len() + l.quadrics.len()) as u64;
@@ -327,6 +318,17 @@ fn exact_bounds(
     })
 }
 
+/// The eight corners of a box.
+fn corners((a, b): (DVec3, DVec3)) -> impl Iterator<Item = DVec3> {
+    (0..8).map(move |c| {
+        DVec3::new(
+            if c & 1 == 0 { a.x } else { b.x },
+            if c & 2 == 0 { a.y } else { b.y },
+            if c & 4 == 0 { a.z } else { b.z },
+        )
+    })
+}
+
 /// Bounds as boxes of boxes: each prototype's box once, children first, placed by its instances'
 /// transforms.
 fn boxed_bounds(g: &Geometry) -> Option<(DVec3, DVec3)> {
@@ -350,9 +352,7 @@ fn boxed_bounds(g: &Geometry) -> Option<(DVec3, DVec3)> {
             let Some(Some((a, b))) = boxes.get(inst.prototype as usize) else {
                 continue;
             };
-            for corner in 0..8 {
-                let pick = |bit: u32, x: f64, y: f64| if corner & bit == 0 { x } else { y };
-                let c = DVec3::new(pick(1, a.x, b.x), pick(2, a.y, b.y), pick(4, a.z, b.z));
+            for c in corners((*a, *b)) {
                 let w = inst.transform.to_world.transform_point3(c);
                 grow((w, w));
             }
