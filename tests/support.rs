@@ -1,5 +1,8 @@
 //! Shared helpers for the end-to-end tests: locating the repository's scenes and rendering them.
 
+#[path = "hostile_cases.rs"]
+pub mod hostile;
+
 use quadray::{AccelStats, Film, NoProgress, RenderSettings, Rendered, Scene};
 use std::path::{Path, PathBuf};
 

@@ -75,8 +75,9 @@ pub fn read_image(path: &Path) -> Result<LinearImage> {
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("png") => {
+            // The image crate's errors repeat their cause in their own message: keep one.
             let img = image::open(path)
-                .with_context(|| format!("reading {}", path.display()))?
+                .map_err(|e| anyhow::anyhow!("reading {}: {e}", path.display()))?
                 .to_rgb8();
             Ok(LinearImage::from_srgb8(
                 img.width(),

@@ -64,7 +64,12 @@ pub struct QuadricArgs {
     )]
     pub coeffs: Vec<f64>,
     /// Half-size R of the clip cube [-R, R]³.
-    #[arg(long, value_name = "R", default_value_t = 1.0)]
+    #[arg(
+        long,
+        value_name = "R",
+        default_value_t = 1.0,
+        allow_negative_numbers = true
+    )]
     pub clip: f64,
     /// Surface texture.
     #[arg(long, value_enum, default_value = "ramp")]
@@ -79,7 +84,7 @@ pub struct QuadricArgs {
     #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub pitch: Option<f64>,
     /// Orbit distance from the centre (default: 5 × the clip size).
-    #[arg(long, value_name = "D")]
+    #[arg(long, value_name = "D", allow_negative_numbers = true)]
     pub distance: Option<f64>,
     /// Resolution as WIDTHxHEIGHT.
     #[arg(long, value_name = "WxH", value_parser = crate::args::parse_resolution, default_value = "640x480")]

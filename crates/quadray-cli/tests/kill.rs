@@ -6,7 +6,7 @@ use std::process::Command;
 
 /// A render killed outright (SIGKILL, which no handler sees) at several moments never damages the
 /// previous output: it stays byte for byte and decodes; any leftover is a recognisable hidden
-/// temporary file; and the next render succeeds and replaces the output.
+/// temporary file; and the next render succeeds, replaces the output and removes the leftovers.
 #[test]
 fn killed_renders_leave_the_previous_output_intact() {
     let dir = tempfile::tempdir().unwrap();
@@ -73,6 +73,15 @@ fn killed_renders_leave_the_previous_output_intact() {
             "64x48",
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains(".quadray-tmp."))
+            .collect();
+        assert!(
+            leftovers.is_empty() || !std::path::Path::new("/proc/self").exists(),
+            "the next render removes what killed renders left: {leftovers:?}"
+        );
         assert_ne!(
             std::fs::read(&out).unwrap(),
             first,

@@ -2,11 +2,12 @@
 //! mechanism behind every output quadray writes (images, reports, glTF).
 //!
 //! The new contents go to a hidden temporary file beside the target, named
-//! `.NAME.XXXXXX.quadray-tmp.EXT` (recognisable, and keeping the extension, since image writers
-//! pick their format from it), which is renamed over the target when complete. On any error it
-//! is deleted (the `tempfile` crate deletes it when dropped), and an older target survives
-//! untouched. A process killed outright (SIGKILL) cannot delete it: such a leftover is safe to
-//! remove, and the target is never half-written either way.
+//! `.NAME.pPID.XXXXXX.quadray-tmp.EXT` (recognisable, and keeping the extension, since image
+//! writers pick their format from it), which is renamed over the target when complete. On any
+//! error it is deleted (the `tempfile` crate deletes it when dropped), and an older target
+//! survives untouched. A process killed outright (SIGKILL) cannot delete it; the next write of the
+//! same target removes such leftovers, but only those whose process (the PID in the name) is gone,
+//! so a render still running into the same file is never disturbed.
 
 use std::path::{Path, PathBuf};
 
@@ -28,13 +29,45 @@ pub fn replace_with<E: From<std::io::Error>>(
         Some(ext) => format!(".quadray-tmp.{ext}"),
         None => ".quadray-tmp".to_string(),
     };
+    let prefix = format!(".{name}.p");
+    remove_leftovers(&dir, &prefix, &suffix);
     let tmp = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
+        .prefix(&format!("{prefix}{}.", std::process::id()))
         .suffix(&suffix)
         .tempfile_in(&dir)?;
     write(tmp.path())?;
     tmp.persist(path).map_err(|e| e.error)?;
     Ok(())
+}
+
+/// Deletes the temporary files of earlier writes to the same target (`prefix` PID `.` random
+/// `suffix`) whose process no longer runs. Best effort: where processes cannot be looked up
+/// (no `/proc`), or a file cannot be removed, it stays.
+fn remove_leftovers(dir: &Path, prefix: &str, suffix: &str) {
+    let proc = Path::new("/proc");
+    if !proc.join("self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let file_name = entry.file_name();
+        let Some(name) = file_name.to_str() else {
+            continue;
+        };
+        let Some(pid) = name
+            .strip_prefix(prefix)
+            .filter(|rest| rest.ends_with(suffix))
+            .and_then(|rest| rest.split_once('.'))
+            .and_then(|(pid, _)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if !proc.join(pid.to_string()).exists() {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
 }
 
 /// [`replace_with`] for contents already in memory.
@@ -77,5 +110,37 @@ mod tests {
         replace(&target, b"new").unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"new");
         assert_eq!(entries(dir.path()), vec!["out.png"]);
+    }
+
+    /// Leftovers of a dead process writing the same target go; those of a live process (PID 1
+    /// always runs), of other targets and of other programs stay.
+    #[test]
+    fn leftovers_of_dead_processes_are_removed() {
+        if !Path::new("/proc/self").exists() {
+            eprintln!("skipped: no /proc on this system");
+            return;
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out.png");
+        let keep = [
+            ".out.png.p1.abcdef.quadray-tmp.png",
+            ".other.png.p999999999.abcdef.quadray-tmp.png",
+            ".out.png.p999999999.abcdef.png",
+            "notes.txt",
+        ];
+        for name in keep {
+            std::fs::write(dir.path().join(name), b"x").unwrap();
+        }
+        std::fs::write(
+            dir.path()
+                .join(".out.png.p999999999.abcdef.quadray-tmp.png"),
+            b"x",
+        )
+        .unwrap();
+        replace(&target, b"new").unwrap();
+        let mut expected: Vec<&str> = keep.to_vec();
+        expected.push("out.png");
+        expected.sort();
+        assert_eq!(entries(dir.path()), expected);
     }
 }

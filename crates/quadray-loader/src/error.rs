@@ -114,16 +114,10 @@ impl fmt::Display for LoadError {
     }
 }
 
-impl std::error::Error for LoadError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match &self.kind {
-            LoadErrorKind::Io(e) => Some(e),
-            LoadErrorKind::Referenced { source, .. } => Some(source),
-            LoadErrorKind::Include { source, .. } => Some(source.as_ref()),
-            _ => None,
-        }
-    }
-}
+/// No `source()`: the message already ends with the cause (the I/O error, the included file's own
+/// error), so a printer that walks the chain (anyhow's `{:#}`) would say it twice. The cause is
+/// still there to match on in [`LoadError::kind`].
+impl std::error::Error for LoadError {}
 
 #[cfg(test)]
 mod tests {

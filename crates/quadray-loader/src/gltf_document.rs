@@ -57,12 +57,26 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
     let (json, blob) = if bytes.starts_with(GLB_MAGIC) {
         split_glb(bytes).map_err(|m| LoadError::new(path, None, m))?
     } else {
+        let is_glb = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+        let looks_like_json = bytes.trim_ascii_start().starts_with(b"{");
+        if is_glb && !looks_like_json {
+            return Err(LoadError::new(
+                path,
+                None,
+                LoadErrorKind::Syntax(
+                    "not a binary glTF (GLB) file: it does not start with `glTF`".into(),
+                ),
+            ));
+        }
         (bytes, None)
     };
     let mut value: Value = serde_json::from_slice(json).map_err(|e| {
+        // serde_json counts columns from 0 at the end of the input; editors count from 1.
         let location = (e.line() > 0).then_some(Location {
             line: e.line(),
-            column: e.column(),
+            column: e.column().max(1),
         });
         LoadError::new(path, location, LoadErrorKind::Syntax(format!("JSON: {e}")))
     })?;
@@ -406,10 +420,21 @@ pub fn read_image(file: &GltfFile, image: &gltf::Image<'_>) -> Result<Image, Str
         _ => {}
     }
     let bytes = match image.source() {
-        gltf::image::Source::Uri { uri, .. } => read_uri(&file.base, uri).map_err(|e| match e {
-            UriError::Io(p, e) => format!("cannot read `{}`: {e}", p.display()),
-            UriError::Invalid(m) => m,
-        })?,
+        gltf::image::Source::Uri { uri, .. } => {
+            let bytes = read_uri(&file.base, uri).map_err(|e| match e {
+                UriError::Io(p, e) => format!("cannot read `{}`: {e}", p.display()),
+                UriError::Invalid(m) => m,
+            })?;
+            // Name the file: a decoder's message alone ("format could not be determined") does
+            // not say which of a model's images it is about.
+            let shown = if uri.starts_with("data:") {
+                "data URI"
+            } else {
+                uri
+            };
+            return decode_image(&bytes, ColorEncoding::Srgb)
+                .map_err(|e| format!("cannot decode `{shown}`: {e}"));
+        }
         gltf::image::Source::View { view, .. } => {
             let buffer = file
                 .buffers

@@ -28,6 +28,7 @@ pub mod include;
 pub mod mtl;
 pub mod native;
 pub mod obj;
+mod obj_locate;
 pub mod quadrics_ext;
 pub mod read_limited;
 pub mod standalone;

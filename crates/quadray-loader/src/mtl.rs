@@ -16,13 +16,22 @@ use glam::Vec3;
 use quadray::{Filter, ImageMap, ImageTexture, Material, SpecularModel, Texture, Wrap};
 use std::path::Path;
 
-/// The Whitted material for an MTL material whose library lives in `folder`.
+/// The Whitted material for an MTL material whose library lives in `folder`, or what is wrong
+/// with it (a colour or exponent that is not a finite number).
 pub fn whitted_material(
     m: &tobj::Material,
     folder: &Path,
     images: &mut ImageCache,
     notes: &mut Vec<String>,
-) -> Material {
+) -> Result<Material, String> {
+    for (statement, value) in [("Ka", m.ambient), ("Kd", m.diffuse), ("Ks", m.specular)] {
+        if let Some(c) = value.filter(|c| c.iter().any(|x| !x.is_finite())) {
+            return Err(format!("{statement} {c:?} is not three finite numbers"));
+        }
+    }
+    if let Some(ns) = m.shininess.filter(|n| !n.is_finite()) {
+        return Err(format!("Ns {ns} is not a finite number"));
+    }
     let rgb = |c: Option<[f32; 3]>| c.map(|c| Vec3::from_array(c).max(Vec3::ZERO));
     let kd = rgb(m.diffuse);
     let ks = rgb(m.specular).unwrap_or(Vec3::ZERO);
@@ -83,7 +92,7 @@ pub fn whitted_material(
         ));
     }
     let defaults = Material::default();
-    Material {
+    Ok(Material {
         texture,
         ambient: defaults.ambient,
         diffuse: defaults.diffuse,
@@ -92,7 +101,7 @@ pub fn whitted_material(
         specular_model: SpecularModel::Phong,
         reflectivity,
         reflection_tint: 0.0,
-    }
+    })
 }
 
 /// The file name in a `map_Kd` statement, past any options (`-s 1 1 1`, `-clamp on`, `-bm 0.5`).
@@ -169,8 +178,23 @@ mod tests {
             Path::new("/nonexistent"),
             &mut ImageCache::default(),
             &mut notes,
-        );
+        )
+        .unwrap();
         (mats[0].clone(), notes, m)
+    }
+
+    #[test]
+    fn non_finite_colours_are_refused() {
+        let text = normalise_colour_statements("newmtl a\nKd nan 0.5 0.5\n").unwrap();
+        let (mats, _) = tobj::load_mtl_buf(&mut text.as_bytes()).unwrap();
+        let e = whitted_material(
+            &mats[0],
+            Path::new("."),
+            &mut ImageCache::default(),
+            &mut vec![],
+        )
+        .unwrap_err();
+        assert!(e.contains("Kd"), "{e}");
     }
 
     #[test]

@@ -14,6 +14,10 @@ use crate::error::{LoadError, LoadErrorKind, Location};
 use crate::image_file::{ImageCache, resolve_reference};
 use crate::import::{ImportOptions, Imported};
 use crate::mtl::{normalise_colour_statements, whitted_material};
+pub use crate::obj_locate::MAX_FACE_VERTICES;
+use crate::obj_locate::{
+    locate_non_finite_vertex, locate_parse_error, oversized_face, undefined_materials,
+};
 use glam::{DVec3, Vec2, Vec3, Vec4};
 use quadray::{Material, Mesh};
 use std::cell::RefCell;
@@ -24,29 +28,6 @@ pub fn import_obj(path: &Path, options: &ImportOptions) -> Result<Imported, Load
     let bytes = crate::read_limited::read(path, crate::read_limited::MAX_MESH_BYTES)
         .map_err(|e| LoadError::new(path, None, LoadErrorKind::Io(e)))?;
     import_obj_bytes(&bytes, path, options)
-}
-
-/// Most vertices one OBJ face may have. A polygon is triangulated as a fan of slivers that all
-/// share its first vertex, on which the BVH builder's nearest-neighbour merging grows
-/// quadratically (a 100 000-vertex face took 17 s); 16 384 build in well under a second.
-pub const MAX_FACE_VERTICES: usize = 16_384;
-
-/// The first face with more than [`MAX_FACE_VERTICES`] vertices: its 1-based line and size.
-fn oversized_face(bytes: &[u8]) -> Option<(usize, usize)> {
-    bytes
-        .split(|&b| b == b'\n')
-        .enumerate()
-        .find_map(|(i, line)| {
-            let rest = line.strip_prefix(b"f")?;
-            if !rest.first().is_some_and(|b| b.is_ascii_whitespace()) {
-                return None;
-            }
-            let count = rest
-                .split(|b| b.is_ascii_whitespace())
-                .filter(|t| !t.is_empty())
-                .count();
-            (count > MAX_FACE_VERTICES).then_some((i + 1, count))
-        })
 }
 
 /// A material library tobj asked for, as this loader found it.
@@ -126,6 +107,19 @@ pub fn import_obj_bytes(
         return Err(e);
     }
     let (models, materials) = result.map_err(|e| obj_error(bytes, path, e))?;
+    let non_finite = models
+        .iter()
+        .any(|m| m.mesh.positions.iter().any(|x| !x.is_finite()));
+    if non_finite && let Some((line, message)) = locate_non_finite_vertex(bytes) {
+        return Err(LoadError::new(
+            path,
+            Some(Location { line, column: 1 }),
+            LoadErrorKind::Invalid {
+                key: "v".into(),
+                message,
+            },
+        ));
+    }
     let mut notes = notes.into_inner();
     // tobj reports a missing library as an error in place of the materials; the note says so.
     let materials = materials.unwrap_or_default();
@@ -139,7 +133,10 @@ pub fn import_obj_bytes(
             .flat_map(|l| std::iter::repeat_n(&l.folder, l.materials));
         for m in &materials {
             let lib_folder = library.next().unwrap_or(&folder);
-            let w = whitted_material(m, lib_folder, &mut images, &mut notes);
+            let w =
+                whitted_material(m, lib_folder, &mut images, &mut notes).map_err(|message| {
+                    LoadError::invalid(path, None, format!("material \"{}\"", m.name), message)
+                })?;
             out.materials.push((m.name.clone(), w));
         }
     }
@@ -228,8 +225,15 @@ pub fn import_obj_bytes(
         out.geometry.meshes.push(built);
     }
     if unmatched > 0 {
+        let defined: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+        let undefined = undefined_materials(bytes, &defined);
+        let named = if undefined.is_empty() {
+            String::new()
+        } else {
+            format!(" (undefined: {})", undefined.join(", "))
+        };
         notes.push(format!(
-            "{unmatched} object(s) name no material, or one their libraries do not define; they use a default grey"
+            "warning: {unmatched} object(s) name no material, or one their libraries do not define{named}; they use a default grey"
         ));
     }
     if out
@@ -257,18 +261,10 @@ pub fn import_obj_bytes(
     Ok(out)
 }
 
-/// A tobj error as a [`LoadError`]; out-of-range face indices are located by a second look at the
-/// text, because tobj does not say where they are.
+/// A tobj error as a [`LoadError`], located on its line when a second look at the text finds it
+/// (tobj does not say where its errors are).
 fn obj_error(bytes: &[u8], path: &Path, e: tobj::LoadError) -> LoadError {
-    use tobj::LoadError as T;
-    if matches!(
-        e,
-        T::FaceVertexOutOfBounds
-            | T::FaceTexCoordOutOfBounds
-            | T::FaceNormalOutOfBounds
-            | T::FaceColorOutOfBounds
-    ) && let Some((line, message)) = locate_bad_index(bytes)
-    {
+    if let Some((line, message)) = locate_parse_error(bytes, &e) {
         return LoadError::new(
             path,
             Some(Location { line, column: 1 }),
@@ -276,50 +272,10 @@ fn obj_error(bytes: &[u8], path: &Path, e: tobj::LoadError) -> LoadError {
         );
     }
     let message = match e {
-        T::ReadError => "the file is not text (invalid UTF-8)".to_string(),
+        tobj::LoadError::ReadError => "the file is not text (invalid UTF-8)".to_string(),
         other => other.to_string(),
     };
     LoadError::new(path, None, LoadErrorKind::Syntax(message))
-}
-
-/// The first face-index statement whose index refers to an element not defined before it: its
-/// line number and a message. A diagnostic only; the parse itself is tobj's.
-fn locate_bad_index(bytes: &[u8]) -> Option<(usize, String)> {
-    let text = String::from_utf8_lossy(bytes);
-    let (mut v, mut vt, mut vn) = (0i64, 0i64, 0i64);
-    for (n, line) in text.lines().enumerate() {
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("v") => v += 1,
-            Some("vt") => vt += 1,
-            Some("vn") => vn += 1,
-            Some("f") => {
-                for corner in words {
-                    for (slot, field) in corner.split('/').enumerate() {
-                        let (count, what) = match slot {
-                            0 => (v, "vertices (v)"),
-                            1 => (vt, "texture coordinates (vt)"),
-                            _ => (vn, "normals (vn)"),
-                        };
-                        let Ok(i) = field.parse::<i64>() else {
-                            continue;
-                        };
-                        let resolved = if i < 0 { count + 1 + i } else { i };
-                        if !(1..=count).contains(&resolved) {
-                            return Some((
-                                n + 1,
-                                format!(
-                                    "face index {i} is out of range: {count} {what} are defined before this line"
-                                ),
-                            ));
-                        }
-                    }
-                }
-            }
-            _ => {}
-        }
-    }
-    None
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! the file's camera if it has one (else one framing its bounds), its lights if any (else a
 //! default key light), and a note for every assumption.
 
-use crate::error::LoadError;
+use crate::error::{LoadError, LoadErrorKind};
 use crate::import::{Imported, Selector, default_key_light, framing_camera};
 use crate::native::{LoadedScene, SceneSettings};
 use glam::Vec3;
@@ -18,6 +18,27 @@ pub fn scene_from_import(
     path: &Path,
     camera: Option<&Selector>,
 ) -> Result<LoadedScene, LoadError> {
+    let g = &imported.geometry;
+    if g.spheres.is_empty()
+        && g.planes.is_empty()
+        && g.quadrics.is_empty()
+        && g.meshes.is_empty()
+        && g.instances.is_empty()
+    {
+        // Only points, lines or empty nodes: say so rather than draw an empty image.
+        let skipped = if imported.notes.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", imported.notes.join("; "))
+        };
+        return Err(LoadError::new(
+            path,
+            None,
+            LoadErrorKind::Unsupported(format!(
+                "the file holds no surfaces (triangles or quadric shapes): nothing to render{skipped}"
+            )),
+        ));
+    }
     let mut notes = imported.notes.clone();
     let mut settings = SceneSettings::default();
     let chosen = match camera {

@@ -1,6 +1,6 @@
 //! Cameras: perspective look-at, the seed's orbit camera, and orthographic.
 
-use crate::math::Ray;
+use crate::math::{MAX_COORDINATE, Ray};
 use glam::DVec3;
 
 /// How the camera projects the scene onto the image.
@@ -48,6 +48,9 @@ pub enum CameraError {
     /// A coordinate is NaN or infinite.
     #[error("camera coordinates must be finite")]
     NotFinite,
+    /// A coordinate's magnitude is beyond [`MAX_COORDINATE`].
+    #[error("camera coordinates reach {0:e}; quadray supports magnitudes up to {MAX_COORDINATE:e}")]
+    TooFar(f64),
 }
 
 impl Camera {
@@ -77,6 +80,10 @@ impl Camera {
     pub fn prepare(&self, aspect: f64) -> Result<CameraFrame, CameraError> {
         if !(self.from.is_finite() && self.to.is_finite() && self.up.is_finite()) {
             return Err(CameraError::NotFinite);
+        }
+        let reach = self.from.abs().max(self.to.abs()).max_element();
+        if reach > MAX_COORDINATE {
+            return Err(CameraError::TooFar(reach));
         }
         let forward = (self.to - self.from)
             .try_normalize()

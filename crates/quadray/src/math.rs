@@ -2,6 +2,10 @@
 
 use glam::{DAffine3, DMat3, DVec3};
 
+/// Largest coordinate magnitude a scene may reach, shapes as placed and camera alike (f32's range
+/// is 3.4·10³⁸; the margin covers box padding and ray spans).
+pub const MAX_COORDINATE: f64 = 1e30;
+
 /// Unit roundoff of f64 (half an ulp of 1.0): every correctly rounded operation has relative error at most this.
 pub const F64_UNIT_ROUNDOFF: f64 = f64::EPSILON * 0.5;
 

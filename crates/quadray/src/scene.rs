@@ -10,9 +10,7 @@ use crate::math::Ray;
 use crate::shape::{PrimRef, SurfaceHit};
 use glam::Vec3;
 
-/// Largest coordinate magnitude a scene may reach, shapes as placed and camera alike (f32's range
-/// is 3.4·10³⁸; the margin covers box padding and ray spans).
-pub const MAX_COORDINATE: f64 = 1e30;
+pub use crate::math::MAX_COORDINATE;
 
 /// Everything a scene holds, before validation.
 #[derive(Clone, Debug)]

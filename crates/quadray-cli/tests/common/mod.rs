@@ -1,4 +1,6 @@
 //! Helpers shared by the CLI's end-to-end tests: running the real binary on bundled scenes.
+// Each test file compiles this module on its own and uses only some of it.
+#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

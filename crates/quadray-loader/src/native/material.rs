@@ -11,26 +11,27 @@ impl Builder<'_> {
             .map(|c| self.colour(c, &format!("{key}.color")))
             .transpose()?;
         let texture_name = m.texture.as_ref().map(|t| (t.get_ref().as_str(), t.span()));
-        let only_for = |field: bool, name: &str, texture: &str| -> Result<(), LoadError> {
-            if field {
-                return Err(LoadError::invalid(
-                    self.path,
-                    None,
-                    format!("{key}.{name}"),
-                    format!("only applies to texture = \"{texture}\""),
-                ));
-            }
-            Ok(())
-        };
+        let only_for =
+            |field: Option<Range<usize>>, name: &str, texture: &str| -> Result<(), LoadError> {
+                match field {
+                    Some(span) => Err(self.err(
+                        span,
+                        format!("{key}.{name}"),
+                        format!("only applies to texture = \"{texture}\""),
+                    )),
+                    None => Ok(()),
+                }
+            };
         if !matches!(texture_name, Some(("bands", _))) {
-            only_for(m.bands.is_some(), "bands", "bands")?;
+            only_for(m.bands.as_ref().map(|b| b.span()), "bands", "bands")?;
         }
         if !matches!(texture_name, Some(("checker", _))) {
             only_for(
-                m.checker_size.is_some() || m.color2.is_some(),
-                "checker_size/color2",
+                m.checker_size.as_ref().map(|c| c.span()),
+                "checker_size",
                 "checker",
             )?;
+            only_for(m.color2.as_ref().map(|c| c.span()), "color2", "checker")?;
         }
         let texture = match texture_name {
             None | Some(("constant", _)) => Texture::Constant(color.unwrap_or(Vec3::splat(0.8))),

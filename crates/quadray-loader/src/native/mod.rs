@@ -11,7 +11,7 @@ use crate::import::{
 };
 use crate::include;
 use glam::{DVec3, Vec3};
-use quadray::render::{MAX_DEPTH, MAX_SIDE, MAX_SPP};
+use quadray::render::{MAX_ASPECT, MAX_DEPTH, MAX_SIDE, MAX_SPP};
 use quadray::{
     Camera, ClipBox, Coefficients, Geometry, Light, Material, Mesh, Plane, Projection, Quadric,
     QuadricKind, QuadricSurface, SceneDescription, SpecularModel, Sphere, Texture, Transform,

@@ -146,7 +146,16 @@ impl Builder<'_> {
             }
         };
         let clip = match q.clip.get_ref() {
-            ClipSpec::Radius(r) => ClipBox::cube(*r),
+            ClipSpec::Radius(r) => {
+                if !(*r > 0.0 && r.is_finite()) {
+                    return Err(self.err(
+                        q.clip.span(),
+                        format!("{key}.clip"),
+                        format!("a clip radius must be a positive finite number, got {r}"),
+                    ));
+                }
+                ClipBox::cube(*r)
+            }
             ClipSpec::Box { min, max } => ClipBox {
                 min: DVec3::from_array(min.0),
                 max: DVec3::from_array(max.0),
@@ -155,12 +164,20 @@ impl Builder<'_> {
         let transform = self.transform(&q.transform, &format!("{key}.transform"))?;
         let material = self.material_id(names, &q.material, &format!("{key}.material"))?;
         Quadric::new(surface, clip, transform, material).map_err(|e| {
-            let span = match &e {
-                quadray::QuadricError::EmptyClipBox { .. } => q.clip.span(),
-                quadray::QuadricError::BadTransform => {
-                    q.transform.as_ref().map_or(spec.span(), |t| t.span())
+            let (span, key) = match (&e, &q.coefficients) {
+                (quadray::QuadricError::EmptyClipBox { .. }, _) => {
+                    (q.clip.span(), format!("{key}.clip"))
                 }
-                _ => spec.span(),
+                (quadray::QuadricError::BadTransform, _) => (
+                    q.transform.as_ref().map_or(spec.span(), |t| t.span()),
+                    format!("{key}.transform"),
+                ),
+                (
+                    quadray::QuadricError::NonFiniteCoefficient { .. }
+                    | quadray::QuadricError::Degenerate(_),
+                    Some(k),
+                ) => (k.span(), format!("{key}.coefficients")),
+                _ => (spec.span(), key.to_string()),
             };
             self.err(span, key, e.to_string())
         })

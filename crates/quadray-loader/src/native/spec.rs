@@ -67,7 +67,7 @@ pub(super) struct InstanceSpec {
 
 /// A glTF scene or camera chosen by index or by name.
 #[derive(Clone, Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "an index (a whole number) or a name (a string)")]
 pub(super) enum SelectorSpec {
     Index(i64),
     Name(String),
@@ -166,14 +166,17 @@ pub(super) struct QuadricSpec {
 }
 
 #[derive(Clone, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "a clip radius (a number) or a box { min = [x, y, z], max = [x, y, z] }"
+)]
 pub(super) enum ClipSpec {
     Radius(f64),
     Box { min: V3, max: V3 },
 }
 
 #[derive(Clone, Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a scale: one number, or [x, y, z]")]
 pub(super) enum ScaleSpec {
     Uniform(f64),
     PerAxis(V3),
