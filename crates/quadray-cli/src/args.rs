@@ -1,11 +1,24 @@
 //! Command-line arguments (clap derive), parsed first and validated where they are used.
 
 use clap::{Args, Parser, Subcommand};
-use std::path::PathBuf;
+use quadray::render::{MAX_ASPECT, MAX_DEPTH, MAX_PIXELS, MAX_SIDE, MAX_SPP};
+use std::path::{Path, PathBuf};
+
+/// The exit statuses, as `--help` lists them (and the README).
+pub const EXIT_STATUS: &str = "\
+Exit status:
+  0  success; for compare, the images match
+  1  the scene, an image or a file cannot be used (the message says which and where);
+     for compare, the images differ
+  2  a usage error: an unknown option or a value out of range; for compare, an image
+     cannot be read";
+
+/// Most worker threads `-t` accepts.
+pub const MAX_THREADS: usize = 1024;
 
 /// quadray: a ray tracer with clipped quadric surfaces, spheres, planes and meshes.
 #[derive(Parser, Debug)]
-#[command(version, about)]
+#[command(name = "quadray", version, about, after_help = EXIT_STATUS)]
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]
@@ -37,20 +50,21 @@ pub enum Command {
 pub struct RenderArgs {
     /// The scene file.
     pub scene: PathBuf,
-    /// Output image; the extension picks the format (.png or .exr).
-    #[arg(short, long, value_name = "OUT")]
-    pub output: PathBuf,
+    /// Output image; the extension picks the format (.png or .exr). Default: the scene's name
+    /// with .png, beside the scene.
+    #[arg(short, long, value_name = "OUT", value_parser = parse_image_output)]
+    pub output: Option<PathBuf>,
     /// Samples per pixel (overrides the scene).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: Option<u32>,
     /// Resolution as WIDTHxHEIGHT (overrides the scene).
     #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
     pub res: Option<(u32, u32)>,
     /// Most rays in one reflection chain, camera ray included (overrides the scene).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
     pub max_depth: Option<u32>,
     /// Worker threads (default: all cores).
-    #[arg(short = 't', long, value_name = "THREADS")]
+    #[arg(short = 't', long, value_name = "THREADS", value_parser = parse_threads)]
     pub threads: Option<usize>,
     /// Print load and BVH build times besides the final stats line.
     #[arg(long)]
@@ -82,7 +96,7 @@ pub struct ConvertArgs {
     /// The scene file (.toml, .obj, .gltf or .glb).
     pub scene: PathBuf,
     /// Output file: .gltf (with a .bin beside it) or .glb.
-    #[arg(short, long, value_name = "OUT")]
+    #[arg(short, long, value_name = "OUT", value_parser = parse_gltf_output)]
     pub output: PathBuf,
     /// Print nothing but errors.
     #[arg(short, long)]
@@ -109,16 +123,23 @@ pub fn thread_pool(threads: Option<usize>) -> anyhow::Result<rayon::ThreadPool> 
     use anyhow::Context;
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(t) = threads {
-        anyhow::ensure!(
-            (1..=1024).contains(&t),
-            "thread count must be between 1 and 1024, got {t}"
-        );
+        parse_threads(&t.to_string()).map_err(crate::UsageError)?;
         pool = pool.num_threads(t);
     }
     pool.build().context("starting the thread pool")
 }
 
-/// Parses `640x480`.
+/// Parses a worker thread count, 1 to [`MAX_THREADS`].
+pub fn parse_threads(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(t) if (1..=MAX_THREADS).contains(&t) => Ok(t),
+        _ => Err(format!(
+            "the thread count must be a whole number from 1 to {MAX_THREADS}, got \"{s}\""
+        )),
+    }
+}
+
+/// Parses WIDTHxHEIGHT within the renderer's limits (sides, pixel count, aspect ratio).
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
@@ -128,7 +149,51 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
             .parse::<u32>()
             .map_err(|_| format!("\"{v}\" is not a pixel count"))
     };
-    Ok((parse(w)?, parse(h)?))
+    let (w, h) = (parse(w)?, parse(h)?);
+    let aspect = w as f64 / h.max(1) as f64;
+    if !(1..=MAX_SIDE).contains(&w)
+        || !(1..=MAX_SIDE).contains(&h)
+        || w as u64 * h as u64 > MAX_PIXELS
+        || !(1.0 / MAX_ASPECT..=MAX_ASPECT).contains(&aspect)
+    {
+        return Err(format!(
+            "{w}x{h} is outside the limits: 1 to {MAX_SIDE} per side, at most {MAX_PIXELS} pixels, \
+             aspect ratio at most {MAX_ASPECT}"
+        ));
+    }
+    Ok((w, h))
+}
+
+/// Parses an output path whose extension is one of `extensions` (any case).
+fn output_with(s: &str, extensions: &[&str]) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if extensions.iter().any(|e| ext.eq_ignore_ascii_case(e)) {
+        Ok(path)
+    } else {
+        let listed: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
+        Err(format!("the output must end in {}", listed.join(" or ")))
+    }
+}
+
+/// Parses an image output path: .png or .exr.
+pub fn parse_image_output(s: &str) -> Result<PathBuf, String> {
+    output_with(s, &["png", "exr"])
+}
+
+/// Parses a PNG output path.
+pub fn parse_png_output(s: &str) -> Result<PathBuf, String> {
+    output_with(s, &["png"])
+}
+
+/// Parses a glTF output path: .gltf or .glb.
+pub fn parse_gltf_output(s: &str) -> Result<PathBuf, String> {
+    output_with(s, &["gltf", "glb"])
+}
+
+/// The default output of `render SCENE`: the scene's file name with `.png`, beside the scene.
+pub fn default_output(scene: &Path) -> PathBuf {
+    scene.with_extension("png")
 }
 
 #[cfg(test)]
@@ -141,6 +206,9 @@ mod tests {
         assert!(parse_resolution("1280").is_err());
         assert!(parse_resolution("ax2").is_err());
         assert!(parse_resolution("-5x2").is_err());
+        assert!(parse_resolution("0x0").is_err());
+        assert!(parse_resolution("16384x1").is_err(), "aspect");
+        assert!(parse_resolution("16384x16384").is_err(), "pixels");
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use crate::compare::{Thresholds, compare, read_image};
 use crate::output::{Format, check_writable, write_rgb8_png};
-use anyhow::{Result, bail, ensure};
+use anyhow::{Result, ensure};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -15,20 +15,35 @@ pub struct CompareArgs {
     /// The image to test against it (.png or .exr).
     pub test: PathBuf,
     /// Write the FLIP error heat map here (.png; black: equal, yellow: very different).
-    #[arg(long, value_name = "OUT.png")]
+    #[arg(long, value_name = "OUT.png", value_parser = crate::args::parse_png_output)]
     pub diff: Option<PathBuf>,
     /// A pixel counts as different when a channel differs by more than this many 8-bit display
     /// steps (1 = 1/255).
-    #[arg(long, value_name = "STEPS", default_value_t = 2.0)]
+    #[arg(
+        long,
+        value_name = "STEPS",
+        default_value_t = 2.0,
+        allow_negative_numbers = true
+    )]
     pub threshold: f32,
     /// Fail when more than this percentage of pixels differ.
-    #[arg(long, value_name = "PERCENT", default_value_t = 0.1)]
+    #[arg(
+        long,
+        value_name = "PERCENT",
+        default_value_t = 0.1,
+        allow_negative_numbers = true
+    )]
     pub max_percent: f64,
     /// Fail when any channel differs by more than this many 8-bit display steps.
-    #[arg(long, value_name = "STEPS", default_value_t = 32.0)]
+    #[arg(
+        long,
+        value_name = "STEPS",
+        default_value_t = 32.0,
+        allow_negative_numbers = true
+    )]
     pub max_diff: f32,
     /// Fail when the mean FLIP error exceeds this (not judged unless given).
-    #[arg(long, value_name = "FLIP")]
+    #[arg(long, value_name = "FLIP", allow_negative_numbers = true)]
     pub max_flip: Option<f32>,
 }
 
@@ -76,12 +91,13 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     }
     let failures = c.failures(&thresholds);
     if !failures.is_empty() {
-        bail!(
+        return Err(crate::ImagesDiffer(format!(
             "{} and {} differ: {}",
             args.reference.display(),
             args.test.display(),
             failures.join("; ")
-        );
+        ))
+        .into());
     }
     Ok(())
 }

@@ -6,10 +6,6 @@ use anyhow::{Context, Result};
 
 /// Runs the convert subcommand.
 pub fn run(args: &ConvertArgs) -> Result<()> {
-    let ext = args.output.extension().and_then(|e| e.to_str());
-    if !ext.is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb")) {
-        anyhow::bail!("output {} must end in .gltf or .glb", args.output.display());
-    }
     let loaded = quadray_loader::load_any(&args.scene)?;
     for note in &loaded.notes {
         if !args.quiet {

@@ -22,7 +22,7 @@ const CAPTION_BAND: u32 = 30;
 #[derive(Args, Debug)]
 pub struct GalleryArgs {
     /// Output contact sheet (.png).
-    #[arg(short, long, value_name = "OUT.png")]
+    #[arg(short, long, value_name = "OUT.png", value_parser = crate::args::parse_png_output)]
     pub output: PathBuf,
     /// Size of one tile (picture and caption) as WIDTHxHEIGHT.
     #[arg(long, value_name = "WxH", value_parser = crate::args::parse_resolution, default_value = "440x400")]
@@ -50,11 +50,13 @@ pub fn render_sheet(args: &GalleryArgs) -> Result<(u32, u32, Vec<u8>)> {
     let scale = (tw / 220).clamp(1, 4);
     let caption = CAPTION_BAND * scale;
     let title = TITLE_BAND * scale;
-    ensure!(
+    crate::usage_ensure(
         (64..=4096).contains(&tw) && th >= caption + 32 && th <= 4096,
-        "--tile must be at least 64 wide and {} tall, and at most 4096x4096, got {tw}x{th}",
-        caption + 32
-    );
+        &format!(
+            "--tile must be at least 64 wide and {} tall, and at most 4096x4096, got {tw}x{th}",
+            caption + 32
+        ),
+    )?;
     let shows = Showcase::all();
     let rows = (shows.len() as u32).div_ceil(COLUMNS);
     let (w, h) = (tw * COLUMNS, title + th * rows);

@@ -21,6 +21,55 @@ pub mod showcase;
 
 use clap::Parser;
 
+/// A command line that cannot run as given (options that conflict, a value out of range found
+/// after parsing): exit status 2, like clap's own usage errors.
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// `Err(UsageError(message))` unless `condition` holds.
+pub fn usage_ensure(condition: bool, message: &str) -> Result<(), UsageError> {
+    if condition {
+        Ok(())
+    } else {
+        Err(UsageError(message.to_string()))
+    }
+}
+
+/// `quadray compare` found the images different beyond its thresholds: exit status 1, as `cmp`
+/// and `diff` do.
+#[derive(Debug)]
+pub struct ImagesDiffer(pub String);
+
+impl std::fmt::Display for ImagesDiffer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ImagesDiffer {}
+
+/// The exit status for an error of a run (see [`args::EXIT_STATUS`]): 2 for usage errors (and,
+/// for compare, for any trouble other than a difference), else 1.
+pub fn exit_status(err: &anyhow::Error, command_is_compare: bool) -> u8 {
+    if err.downcast_ref::<UsageError>().is_some() || err.downcast_ref::<clap::Error>().is_some() {
+        2
+    } else if err.downcast_ref::<ImagesDiffer>().is_some() {
+        1
+    } else if command_is_compare {
+        2
+    } else {
+        1
+    }
+}
+
 /// Runs a parsed command line.
 pub fn run(cli: args::Cli) -> anyhow::Result<()> {
     match cli.command {

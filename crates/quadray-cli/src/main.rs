@@ -4,13 +4,15 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // clap prints its own usage errors and exits with status 2.
     let cli = quadray_cli::args::Cli::parse();
+    let is_compare = matches!(cli.command, quadray_cli::args::Command::Compare(_));
     match quadray_cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
             // `{:#}` prints the whole context chain on one line.
             eprintln!("error: {err:#}");
-            ExitCode::from(1)
+            ExitCode::from(quadray_cli::exit_status(&err, is_compare))
         }
     }
 }

@@ -3,7 +3,8 @@
 
 use crate::output::{check_writable, write_film};
 use crate::showcase::{GENERAL_EQUATION, Showcase};
-use anyhow::{Context, Result, bail, ensure};
+use crate::{UsageError, usage_ensure};
+use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use quadray::{Coefficients, QuadricKind, QuadricSurface, RenderSettings, Scene, Texture};
 use std::path::PathBuf;
@@ -93,7 +94,13 @@ pub struct QuadricArgs {
     #[arg(long, value_name = "N", default_value_t = 4)]
     pub spp: u32,
     /// Output image (.png or .exr).
-    #[arg(short, long, value_name = "OUT", required_unless_present = "list")]
+    #[arg(
+        short,
+        long,
+        value_name = "OUT",
+        required_unless_present = "list",
+        value_parser = crate::args::parse_image_output
+    )]
     pub output: Option<PathBuf>,
     /// Print nothing but errors.
     #[arg(short, long)]
@@ -117,29 +124,40 @@ pub fn list() -> String {
 pub fn showcase(args: &QuadricArgs) -> Result<Showcase> {
     let name = args.kind.as_deref().unwrap_or_default();
     let mut show = if name == "general" {
-        ensure!(
+        usage_ensure(
             args.a.is_none() && args.b.is_none() && args.c.is_none(),
-            "-a, -b and -c belong to the named kinds; a general quadric takes only --coeffs"
-        );
-        ensure!(
+            "-a, -b and -c belong to the named kinds; a general quadric takes only --coeffs",
+        )?;
+        usage_ensure(
             args.coeffs.len() == 10,
-            "a general quadric needs --coeffs with exactly 10 numbers A..J, got {}",
-            args.coeffs.len()
-        );
+            &format!(
+                "a general quadric needs --coeffs with exactly 10 numbers A..J, got {}",
+                args.coeffs.len()
+            ),
+        )?;
         let mut k = [0.0; 10];
         k.copy_from_slice(&args.coeffs);
         Showcase::general(Coefficients(k))
     } else {
         let Some(kind) = QuadricKind::from_name(name) else {
-            bail!(
+            return Err(UsageError(format!(
                 "unknown quadric kind \"{name}\"; the kinds are {} and general",
                 QuadricKind::ALL.map(|k| k.name()).join(", ")
-            );
+            ))
+            .into());
         };
-        ensure!(
+        usage_ensure(
             args.coeffs.is_empty(),
-            "--coeffs is for `general`; the {name} takes -a, -b, -c"
-        );
+            &format!("--coeffs is for `general`; the {name} takes -a, -b, -c"),
+        )?;
+        for (flag, value) in [("-a", args.a), ("-b", args.b), ("-c", args.c)] {
+            if let Some(v) = value {
+                usage_ensure(
+                    v > 0.0 && v.is_finite(),
+                    &format!("{flag} must be a positive number, got {v}"),
+                )?;
+            }
+        }
         let mut show = Showcase::of(kind);
         if let QuadricSurface::Canonical { a, b, c, .. } = &mut show.surface {
             *a = args.a.unwrap_or(*a);
@@ -148,26 +166,26 @@ pub fn showcase(args: &QuadricArgs) -> Result<Showcase> {
         }
         show
     };
-    ensure!(
+    usage_ensure(
         args.clip > 0.0 && args.clip.is_finite(),
-        "--clip must be a positive number, got {}",
-        args.clip
-    );
+        &format!("--clip must be a positive number, got {}", args.clip),
+    )?;
     show.clip = args.clip;
     show.yaw = args.yaw.unwrap_or(show.yaw);
     show.pitch = args.pitch.unwrap_or(show.pitch);
     show.distance = args.distance.unwrap_or(show.distance * args.clip);
-    ensure!(show.yaw.is_finite(), "--yaw must be a finite angle");
-    ensure!(
+    usage_ensure(show.yaw.is_finite(), "--yaw must be a finite angle")?;
+    usage_ensure(
         (-90.0..=90.0).contains(&show.pitch),
-        "--pitch must be in [-90, 90] degrees, got {}",
-        show.pitch
-    );
-    ensure!(
+        &format!("--pitch must be in [-90, 90] degrees, got {}", show.pitch),
+    )?;
+    usage_ensure(
         show.distance > 0.0 && show.distance.is_finite(),
-        "--distance must be a positive number, got {}",
-        show.distance
-    );
+        &format!(
+            "--distance must be a positive number, got {}",
+            show.distance
+        ),
+    )?;
     Ok(show)
 }
 

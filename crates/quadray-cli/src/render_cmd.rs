@@ -4,13 +4,18 @@ use crate::args::RenderArgs;
 use crate::output::{Format, check_writable, write_film};
 use crate::passes::{Pass, selection_of, write_exr, write_png_pass};
 use crate::progress::RowBar;
+use crate::usage_ensure;
 use anyhow::{Context, Result};
 use quadray::Scene;
 use std::time::Instant;
 
 /// Runs the render subcommand.
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let format = check_writable(&args.output)?;
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| crate::args::default_output(&args.scene));
+    let format = check_writable(&output)?;
     let selection = pass_selection(args, format)?;
     let start = Instant::now();
     let options = quadray_loader::ImportOptions {
@@ -48,12 +53,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let render_cpu = cpu_start.and_then(|t| t.try_elapsed().ok());
     match format {
         Format::Exr if aovs.is_some() || args.half => {
-            write_exr(&rendered.film, aovs.as_ref(), args.half, &args.output)?
+            write_exr(&rendered.film, aovs.as_ref(), args.half, &output)?
         }
         Format::Png if args.pass != Pass::Combined => {
-            write_png_pass(args.pass, &rendered.film, aovs.as_ref(), &args.output)?
+            write_png_pass(args.pass, &rendered.film, aovs.as_ref(), &output)?
         }
-        _ => write_film(&rendered.film, &args.output)?,
+        _ => write_film(&rendered.film, &output)?,
     }
 
     if !args.quiet {
@@ -84,7 +89,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             c.reflection,
             secs,
             c.total() as f64 / secs.max(1e-9) / 1e6,
-            args.output.display()
+            output.display()
         );
     }
     Ok(())
@@ -94,22 +99,22 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 fn pass_selection(args: &RenderArgs, format: Format) -> Result<quadray::AovSelection> {
     match format {
         Format::Exr => {
-            anyhow::ensure!(
+            usage_ensure(
                 args.pass == Pass::Combined,
-                "--pass is for PNG output; an EXR takes its passes from --aov"
-            );
-            anyhow::ensure!(
+                "--pass is for PNG output; an EXR takes its passes from --aov",
+            )?;
+            usage_ensure(
                 !args.aov.contains(&Pass::Combined),
-                "--aov combined: the beauty image is always written; list only the extra passes"
-            );
+                "--aov combined: the beauty image is always written; list only the extra passes",
+            )?;
             Ok(selection_of(&args.aov))
         }
         Format::Png => {
-            anyhow::ensure!(
+            usage_ensure(
                 args.aov.is_empty(),
-                "--aov needs an .exr output; a PNG shows one pass, chosen with --pass"
-            );
-            anyhow::ensure!(!args.half, "--half is for EXR output");
+                "--aov needs an .exr output; a PNG shows one pass, chosen with --pass",
+            )?;
+            usage_ensure(!args.half, "--half is for EXR output")?;
             Ok(args.pass.selection())
         }
     }

@@ -71,11 +71,12 @@ fn bad_arguments_fail_cleanly() {
         "--res",
         "100000x100000",
     ]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(
-        String::from_utf8_lossy(&o.stderr)
-            .contains("resolution 100000x100000 is outside the limits")
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "values out of range are usage errors"
     );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("100000x100000 is outside the limits"));
     let o = quadray(&["render", &scene("defense.toml"), "-o", "x.jpg"]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("must end in .png or .exr"));
     let o = quadray(&[
@@ -86,10 +87,43 @@ fn bad_arguments_fail_cleanly() {
         "--spp",
         "0",
     ]);
-    assert!(!o.status.success());
-    let o = quadray(&["render", &scene("defense.toml")]);
-    assert_eq!(o.status.code(), Some(2), "clap usage errors exit 2");
+    assert_eq!(o.status.code(), Some(2));
     assert!(!out.exists());
+}
+
+/// Without `-o`, `render` writes the scene's name with .png beside the scene.
+#[test]
+fn the_output_defaults_to_a_png_beside_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let copy = tmp(&dir, "ball.toml");
+    std::fs::copy(scene("sphere-on-plane.toml"), &copy).unwrap();
+    let o = quadray(&["render", copy.to_str().unwrap(), "--res", "8x6", "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(tmp(&dir, "ball.png")).unwrap();
+    assert_eq!((img.width(), img.height()), (8, 6));
+}
+
+/// `--version` names the program, and `--help` lists every subcommand and the exit statuses.
+#[test]
+fn version_and_help_say_what_a_user_needs() {
+    let o = quadray(&["--version"]);
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout).trim(),
+        format!("quadray {}", env!("CARGO_PKG_VERSION"))
+    );
+    let help = String::from_utf8_lossy(&quadray(&["--help"]).stdout).into_owned();
+    for command in [
+        "render", "check", "convert", "bench", "quadric", "gallery", "compare",
+    ] {
+        assert!(
+            help.lines().any(|l| l.trim_start().starts_with(command)),
+            "--help lists {command}: {help}"
+        );
+    }
+    assert!(
+        help.contains("Exit status") && help.contains("usage error"),
+        "{help}"
+    );
 }
 
 #[test]
@@ -314,7 +348,11 @@ fn png_shows_one_pass_and_bad_pass_options_are_refused() {
         let mut all = vec!["render", scene.as_str()];
         all.extend(args);
         let o = quadray(&all);
-        assert_eq!(o.status.code(), Some(1));
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "options that conflict are usage errors"
+        );
         assert!(
             String::from_utf8_lossy(&o.stderr).contains(message),
             "{message}"
@@ -388,34 +426,42 @@ fn quadric_explorer_lists_renders_and_refuses_bad_input() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 
-    for (args, message) in [
+    // Usage errors (2), then a quadric the options describe but that shows nothing (1).
+    for (args, message, code) in [
         (
             vec!["quadric", "sphere", "-o", "x.png"],
             "unknown quadric kind \"sphere\"",
+            2,
         ),
         (
             vec!["quadric", "general", "-o", "x.png"],
             "exactly 10 numbers",
+            2,
         ),
         (
             vec!["quadric", "cone", "--coeffs", "1,2", "-o", "x.png"],
             "--coeffs is for `general`",
+            2,
         ),
         (
             vec!["quadric", "ellipsoid", "-a", "-1", "-o", "x.png"],
-            "a must be",
+            "-a must be",
+            2,
         ),
         (
             vec!["quadric", "ellipsoid", "--clip", "0", "-o", "x.png"],
             "--clip must be a positive",
+            2,
         ),
         (
             vec!["quadric", "ellipsoid", "--pitch", "100", "-o", "x.png"],
             "--pitch must be in",
+            2,
         ),
         (
             vec!["quadric", "ellipsoid", "-o", "x.jpg"],
             "must end in .png or .exr",
+            2,
         ),
         (
             vec![
@@ -427,11 +473,12 @@ fn quadric_explorer_lists_renders_and_refuses_bad_input() {
                 "x.png",
             ],
             "empty",
+            1,
         ),
     ] {
         let o = quadray(&args);
         let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
         assert!(err.contains(message), "{args:?}: {err}");
     }
 }
@@ -462,7 +509,7 @@ fn gallery_is_a_labelled_sheet_of_every_kind() {
         assert!(has_label, "tile {i} has its name drawn in");
     }
     let o = quadray(&["gallery", "-o", out.to_str().unwrap(), "--tile", "10x10"]);
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2));
     let o = quadray(&["gallery", "-o", tmp(&dir, "g.exr").to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("must end in .png"));
 }
@@ -539,7 +586,11 @@ fn compare_measures_and_fails_over_the_thresholds() {
     let o = quadray(&["compare", a.to_str().unwrap(), small.to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("differ in size"));
     let o = quadray(&["compare", a.to_str().unwrap(), "/no/such.png"]);
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "compare: trouble is 2, a difference 1"
+    );
     assert!(String::from_utf8_lossy(&o.stderr).contains("/no/such.png"));
 }
 

@@ -1,7 +1,8 @@
 //! The hostile-input corpus (`tests/hostile/cases.toml`) through the `quadray` binary: every bad
-//! file given to `quadray check`, and every bad command line, must exit with the stated status,
-//! print one error line that names the file (and the place) and the problem, never panic, and
-//! leave no file behind. `tests/hostile.rs` at the top level checks the same files' error
+//! file given to `quadray check`, and every bad command line, must exit with the stated status
+//! (0 success, 1 a scene or file error, 2 a usage error; `compare`: 0 same, 1 different,
+//! 2 trouble), print one error line that names the file (and the place) and the problem, never
+//! panic, and leave no file behind. `tests/hostile.rs` at the top level checks the same files' error
 //! classes through the library.
 
 mod common;
@@ -118,9 +119,12 @@ fn bad_command_lines_exit_with_their_status_and_leave_nothing_behind() {
             Some(format!("exit {:?}: {stderr}", out.status.code()))
         } else if !left.is_empty() {
             Some(format!("left {left:?} behind"))
-        } else if case.exit == 2 {
-            // clap's usage errors: the message, a usage line and a hint.
-            (!stderr.contains(&case.says)).then(|| format!("does not say {:?}", case.says))
+        } else if case.exit != 1 {
+            // Success (its report on stdout), or a usage error (clap's: the message, a usage line
+            // and a hint).
+            let stdout = String::from_utf8_lossy(&out.stdout);
+            let said = stdout.contains(&case.says) || stderr.contains(&case.says);
+            (!said).then(|| format!("does not say {:?}: {stdout} {stderr}", case.says))
         } else {
             error_line_problem(&stderr, &[&case.says])
         };
