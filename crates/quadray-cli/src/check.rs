@@ -22,6 +22,11 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     }
     let scene = Scene::new(loaded.description)
         .with_context(|| format!("invalid scene {}", args.scene.display()))?;
+    for warning in
+        crate::warnings::scene_warnings(&args.scene, &scene, settings.width, settings.height)
+    {
+        eprintln!("warning: {warning}");
+    }
     let g = scene.geometry();
     let triangles: usize = g.meshes.iter().map(|m| m.triangle_count()).sum();
     println!(

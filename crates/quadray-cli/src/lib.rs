@@ -18,6 +18,8 @@ mod progress;
 pub mod quadric_cmd;
 mod render_cmd;
 pub mod showcase;
+pub mod snippet;
+mod warnings;
 
 use clap::Parser;
 

@@ -12,6 +12,9 @@ fn main() -> ExitCode {
         Err(err) => {
             // `{:#}` prints the whole context chain on one line.
             eprintln!("error: {err:#}");
+            if let Some(snippet) = quadray_cli::snippet::for_error(&err) {
+                eprintln!("{snippet}");
+            }
             ExitCode::from(quadray_cli::exit_status(&err, is_compare))
         }
     }

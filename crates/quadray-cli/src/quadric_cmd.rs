@@ -140,9 +140,11 @@ pub fn showcase(args: &QuadricArgs) -> Result<Showcase> {
         Showcase::general(Coefficients(k))
     } else {
         let Some(kind) = QuadricKind::from_name(name) else {
+            let names = QuadricKind::ALL.map(|k| k.name());
             return Err(UsageError(format!(
-                "unknown quadric kind \"{name}\"; the kinds are {} and general",
-                QuadricKind::ALL.map(|k| k.name()).join(", ")
+                "unknown quadric kind \"{name}\"{}; the kinds are {} and general",
+                quadray_loader::suggest::did_you_mean(name, names.into_iter().chain(["general"])),
+                names.join(", ")
             ))
             .into());
         };

@@ -43,6 +43,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .install(|| Scene::new(loaded.description))
         .with_context(|| format!("invalid scene {}", args.scene.display()))?;
     let built_at = Instant::now();
+    if !args.quiet {
+        for warning in
+            crate::warnings::scene_warnings(&args.scene, &scene, settings.width, settings.height)
+        {
+            eprintln!("warning: {warning}");
+        }
+    }
 
     let bar = RowBar::new(settings.height, args.quiet);
     let cpu_start = cpu_time::ProcessTime::try_now().ok();

@@ -49,6 +49,8 @@ fn malformed_scene_exits_nonzero_with_file_line_and_column() {
         err.contains("bad.toml:7:10: `sphere[0].radius`: must be positive, got -2"),
         "{err}"
     );
+    // The line itself, with a caret under the column.
+    assert!(err.contains("7 | radius = -2\n  |          ^"), "{err}");
     // The older output survives a failed render, and no temporary file is left.
     assert_eq!(std::fs::read(&out).unwrap(), b"previous image");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
@@ -89,6 +91,45 @@ fn bad_arguments_fail_cleanly() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(!out.exists());
+}
+
+/// A scene without lights, and a camera that looks away from everything, load and render but
+/// are warned about, by `check` and `render` alike; a lit scene in view gets no warning.
+#[test]
+fn dark_and_empty_views_are_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let unlit = tmp(&dir, "unlit.toml");
+    let base = "version = 1\n[camera]\nfrom = [0, -5, 1]\nto = [0, 0, 0]\n[[material]]\nname = \"m\"\n\
+                [[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n";
+    std::fs::write(&unlit, base).unwrap();
+    let away = tmp(&dir, "away.toml");
+    let light = "[[light]]\ntype = \"point\"\nposition = [2, -3, 4]\nintensity = 20\n";
+    std::fs::write(
+        &away,
+        base.replace("to = [0, 0, 0]", "to = [0, -10, 1]") + light,
+    )
+    .unwrap();
+    let lit = tmp(&dir, "lit.toml");
+    std::fs::write(&lit, base.to_string() + light).unwrap();
+    for (file, expected) in [
+        (&unlit, Some("has no lights")),
+        (&away, Some("the camera sees none")),
+        (&lit, None),
+    ] {
+        let path = file.to_str().unwrap();
+        let out = tmp(&dir, "o.png");
+        for o in [
+            quadray(&["check", path]),
+            quadray(&["render", path, "--res", "8x6", "-o", out.to_str().unwrap()]),
+        ] {
+            assert!(o.status.success());
+            let err = String::from_utf8_lossy(&o.stderr);
+            match expected {
+                Some(text) => assert!(err.contains(text) && err.contains("warning:"), "{err}"),
+                None => assert!(!err.contains("warning"), "{err}"),
+            }
+        }
+    }
 }
 
 /// Without `-o`, `render` writes the scene's name with .png beside the scene.

@@ -32,6 +32,7 @@ mod obj_locate;
 pub mod quadrics_ext;
 pub mod read_limited;
 pub mod standalone;
+pub mod suggest;
 pub mod tessellate;
 
 pub use error::{LoadError, LoadErrorKind, Location};

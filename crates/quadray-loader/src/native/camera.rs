@@ -80,7 +80,10 @@ impl Builder<'_> {
                         return Err(self.err(
                             span,
                             "camera.projection",
-                            format!("unknown projection \"{other}\" (perspective, orthographic)"),
+                            format!(
+                                "unknown projection \"{other}\" (perspective, orthographic){}",
+                                did_you_mean(other, ["perspective", "orthographic"])
+                            ),
                         ));
                     }
                 };

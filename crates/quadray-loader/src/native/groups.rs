@@ -294,12 +294,13 @@ impl Builder<'_> {
                 span,
                 at_key,
                 format!(
-                    "no group or named shape \"{name}\" (defined: {})",
+                    "no group or named shape \"{name}\" (defined: {}){}",
                     if known.is_empty() {
                         "none".into()
                     } else {
                         known.join(", ")
-                    }
+                    },
+                    did_you_mean(name, known.iter().copied())
                 ),
             ));
         };

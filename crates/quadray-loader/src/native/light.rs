@@ -133,7 +133,10 @@ impl Builder<'_> {
             other => Err(self.err(
                 l.kind.span(),
                 format!("{key}.type"),
-                format!("unknown light type \"{other}\" (point, directional, spot)"),
+                format!(
+                    "unknown light type \"{other}\" (point, directional, spot){}",
+                    did_you_mean(other, ["point", "directional", "spot"])
+                ),
             )),
         }
     }

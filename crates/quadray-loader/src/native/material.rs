@@ -68,7 +68,10 @@ impl Builder<'_> {
                 return Err(self.err(
                     span,
                     format!("{key}.texture"),
-                    format!("unknown texture \"{other}\" (constant, ramp, bands, checker)"),
+                    format!(
+                        "unknown texture \"{other}\" (constant, ramp, bands, checker){}",
+                        did_you_mean(other, ["constant", "ramp", "bands", "checker"])
+                    ),
                 ));
             }
         };
@@ -83,7 +86,10 @@ impl Builder<'_> {
                 return Err(self.err(
                     span,
                     format!("{key}.specular_model"),
-                    format!("unknown model \"{other}\" (phong, blinn)"),
+                    format!(
+                        "unknown model \"{other}\" (phong, blinn){}",
+                        did_you_mean(other, ["phong", "blinn"])
+                    ),
                 ));
             }
         };

@@ -10,6 +10,7 @@ use crate::import::{
     ImportOptions, Selector, UpAxis, framing_camera, geometry_bounds, select_camera,
 };
 use crate::include;
+use crate::suggest::did_you_mean;
 use glam::{DVec3, Vec3};
 use quadray::render::{MAX_ASPECT, MAX_DEPTH, MAX_SIDE, MAX_SPP};
 use quadray::{
@@ -113,7 +114,11 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<LoadedScene, LoadError> {
         LoadError::new(
             path,
             location,
-            LoadErrorKind::Syntax(e.message().trim().to_string()),
+            LoadErrorKind::Syntax(format!(
+                "{}{}",
+                e.message().trim(),
+                crate::suggest::for_unknown_field(e.message())
+            )),
         )
     })?;
     Builder { path, text }.build(file)
@@ -222,9 +227,10 @@ impl Builder<'_> {
                 v.span(),
                 key,
                 format!(
-                    "unknown material \"{}\" (defined: {})",
+                    "unknown material \"{}\" (defined: {}){}",
                     v.get_ref(),
-                    known.join(", ")
+                    known.join(", "),
+                    did_you_mean(v.get_ref(), known.iter().copied())
                 ),
             )
         })

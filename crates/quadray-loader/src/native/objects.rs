@@ -126,8 +126,9 @@ impl Builder<'_> {
                     q.kind.span(),
                     format!("{key}.kind"),
                     format!(
-                        "unknown kind \"{kind}\" (one of {}, general)",
-                        names.join(", ")
+                        "unknown kind \"{kind}\" (one of {}, general){}",
+                        names.join(", "),
+                        did_you_mean(kind, names.iter().copied().chain(["general"]))
                     ),
                 )
             })?;
