@@ -5,6 +5,7 @@ use crate::output::{write_atomically, write_rgb8_png};
 use anyhow::{Result, anyhow, bail};
 use exr::prelude::*;
 use quadray::{AovSelection, Aovs, Film, film::encode_srgb8};
+use std::ops::RangeInclusive;
 use std::path::Path;
 
 /// The passes a render can write, as named on the command line.
@@ -23,8 +24,9 @@ pub enum Pass {
 }
 
 impl Pass {
-    /// The selection that computes this pass (none for the beauty image).
-    pub fn selection(self) -> AovSelection {
+    /// The selection that computes exactly this pass, as an EXR stores it (none for the beauty
+    /// image).
+    pub fn channels(self) -> AovSelection {
         let mut s = AovSelection::NONE;
         match self {
             Pass::Combined => {}
@@ -35,13 +37,21 @@ impl Pass {
         }
         s
     }
+
+    /// The selection that computes this pass as a PNG shows it: the depth PNG also needs the
+    /// object ids, to tell plane pixels apart for its display range.
+    pub fn selection(self) -> AovSelection {
+        let mut s = self.channels();
+        s.object_id |= self == Pass::Depth;
+        s
+    }
 }
 
-/// The union of the selections of `passes`.
+/// The union of the channels of `passes`.
 pub fn selection_of(passes: &[Pass]) -> AovSelection {
     passes
         .iter()
-        .map(|p| p.selection())
+        .map(|p| p.channels())
         .fold(AovSelection::NONE, |a, b| AovSelection {
             depth: a.depth || b.depth,
             normal: a.normal || b.normal,
@@ -149,11 +159,57 @@ pub fn write_exr(film: &Film, aovs: Option<&Aovs>, half: bool, path: &Path) -> R
     })
 }
 
+/// Share of hit depths the depth PNG spans when only planes are in view: the nearest hit to this
+/// quantile (the rest run to the horizon and clamp).
+pub const DEPTH_DISPLAY_QUANTILE: f64 = 0.95;
+
+/// The object ids of the scene's planes (see [`quadray::Geometry::object_index`]): unbounded, so
+/// their depths run to the horizon.
+pub fn plane_ids(scene: &quadray::Scene) -> RangeInclusive<u32> {
+    let g = scene.geometry();
+    let first = g.spheres.len() as u32 + 1;
+    first..=first + g.planes.len() as u32 - 1
+}
+
+/// The depths the depth PNG maps to white and to its darkest grey: the nearest hit, and the
+/// farthest hit on the scene's finite content (anything but `planes`), so that a floor running
+/// to the horizon does not squeeze the objects into one grey; farther plane pixels clamp. With
+/// only planes in view, the [`DEPTH_DISPLAY_QUANTILE`] of hit depths. `None` when nothing was hit.
+pub fn depth_display_range(
+    samples: &[quadray::AovSample],
+    planes: &RangeInclusive<u32>,
+) -> Option<(f32, f32)> {
+    let hit = |p: &&quadray::AovSample| p.depth < quadray::aov::NO_HIT_DEPTH;
+    let near = samples
+        .iter()
+        .filter(hit)
+        .map(|p| p.depth)
+        .reduce(f32::min)?;
+    let finite_far = samples
+        .iter()
+        .filter(hit)
+        .filter(|p| !planes.contains(&p.object_id))
+        .map(|p| p.depth)
+        .reduce(f32::max);
+    let far = finite_far.unwrap_or_else(|| {
+        let mut depths: Vec<f32> = samples.iter().filter(hit).map(|p| p.depth).collect();
+        depths.sort_unstable_by(f32::total_cmp);
+        depths[((depths.len() - 1) as f64 * DEPTH_DISPLAY_QUANTILE).round() as usize]
+    });
+    Some((near, far))
+}
+
 /// The 8-bit RGB bytes showing one pass: the beauty and albedo sRGB-encoded; depth as grey, white
-/// at the nearest hit to black at the farthest (misses black); normals as (n + 1)/2 without
+/// at the nearest hit to a dark grey at [`depth_display_range`]'s far end and beyond (misses
+/// black); normals as (n + 1)/2 without
 /// encoding (the usual normal-map colours; misses black); object ids as distinct colours
 /// (background black).
-pub fn pass_rgb8(pass: Pass, film: &Film, aovs: Option<&Aovs>) -> Result<Vec<u8>> {
+pub fn pass_rgb8(
+    pass: Pass,
+    film: &Film,
+    aovs: Option<&Aovs>,
+    planes: &RangeInclusive<u32>,
+) -> Result<Vec<u8>> {
     let samples = || match aovs {
         Some(a) => Ok(a.samples()),
         None => Err(anyhow!("the {pass:?} pass was not rendered")),
@@ -178,15 +234,13 @@ pub fn pass_rgb8(pass: Pass, film: &Film, aovs: Option<&Aovs>) -> Result<Vec<u8>
             .collect(),
         Pass::Depth => {
             let s = samples()?;
-            let hits = s.iter().filter(|p| p.depth < quadray::aov::NO_HIT_DEPTH);
-            let (lo, hi) = hits.fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), p| {
-                (l.min(p.depth), h.max(p.depth))
-            });
+            let (lo, hi) = depth_display_range(s, planes).unwrap_or((0.0, 1.0));
             let span = (hi - lo).max(f32::MIN_POSITIVE);
             s.iter()
                 .flat_map(|p| {
                     let v = if p.depth < quadray::aov::NO_HIT_DEPTH {
-                        (255.0 * (1.0 - 0.85 * (p.depth - lo) / span)).round() as u8
+                        let t = ((p.depth - lo) / span).min(1.0);
+                        (255.0 * (1.0 - 0.85 * t)).round() as u8
                     } else {
                         0
                     };
@@ -221,7 +275,13 @@ pub fn id_colour(id: u32) -> [u8; 3] {
 }
 
 /// Writes one pass as a PNG, atomically.
-pub fn write_png_pass(pass: Pass, film: &Film, aovs: Option<&Aovs>, path: &Path) -> Result<()> {
-    let bytes = pass_rgb8(pass, film, aovs)?;
+pub fn write_png_pass(
+    pass: Pass,
+    film: &Film,
+    aovs: Option<&Aovs>,
+    planes: &RangeInclusive<u32>,
+    path: &Path,
+) -> Result<()> {
+    let bytes = pass_rgb8(pass, film, aovs, planes)?;
     write_rgb8_png(film.width(), film.height(), &bytes, path)
 }

@@ -63,7 +63,20 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             write_exr(&rendered.film, aovs.as_ref(), args.half, &output)?
         }
         Format::Png if args.pass != Pass::Combined => {
-            write_png_pass(args.pass, &rendered.film, aovs.as_ref(), &output)?
+            let planes = crate::passes::plane_ids(&scene);
+            write_png_pass(args.pass, &rendered.film, aovs.as_ref(), &planes, &output)?;
+            if args.pass == Pass::Depth
+                && !args.quiet
+                && let Some((near, far)) = aovs
+                    .as_ref()
+                    .and_then(|a| crate::passes::depth_display_range(a.samples(), &planes))
+            {
+                eprintln!(
+                    "depth shown from {near:.4} (white, the nearest hit) to {far:.4} (dark grey, \
+                     the farthest hit on anything but a plane; farther plane pixels clamp), \
+                     misses black"
+                );
+            }
         }
         _ => write_film(&rendered.film, &output)?,
     }

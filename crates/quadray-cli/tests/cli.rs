@@ -132,6 +132,41 @@ fn dark_and_empty_views_are_warned_about() {
     }
 }
 
+/// The depth PNG spans the finite content: the defense scene's floor runs to the horizon, which
+/// used to squeeze every object into white. Now the nearest hit is white, the farthest object
+/// point the darkest grey (0.15 of white, where far floor pixels clamp), and the objects spread
+/// over many grey levels between.
+#[test]
+fn the_depth_png_spans_the_scene_not_the_horizon() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = tmp(&dir, "depth.png");
+    let o = quadray(&[
+        "render",
+        &scene("defense.toml"),
+        "--pass",
+        "depth",
+        "--res",
+        "160x90",
+        "--spp",
+        "1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("depth shown from") && err.contains("farther plane pixels clamp"),
+        "{err}"
+    );
+    let img = image::open(&out).unwrap().to_luma8();
+    let mut levels: Vec<u8> = img.pixels().map(|p| p.0[0]).filter(|&v| v > 0).collect();
+    levels.sort_unstable();
+    levels.dedup();
+    assert_eq!(levels.first(), Some(&38), "far pixels at 0.15 of white");
+    assert_eq!(levels.last(), Some(&255), "the nearest hit white");
+    assert!(levels.len() > 100, "{} grey levels", levels.len());
+}
+
 /// Without `-o`, `render` writes the scene's name with .png beside the scene.
 #[test]
 fn the_output_defaults_to_a_png_beside_the_scene() {
