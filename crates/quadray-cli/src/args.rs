@@ -43,6 +43,10 @@ pub enum Command {
     Gallery(crate::gallery::GalleryArgs),
     /// Compare two images (PNG or EXR): RMSE, largest difference, share over a threshold, FLIP.
     Compare(crate::compare_cmd::CompareArgs),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
+    Completions(crate::shell::CompletionsArgs),
+    /// Print the man page (roff), e.g. `quadray man > quadray.1`.
+    Man,
 }
 
 /// Arguments of `quadray render`.

@@ -17,6 +17,7 @@ pub mod passes;
 mod progress;
 pub mod quadric_cmd;
 mod render_cmd;
+pub mod shell;
 pub mod showcase;
 pub mod snippet;
 mod warnings;
@@ -82,6 +83,8 @@ pub fn run(cli: args::Cli) -> anyhow::Result<()> {
         args::Command::Quadric(a) => quadric_cmd::run(&a),
         args::Command::Gallery(a) => gallery::run(&a),
         args::Command::Compare(a) => compare_cmd::run(&a),
+        args::Command::Completions(a) => shell::completions(&a),
+        args::Command::Man => shell::man(),
     }
 }
 

@@ -202,6 +202,29 @@ fn version_and_help_say_what_a_user_needs() {
     );
 }
 
+/// Shell completions and the man page come from the parser's own definitions.
+#[test]
+fn completions_and_man_page_cover_the_subcommands() {
+    for shell in ["bash", "zsh", "fish"] {
+        let o = quadray(&["completions", shell]);
+        assert!(o.status.success(), "{shell}");
+        let script = String::from_utf8_lossy(&o.stdout);
+        // fish writes long options as `-l spp`.
+        for word in ["render", "compare", "spp", "max-depth"] {
+            assert!(script.contains(word), "{shell} completes {word}");
+        }
+    }
+    assert_eq!(quadray(&["completions", "tcsh"]).status.code(), Some(2));
+    let o = quadray(&["man"]);
+    assert!(o.status.success());
+    let page = String::from_utf8_lossy(&o.stdout);
+    assert!(page.contains(".TH quadray"), "{page}");
+    assert!(
+        page.contains("render") && page.contains("Exit status"),
+        "{page}"
+    );
+}
+
 #[test]
 fn check_validates_without_rendering() {
     let o = quadray(&["check", &scene("defense.toml")]);
