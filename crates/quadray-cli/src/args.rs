@@ -92,6 +92,36 @@ pub struct RenderArgs {
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Sample set: 0 (the default) renders the same image every time; another value jitters every
+    /// pixel with an unrelated pattern, for independent renders of one scene. At 1 spp every
+    /// pixel is sampled at its centre, whatever the seed.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u32,
+    /// Override a value of a .toml scene, as if the file said so (repeatable): `--set
+    /// render.spp=64 --set camera.vfov=30 --set sphere[0].radius=0.5`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<quadray_loader::Override>,
+}
+
+/// Loads the scene at `path` with the command line's `--set` overrides (native scenes only),
+/// import options and camera choice.
+pub fn load_scene_for(
+    path: &Path,
+    set: &[quadray_loader::Override],
+    options: &quadray_loader::ImportOptions,
+    camera: Option<&quadray_loader::Selector>,
+) -> anyhow::Result<quadray_loader::LoadedScene> {
+    if set.is_empty() {
+        return Ok(quadray_loader::load_any_with(path, options, camera)?);
+    }
+    let native = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    crate::usage_ensure(
+        native,
+        "--set overrides values of .toml scenes; OBJ and glTF files have no such keys",
+    )?;
+    Ok(quadray_loader::load_scene_with(path, set)?)
 }
 
 /// Arguments of `quadray convert`.
@@ -112,6 +142,9 @@ pub struct ConvertArgs {
 pub struct CheckArgs {
     /// The scene file.
     pub scene: PathBuf,
+    /// Override a value of a .toml scene, as `render --set` does (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<quadray_loader::Override>,
 }
 
 /// Parses a scene or camera choice: a number is an index, anything else a name.

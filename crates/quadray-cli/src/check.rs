@@ -6,7 +6,7 @@ use quadray::Scene;
 
 /// Runs the check subcommand: exit status 0 when the scene is valid, with a summary on stdout.
 pub fn run(args: &CheckArgs) -> Result<()> {
-    let loaded = quadray_loader::load_any(&args.scene)?;
+    let loaded = crate::args::load_scene_for(&args.scene, &args.set, &Default::default(), None)?;
     for note in &loaded.notes {
         eprintln!("note: {note}");
     }

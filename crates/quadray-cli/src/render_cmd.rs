@@ -22,7 +22,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene: args.gltf_scene.clone(),
         ..Default::default()
     };
-    let loaded = quadray_loader::load_any_with(&args.scene, &options, args.camera.as_ref())?;
+    let loaded =
+        crate::args::load_scene_for(&args.scene, &args.set, &options, args.camera.as_ref())?;
     for note in &loaded.notes {
         if !args.quiet {
             eprintln!("note: {note}");
@@ -34,7 +35,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     s.spp = args.spp.unwrap_or(s.spp);
     s.max_depth = args.max_depth.unwrap_or(s.max_depth);
-    let settings = s.render_settings();
+    let mut settings = s.render_settings();
+    settings.seed = args.seed;
     settings.validate()?;
     let loaded_at = Instant::now();
 

@@ -167,6 +167,68 @@ fn the_depth_png_spans_the_scene_not_the_horizon() {
     assert!(levels.len() > 100, "{} grey levels", levels.len());
 }
 
+/// `--set` overrides a scene file's values with the file's own validation, and names itself in
+/// errors about the values it set.
+#[test]
+fn set_overrides_scene_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = tmp(&dir, "set.png");
+    let o = quadray(&[
+        "render",
+        &scene("sphere-on-plane.toml"),
+        "--set",
+        "render.resolution=[12,10]",
+        "--set",
+        "camera.vfov=20",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&out).unwrap();
+    assert_eq!((img.width(), img.height()), (12, 10));
+    let o = quadray(&["check", &scene("defense.toml"), "--set", "render.spp=0"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("`render.spp`: must be between 1 and 65536, got 0 (the value comes from --set render.spp=0)"),
+        "{err}"
+    );
+    let o = quadray(&["check", &scene("defense.toml"), "--set", "render.spd=4"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("did you mean \"spp\""));
+}
+
+/// `--seed` gives independent renders: the same seed the same bytes, another seed other jitter.
+#[test]
+fn seeds_decorrelate_renders_and_repeat_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |seed: &str, name: &str| {
+        let out = tmp(&dir, name);
+        let o = quadray(&[
+            "render",
+            &scene("sphere-on-plane.toml"),
+            "--res",
+            "48x36",
+            "--spp",
+            "4",
+            "--seed",
+            seed,
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        image::open(&out).unwrap().to_rgb8().into_raw()
+    };
+    let (a, again, other) = (
+        render("0", "a.png"),
+        render("0", "b.png"),
+        render("7", "c.png"),
+    );
+    assert_eq!(a, again);
+    assert_ne!(a, other);
+}
+
 /// Without `-o`, `render` writes the scene's name with .png beside the scene.
 #[test]
 fn the_output_defaults_to_a_png_beside_the_scene() {

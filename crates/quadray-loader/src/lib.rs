@@ -37,7 +37,8 @@ pub mod tessellate;
 
 pub use error::{LoadError, LoadErrorKind, Location};
 pub use import::{ImportOptions, Imported, Selector, UpAxis};
-pub use native::{LoadedScene, SceneSettings, load_scene, parse_scene};
+pub use native::overrides::Override;
+pub use native::{LoadedScene, SceneSettings, load_scene, load_scene_with, parse_scene};
 
 use std::path::Path;
 

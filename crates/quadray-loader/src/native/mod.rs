@@ -29,6 +29,7 @@ mod groups;
 mod light;
 mod material;
 mod objects;
+pub mod overrides;
 mod spec;
 #[cfg(test)]
 mod tests;
@@ -105,6 +106,35 @@ pub fn load_scene(path: &Path) -> Result<LoadedScene, LoadError> {
         )
     })?;
     parse_scene(&text, path)
+}
+
+/// [`load_scene`] with command-line overrides of the file's values (`--set render.spp=64`),
+/// validated as if the file said so. An error about an overridden value names the override.
+pub fn load_scene_with(
+    path: &Path,
+    overrides: &[overrides::Override],
+) -> Result<LoadedScene, LoadError> {
+    if overrides.is_empty() {
+        return load_scene(path);
+    }
+    let bytes = crate::read_limited::read(path, crate::read_limited::MAX_SCENE_BYTES)
+        .map_err(|e| LoadError::new(path, None, LoadErrorKind::Io(e)))?;
+    let text = String::from_utf8_lossy(&bytes);
+    let edited = overrides::apply(&text, overrides)
+        .map_err(|(o, m)| LoadError::invalid(path, None, o.to_string(), m))?;
+    parse_scene(&edited, path).map_err(|mut e| {
+        // The edited line is not what the file says: name the override instead of a place.
+        if let LoadErrorKind::Invalid { key, message } = &mut e.kind
+            && let Some(o) = overrides.iter().rev().find(|o| {
+                key.strip_prefix(o.key.as_str())
+                    .is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']))
+            })
+        {
+            e.location = None;
+            message.push_str(&format!(" (the value comes from {o})"));
+        }
+        e
+    })
 }
 
 /// Parses and validates scene text; `path` names the file in errors.
