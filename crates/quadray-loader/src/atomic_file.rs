@@ -56,10 +56,15 @@ fn remove_leftovers(dir: &Path, prefix: &str, suffix: &str) {
         let Some(name) = file_name.to_str() else {
             continue;
         };
+        // PID `.` RANDOM SUFFIX exactly, RANDOM without dots: another target whose name merely
+        // starts like this one's (`out.png.p3.png`) never matches.
         let Some(pid) = name
             .strip_prefix(prefix)
-            .filter(|rest| rest.ends_with(suffix))
             .and_then(|rest| rest.split_once('.'))
+            .filter(|(_, tail)| {
+                tail.strip_suffix(suffix)
+                    .is_some_and(|random| !random.is_empty() && !random.contains('.'))
+            })
             .and_then(|(pid, _)| pid.parse::<u32>().ok())
         else {
             continue;
@@ -124,6 +129,7 @@ mod tests {
         let target = dir.path().join("out.png");
         let keep = [
             ".out.png.p1.abcdef.quadray-tmp.png",
+            ".out.png.p3.png.p999999999.abcdef.quadray-tmp.png",
             ".other.png.p999999999.abcdef.quadray-tmp.png",
             ".out.png.p999999999.abcdef.png",
             "notes.txt",
