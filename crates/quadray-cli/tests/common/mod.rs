@@ -25,3 +25,40 @@ pub fn scene(name: &str) -> String {
 pub fn tmp(dir: &tempfile::TempDir, name: &str) -> PathBuf {
     dir.path().join(name)
 }
+
+/// A unit sphere (material colour 0.2, 0.4, 0.6) over a plane at z = -2, seen straight down by an
+/// orthographic camera 10 units up: every pass value at the centre and corner follows by hand.
+const PASS_SCENE: &str = r#"version = 1
+[camera]
+projection = "orthographic"
+from = [0, 0, 10]
+to = [0, 0, 0]
+up = [0, 1, 0]
+height = 4.0
+[render]
+resolution = [9, 9]
+background = [0.5, 0.5, 0.5]
+[[material]]
+name = "ball"
+color = [0.2, 0.4, 0.6]
+[[material]]
+name = "ground"
+color = [0.7, 0.7, 0.7]
+[[sphere]]
+center = [0, 0, 0]
+radius = 1
+material = "ball"
+[[plane]]
+point = [0, 0, -2]
+normal = [0, 0, 1]
+material = "ground"
+[[light]]
+type = "directional"
+direction = [0, 0, -1]
+"#;
+
+pub fn pass_scene(dir: &tempfile::TempDir) -> String {
+    let path = tmp(dir, "passes.toml");
+    std::fs::write(&path, PASS_SCENE).unwrap();
+    path.to_string_lossy().into_owned()
+}

@@ -1,0 +1,221 @@
+//! Render passes through the binary: EXR channels read back by an independent reader
+//! (OpenImageIO's `oiiotool`), PNGs of one pass and their display mappings.
+
+use std::process::Command;
+
+mod common;
+use common::{pass_scene, quadray, scene, tmp};
+
+/// The depth PNG spans the finite content: the defense scene's floor runs to the horizon, which
+/// used to squeeze every object into white. Now the nearest hit is white, the farthest object
+/// point the darkest grey (0.15 of white, where far floor pixels clamp), and the objects spread
+/// over many grey levels between.
+#[test]
+fn the_depth_png_spans_the_scene_not_the_horizon() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = tmp(&dir, "depth.png");
+    let o = quadray(&[
+        "render",
+        &scene("defense.toml"),
+        "--pass",
+        "depth",
+        "--res",
+        "160x90",
+        "--spp",
+        "1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("depth shown from") && err.contains("farther plane pixels clamp"),
+        "{err}"
+    );
+    let img = image::open(&out).unwrap().to_luma8();
+    let mut levels: Vec<u8> = img.pixels().map(|p| p.0[0]).filter(|&v| v > 0).collect();
+    levels.sort_unstable();
+    levels.dedup();
+    assert_eq!(levels.first(), Some(&38), "far pixels at 0.15 of white");
+    assert_eq!(levels.last(), Some(&255), "the nearest hit white");
+    assert!(levels.len() > 100, "{} grey levels", levels.len());
+}
+
+/// Runs oiiotool, or says why the test cannot use it (it is installed by .ci/run).
+fn oiiotool(args: &[&str]) -> Option<String> {
+    match Command::new("oiiotool").args(args).output() {
+        Ok(o) => {
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            Some(String::from_utf8_lossy(&o.stdout).into_owned())
+        }
+        Err(e) => {
+            println!(
+                "skipped: oiiotool is not available ({e}); `apt-get install openimageio-tools`"
+            );
+            None
+        }
+    }
+}
+
+#[test]
+fn exr_passes_read_back_in_an_independent_reader() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = pass_scene(&dir);
+    let out = tmp(&dir, "passes.exr");
+    let o = quadray(&[
+        "render",
+        &scene,
+        "-o",
+        out.to_str().unwrap(),
+        "--aov",
+        "depth,normal,albedo,object-id",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let Some(info) = oiiotool(&["--info", "-v", out.to_str().unwrap()]) else {
+        return;
+    };
+    assert!(
+        info.contains("9 x    9, 12 channel, float openexr"),
+        "{info}"
+    );
+    for name in [
+        "ViewLayer.Combined.R",
+        "ViewLayer.Combined.G",
+        "ViewLayer.Combined.B",
+        "ViewLayer.Combined.A",
+        "ViewLayer.Depth.Z",
+        "ViewLayer.Normal.X",
+        "ViewLayer.Normal.Y",
+        "ViewLayer.Normal.Z",
+        "ViewLayer.Albedo.R",
+        "ViewLayer.Albedo.G",
+        "ViewLayer.Albedo.B",
+        "ViewLayer.IndexOB.X",
+    ] {
+        assert!(info.contains(name), "{name} missing from {info}");
+    }
+    // oiiotool lists channels alphabetically, as the file stores them: Albedo RGB, Combined RGBA,
+    // Depth, IndexOB, Normal XYZ.
+    let dump = oiiotool(&["--dumpdata", out.to_str().unwrap()]).unwrap();
+    let pixel = |x: u32, y: u32| -> Vec<f64> {
+        let tag = format!("Pixel ({x}, {y}):");
+        let line = dump
+            .lines()
+            .find(|l| l.contains(&tag))
+            .expect("pixel listed");
+        line.split(':')
+            .nth(1)
+            .unwrap()
+            .split_whitespace()
+            .map(|v| v.parse().unwrap())
+            .collect()
+    };
+    let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-5);
+    // Centre: the sphere's top, straight below the camera: depth 10 - 1, normal +z, object 1 (the
+    // first sphere), lit head-on by the unit directional light: (0.1 + 0.9) · albedo.
+    let c = pixel(4, 4);
+    assert!(
+        close(
+            &c,
+            &[0.2, 0.4, 0.6, 0.2, 0.4, 0.6, 1.0, 9.0, 1.0, 0.0, 0.0, 1.0]
+        ),
+        "{c:?}"
+    );
+    // Corner: the plane 12 units down, object 2 (spheres are numbered before planes).
+    let k = pixel(0, 0);
+    assert!(
+        close(
+            &k,
+            &[0.7, 0.7, 0.7, 0.7, 0.7, 0.7, 1.0, 12.0, 2.0, 0.0, 0.0, 1.0]
+        ),
+        "{k:?}"
+    );
+
+    // --half: the beauty pass in half floats, the passes still f32.
+    let half = tmp(&dir, "half.exr");
+    let o = quadray(&[
+        "render",
+        &scene,
+        "-o",
+        half.to_str().unwrap(),
+        "--aov",
+        "depth",
+        "--half",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let info = oiiotool(&["--info", "-v", half.to_str().unwrap()]).unwrap();
+    assert!(
+        info.contains("ViewLayer.Combined.R (half)") && info.contains("ViewLayer.Depth.Z (float)"),
+        "{info}"
+    );
+}
+
+#[test]
+fn png_shows_one_pass_and_bad_pass_options_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = pass_scene(&dir);
+    let out = tmp(&dir, "normal.png");
+    let o = quadray(&[
+        "render",
+        &scene,
+        "-o",
+        out.to_str().unwrap(),
+        "--pass",
+        "normal",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&out).unwrap().to_rgb8();
+    // +z as (n + 1)/2 colours: (128, 128, 255).
+    assert_eq!(img.get_pixel(4, 4).0, [128, 128, 255]);
+    let ids = tmp(&dir, "ids.png");
+    let o = quadray(&[
+        "render",
+        &scene,
+        "-o",
+        ids.to_str().unwrap(),
+        "--pass",
+        "object-id",
+        "-q",
+    ]);
+    assert!(o.status.success());
+    let img = image::open(&ids).unwrap().to_rgb8();
+    assert_ne!(img.get_pixel(4, 4), img.get_pixel(0, 0));
+
+    for (args, message) in [
+        (
+            vec!["-o", "x.png", "--aov", "depth"],
+            "--aov needs an .exr output",
+        ),
+        (
+            vec!["-o", "x.exr", "--pass", "depth"],
+            "--pass is for PNG output",
+        ),
+        (vec!["-o", "x.png", "--half"], "--half is for EXR output"),
+        (
+            vec!["-o", "x.exr", "--aov", "combined"],
+            "the beauty image is always written",
+        ),
+    ] {
+        let mut all = vec!["render", scene.as_str()];
+        all.extend(args);
+        let o = quadray(&all);
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "options that conflict are usage errors"
+        );
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains(message),
+            "{message}"
+        );
+    }
+    let o = quadray(&["render", &scene, "-o", "x.exr", "--aov", "speed"]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "unknown pass names are usage errors"
+    );
+}
