@@ -1,7 +1,7 @@
 //! Command-line arguments (clap derive), parsed first and validated where they are used.
 
 use clap::{Args, Parser, Subcommand};
-use quadray::render::{MAX_ASPECT, MAX_DEPTH, MAX_PIXELS, MAX_SIDE, MAX_SPP};
+use quadray::render::{MAX_DEPTH, MAX_SPP};
 use std::path::{Path, PathBuf};
 
 /// The exit statuses, as `--help` lists them (and the README).
@@ -160,7 +160,7 @@ pub fn thread_pool(threads: Option<usize>) -> anyhow::Result<rayon::ThreadPool> 
     use anyhow::Context;
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(t) = threads {
-        parse_threads(&t.to_string()).map_err(crate::UsageError)?;
+        parse_threads(&t.to_string()).map_err(crate::StatusError::usage)?;
         pool = pool.num_threads(t);
     }
     pool.build().context("starting the thread pool")
@@ -187,17 +187,7 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
             .map_err(|_| format!("\"{v}\" is not a pixel count"))
     };
     let (w, h) = (parse(w)?, parse(h)?);
-    let aspect = w as f64 / h.max(1) as f64;
-    if !(1..=MAX_SIDE).contains(&w)
-        || !(1..=MAX_SIDE).contains(&h)
-        || w as u64 * h as u64 > MAX_PIXELS
-        || !(1.0 / MAX_ASPECT..=MAX_ASPECT).contains(&aspect)
-    {
-        return Err(format!(
-            "{w}x{h} is outside the limits: 1 to {MAX_SIDE} per side, at most {MAX_PIXELS} pixels, \
-             aspect ratio at most {MAX_ASPECT}"
-        ));
-    }
+    quadray::render::check_resolution(w, h).map_err(|e| e.to_string())?;
     Ok((w, h))
 }
 

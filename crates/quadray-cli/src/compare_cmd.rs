@@ -91,7 +91,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     }
     let failures = c.failures(&thresholds);
     if !failures.is_empty() {
-        return Err(crate::ImagesDiffer(format!(
+        return Err(crate::StatusError::images_differ(format!(
             "{} and {} differ: {}",
             args.reference.display(),
             args.test.display(),

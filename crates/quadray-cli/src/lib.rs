@@ -24,49 +24,58 @@ mod warnings;
 
 use clap::Parser;
 
-/// A command line that cannot run as given (options that conflict, a value out of range found
-/// after parsing): exit status 2, like clap's own usage errors.
+/// An error that sets the exit status itself (see [`args::EXIT_STATUS`]); all others exit 1.
 #[derive(Debug)]
-pub struct UsageError(pub String);
+pub struct StatusError {
+    /// The exit status.
+    pub status: u8,
+    /// What went wrong.
+    pub message: String,
+}
 
-impl std::fmt::Display for UsageError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
+impl StatusError {
+    /// A command line that cannot run as given (options that conflict, a value out of range
+    /// found after parsing): status 2, like clap's own usage errors.
+    pub fn usage(message: impl Into<String>) -> StatusError {
+        StatusError {
+            status: 2,
+            message: message.into(),
+        }
+    }
+
+    /// `quadray compare` found the images different beyond its thresholds: status 1, as `cmp`
+    /// and `diff` do.
+    pub fn images_differ(message: impl Into<String>) -> StatusError {
+        StatusError {
+            status: 1,
+            message: message.into(),
+        }
     }
 }
 
-impl std::error::Error for UsageError {}
+impl std::fmt::Display for StatusError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
 
-/// `Err(UsageError(message))` unless `condition` holds.
-pub fn usage_ensure(condition: bool, message: &str) -> Result<(), UsageError> {
+impl std::error::Error for StatusError {}
+
+/// A usage error ([`StatusError::usage`]) unless `condition` holds.
+pub fn usage_ensure(condition: bool, message: &str) -> Result<(), StatusError> {
     if condition {
         Ok(())
     } else {
-        Err(UsageError(message.to_string()))
+        Err(StatusError::usage(message))
     }
 }
-
-/// `quadray compare` found the images different beyond its thresholds: exit status 1, as `cmp`
-/// and `diff` do.
-#[derive(Debug)]
-pub struct ImagesDiffer(pub String);
-
-impl std::fmt::Display for ImagesDiffer {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for ImagesDiffer {}
 
 /// The exit status for an error of a run (see [`args::EXIT_STATUS`]): 2 for usage errors (and,
 /// for compare, for any trouble other than a difference), else 1.
 pub fn exit_status(err: &anyhow::Error, command_is_compare: bool) -> u8 {
-    if err.downcast_ref::<UsageError>().is_some() || err.downcast_ref::<clap::Error>().is_some() {
-        2
-    } else if err.downcast_ref::<ImagesDiffer>().is_some() {
-        1
-    } else if command_is_compare {
+    if let Some(e) = err.downcast_ref::<StatusError>() {
+        e.status
+    } else if err.downcast_ref::<clap::Error>().is_some() || command_is_compare {
         2
     } else {
         1

@@ -163,16 +163,9 @@ pub fn write_exr(film: &Film, aovs: Option<&Aovs>, half: bool, path: &Path) -> R
 /// quantile (the rest run to the horizon and clamp).
 pub const DEPTH_DISPLAY_QUANTILE: f64 = 0.95;
 
-/// The object ids of the scene's planes (see [`quadray::Geometry::object_index`]): unbounded, so
-/// their depths run to the horizon.
-pub fn plane_ids(scene: &quadray::Scene) -> RangeInclusive<u32> {
-    let g = scene.geometry();
-    let first = g.spheres.len() as u32 + 1;
-    first..=first + g.planes.len() as u32 - 1
-}
-
 /// The depths the depth PNG maps to white and to its darkest grey: the nearest hit, and the
-/// farthest hit on the scene's finite content (anything but `planes`), so that a floor running
+/// farthest hit on the scene's finite content (anything but `planes`, the ids of
+/// [`quadray::Geometry::plane_object_indices`]), so that a floor running
 /// to the horizon does not squeeze the objects into one grey; farther plane pixels clamp. With
 /// only planes in view, the [`DEPTH_DISPLAY_QUANTILE`] of hit depths. `None` when nothing was hit.
 pub fn depth_display_range(

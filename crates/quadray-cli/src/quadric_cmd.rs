@@ -3,7 +3,7 @@
 
 use crate::output::{check_writable, write_film};
 use crate::showcase::{GENERAL_EQUATION, Showcase};
-use crate::{UsageError, usage_ensure};
+use crate::{StatusError, usage_ensure};
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use quadray::{Coefficients, QuadricKind, QuadricSurface, RenderSettings, Scene, Texture};
@@ -141,7 +141,7 @@ pub fn showcase(args: &QuadricArgs) -> Result<Showcase> {
     } else {
         let Some(kind) = QuadricKind::from_name(name) else {
             let names = QuadricKind::ALL.map(|k| k.name());
-            return Err(UsageError(format!(
+            return Err(StatusError::usage(format!(
                 "unknown quadric kind \"{name}\"{}; the kinds are {} and general",
                 quadray_loader::suggest::did_you_mean(name, names.into_iter().chain(["general"])),
                 names.join(", ")

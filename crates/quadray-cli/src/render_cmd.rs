@@ -65,7 +65,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             write_exr(&rendered.film, aovs.as_ref(), args.half, &output)?
         }
         Format::Png if args.pass != Pass::Combined => {
-            let planes = crate::passes::plane_ids(&scene);
+            let planes = scene.geometry().plane_object_indices();
             write_png_pass(args.pass, &rendered.film, aovs.as_ref(), &planes, &output)?;
             if args.pass == Pass::Depth
                 && !args.quiet

@@ -183,6 +183,15 @@ impl Geometry {
         };
         index.min(u32::MAX as u64) as u32
     }
+
+    /// The [`Geometry::object_index`]es of the world's planes (empty without planes): the
+    /// unbounded objects, whose depths run to the horizon.
+    pub fn plane_object_indices(&self) -> std::ops::RangeInclusive<u32> {
+        let first = self.spheres.len() as u64 + 1;
+        let last = self.spheres.len() as u64 + self.planes.len() as u64;
+        let clamp = |i: u64| i.min(u32::MAX as u64) as u32;
+        clamp(first)..=clamp(last)
+    }
 }
 
 #[cfg(test)]
@@ -259,6 +268,10 @@ mod tests {
         assert!((k.depth - 12.0).abs() < 1e-5, "{k:?}");
         assert_eq!(k.object_id, 2);
         assert_eq!(k.normal, Vec3::Z);
+        // The plane's id is the one plane index; the sphere's is not.
+        let planes = s.geometry().plane_object_indices();
+        assert!(planes.contains(&k.object_id) && !planes.contains(&c.object_id));
+        assert!(scene(false).geometry().plane_object_indices().is_empty());
         // The passes do not change the beauty image.
         let plain = render(&s, &settings, &NoProgress).unwrap();
         assert_eq!(plain.film, rendered.film);

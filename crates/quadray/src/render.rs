@@ -72,23 +72,24 @@ pub enum RenderError {
     Camera(#[from] crate::camera::CameraError),
 }
 
+/// Checks an image size against the documented limits: sides, pixel count and aspect ratio.
+pub fn check_resolution(width: u32, height: u32) -> Result<(), RenderError> {
+    let aspect = width as f64 / height.max(1) as f64;
+    let within = (1..=MAX_SIDE).contains(&width)
+        && (1..=MAX_SIDE).contains(&height)
+        && width as u64 * height as u64 <= MAX_PIXELS
+        && (1.0 / MAX_ASPECT..=MAX_ASPECT).contains(&aspect);
+    if within {
+        Ok(())
+    } else {
+        Err(RenderError::Resolution { width, height })
+    }
+}
+
 impl RenderSettings {
     /// Checks the settings against the documented limits.
     pub fn validate(&self) -> Result<(), RenderError> {
-        let (w, h) = (self.width, self.height);
-        let aspect = w as f64 / h.max(1) as f64;
-        if w == 0
-            || h == 0
-            || w > MAX_SIDE
-            || h > MAX_SIDE
-            || w as u64 * h as u64 > MAX_PIXELS
-            || !(1.0 / MAX_ASPECT..=MAX_ASPECT).contains(&aspect)
-        {
-            return Err(RenderError::Resolution {
-                width: w,
-                height: h,
-            });
-        }
+        check_resolution(self.width, self.height)?;
         if !(1..=MAX_SPP).contains(&self.spp) {
             return Err(RenderError::Spp(self.spp));
         }

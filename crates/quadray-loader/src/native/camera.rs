@@ -112,16 +112,9 @@ impl Builder<'_> {
                     format!("each side must be between 1 and {MAX_SIDE}, got {w}x{h}"),
                 ));
             }
-            let aspect = w as f64 / h as f64;
-            if !(1.0 / MAX_ASPECT..=MAX_ASPECT).contains(&aspect) {
-                return Err(self.err(
-                    res.span(),
-                    "render.resolution",
-                    format!(
-                        "{w}x{h} has an aspect ratio of {aspect:.4}; quadray renders 1/{MAX_ASPECT} to {MAX_ASPECT}"
-                    ),
-                ));
-            }
+            // The pixel count and aspect ratio, as the renderer will check them.
+            check_resolution(w as u32, h as u32)
+                .map_err(|e| self.err(res.span(), "render.resolution", e.to_string()))?;
             (s.width, s.height) = (w as u32, h as u32);
         }
         if let Some(v) = &r.spp {

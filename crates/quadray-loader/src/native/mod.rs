@@ -12,7 +12,7 @@ use crate::import::{
 use crate::include;
 use crate::suggest::did_you_mean;
 use glam::{DVec3, Vec3};
-use quadray::render::{MAX_ASPECT, MAX_DEPTH, MAX_SIDE, MAX_SPP};
+use quadray::render::{MAX_DEPTH, MAX_SIDE, MAX_SPP, check_resolution};
 use quadray::{
     Camera, ClipBox, Coefficients, Geometry, Light, Material, Mesh, Plane, Projection, Quadric,
     QuadricKind, QuadricSurface, SceneDescription, SpecularModel, Sphere, Texture, Transform,
@@ -96,16 +96,20 @@ pub struct LoadedScene {
 }
 /// Reads and validates the scene file at `path`.
 pub fn load_scene(path: &Path) -> Result<LoadedScene, LoadError> {
+    parse_scene(&read_scene_text(path)?, path)
+}
+
+/// The text of the scene file at `path`: a regular file within the scene-file limit, in UTF-8.
+fn read_scene_text(path: &Path) -> Result<String, LoadError> {
     let bytes = crate::read_limited::read(path, crate::read_limited::MAX_SCENE_BYTES)
         .map_err(|e| LoadError::new(path, None, LoadErrorKind::Io(e)))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
+    String::from_utf8(bytes).map_err(|e| {
         LoadError::new(
             path,
             None,
             LoadErrorKind::Syntax(format!("the file is not UTF-8 text ({e})")),
         )
-    })?;
-    parse_scene(&text, path)
+    })
 }
 
 /// [`load_scene`] with command-line overrides of the file's values (`--set render.spp=64`),
@@ -117,9 +121,7 @@ pub fn load_scene_with(
     if overrides.is_empty() {
         return load_scene(path);
     }
-    let bytes = crate::read_limited::read(path, crate::read_limited::MAX_SCENE_BYTES)
-        .map_err(|e| LoadError::new(path, None, LoadErrorKind::Io(e)))?;
-    let text = String::from_utf8_lossy(&bytes);
+    let text = read_scene_text(path)?;
     let edited = overrides::apply(&text, overrides)
         .map_err(|(o, m)| LoadError::invalid(path, None, o.to_string(), m))?;
     parse_scene(&edited, path).map_err(|mut e| {
