@@ -20,6 +20,37 @@ fn renders_are_bit_identical_across_thread_counts() {
 }
 
 #[test]
+fn a_crop_window_renders_exactly_the_whole_image_pixels_it_covers() {
+    let (scene, mut settings) = load("defense.toml");
+    (settings.width, settings.height, settings.spp) = (80, 45, 2);
+    let whole = render_with_threads(&scene, &settings, 2);
+    let window = quadray::PixelWindow::from_normalized([0.3, 0.75, 0.1, 0.6], 80, 45).unwrap();
+    settings.crop = Some(window);
+    let crop = render_with_threads(&scene, &settings, 1);
+    assert_eq!(crop.window, window);
+    assert_eq!(
+        (crop.film.width(), crop.film.height()),
+        (window.width(), window.height())
+    );
+    for y in 0..window.height() {
+        for x in 0..window.width() {
+            let inside = crop.film.get(x, y).to_array().map(f32::to_bits);
+            let full = whole
+                .film
+                .get(window.x0 + x, window.y0 + y)
+                .to_array()
+                .map(f32::to_bits);
+            assert_eq!(inside, full, "pixel ({x}, {y}) of the window");
+        }
+    }
+    // Work is done only inside the window: one camera ray per sample of its pixels.
+    assert_eq!(
+        crop.counts.camera,
+        (window.width() * window.height() * settings.spp) as u64
+    );
+}
+
+#[test]
 fn exr_output_holds_the_linear_film_exactly() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("q.exr");

@@ -101,6 +101,12 @@ pub struct RenderArgs {
     /// render.spp=64 --set camera.vfov=30 --set sphere[0].radius=0.5`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<quadray_loader::Override>,
+    /// Render only a window of the image, in fractions of its width and height from the top-left
+    /// corner (pbrt's --cropwindow): `--crop 0.25,0.75,0,0.5` is the middle half of the top half.
+    /// Its pixels equal the whole render's; a PNG holds just the window, an EXR places it in the
+    /// full frame (data window inside the display window).
+    #[arg(long, value_name = "X0,X1,Y0,Y1", value_parser = parse_crop)]
+    pub crop: Option<[f64; 4]>,
 }
 
 /// Loads the scene at `path` with the command line's `--set` overrides (native scenes only),
@@ -191,6 +197,25 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// Parses a normalised crop window `X0,X1,Y0,Y1`: fractions of the image with `0 <= X0 < X1 <= 1`
+/// and the same for Y.
+pub fn parse_crop(s: &str) -> Result<[f64; 4], String> {
+    let values: Vec<f64> = s
+        .split(',')
+        .map(|v| v.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected four numbers X0,X1,Y0,Y1, got \"{s}\""))?;
+    let [x0, x1, y0, y1] = <[f64; 4]>::try_from(values)
+        .map_err(|_| format!("expected four numbers X0,X1,Y0,Y1, got \"{s}\""))?;
+    let ordered = |a: f64, b: f64| (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) && a < b;
+    if !(ordered(x0, x1) && ordered(y0, y1)) {
+        return Err(format!(
+            "the window must satisfy 0 <= X0 < X1 <= 1 and 0 <= Y0 < Y1 <= 1, got \"{s}\""
+        ));
+    }
+    Ok([x0, x1, y0, y1])
+}
+
 /// Parses an output path whose extension is one of `extensions` (any case).
 fn output_with(s: &str, extensions: &[&str]) -> Result<PathBuf, String> {
     let path = PathBuf::from(s);
@@ -236,6 +261,22 @@ mod tests {
         assert!(parse_resolution("0x0").is_err());
         assert!(parse_resolution("16384x1").is_err(), "aspect");
         assert!(parse_resolution("16384x16384").is_err(), "pixels");
+    }
+
+    #[test]
+    fn crop_windows_parse_in_pbrt_order() {
+        assert_eq!(parse_crop("0.25,0.75, 0,0.5"), Ok([0.25, 0.75, 0.0, 0.5]));
+        for bad in [
+            "0,1,0",
+            "0,1,0,1,0",
+            "0.5,0.5,0,1",
+            "0,1,1,0",
+            "-1,1,0,1",
+            "a,b,c,d",
+            "0,1,0,NaN",
+        ] {
+            assert!(parse_crop(bad).is_err(), "{bad}");
+        }
     }
 
     #[test]

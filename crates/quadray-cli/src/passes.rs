@@ -4,7 +4,7 @@
 use crate::output::{write_atomically, write_rgb8_png};
 use anyhow::{Result, anyhow, bail};
 use exr::prelude::*;
-use quadray::{AovSelection, Aovs, Film, film::encode_srgb8};
+use quadray::{AovSelection, Aovs, Film, PixelWindow, film::encode_srgb8};
 use std::ops::RangeInclusive;
 use std::path::Path;
 
@@ -87,11 +87,23 @@ pub const INDEX_OB: &str = "ViewLayer.IndexOB.X";
 /// Writes the beauty image (half floats when `half`) and the passes `aovs` holds into one EXR,
 /// atomically. Without passes the channels are plain `R, G, B, A`, as any viewer expects; with
 /// passes they are Blender's `ViewLayer.*` names. Depth, normals, albedo and ids are always f32:
-/// half's 11-bit mantissa visibly steps depth.
-pub fn write_exr(film: &Film, aovs: Option<&Aovs>, half: bool, path: &Path) -> Result<()> {
+/// half's 11-bit mantissa visibly steps depth. `frame` places the pixels in the full image: its
+/// size is the file's display window and its window the data window, as OpenEXR stores a crop.
+pub fn write_exr(
+    film: &Film,
+    aovs: Option<&Aovs>,
+    half: bool,
+    frame: &ExrFrame,
+    path: &Path,
+) -> Result<()> {
     let (w, h) = (film.width() as usize, film.height() as usize);
     if w == 0 || h == 0 {
         bail!("cannot write an empty image");
+    }
+    if (frame.window.width(), frame.window.height()) != (film.width(), film.height())
+        || !frame.window.fits(frame.width, frame.height)
+    {
+        bail!("the image does not fit its place in the frame");
     }
     if let Some(a) = aovs
         && (a.width() as usize, a.height() as usize) != (w, h)
@@ -146,17 +158,44 @@ pub fn write_exr(film: &Film, aovs: Option<&Aovs>, half: bool, path: &Path) -> R
             channels.push(AnyChannel::new(INDEX_OB, f32s(&|s| s.object_id as f32)));
         }
     }
+    let attributes = LayerAttributes {
+        layer_position: Vec2(frame.window.x0 as i32, frame.window.y0 as i32),
+        ..LayerAttributes::default()
+    };
     let layer = Layer::new(
         Vec2(w, h),
-        LayerAttributes::default(),
+        attributes,
         Encoding::FAST_LOSSLESS,
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
-    let image = Image::from_layer(layer);
+    let display = IntegerBounds::from_dimensions((frame.width as usize, frame.height as usize));
+    let image = Image::new(ImageAttributes::new(display), layer);
     write_atomically(path, |tmp| {
         image.write().to_file(tmp)?;
         Ok(())
     })
+}
+
+/// Where an EXR's pixels lie in the full image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ExrFrame {
+    /// Full image width (the display window).
+    pub width: u32,
+    /// Full image height.
+    pub height: u32,
+    /// The rendered pixels (the data window).
+    pub window: PixelWindow,
+}
+
+impl ExrFrame {
+    /// The frame of a render with `settings`: its full size and its window.
+    pub fn of(settings: &quadray::RenderSettings) -> ExrFrame {
+        ExrFrame {
+            width: settings.width,
+            height: settings.height,
+            window: settings.window(),
+        }
+    }
 }
 
 /// Share of hit depths the depth PNG spans when only planes are in view: the nearest hit to this

@@ -2,11 +2,11 @@
 
 use crate::args::RenderArgs;
 use crate::output::{Format, check_writable, write_film};
-use crate::passes::{Pass, selection_of, write_exr, write_png_pass};
+use crate::passes::{ExrFrame, Pass, selection_of, write_exr, write_png_pass};
 use crate::progress::RowBar;
-use crate::usage_ensure;
+use crate::{StatusError, usage_ensure};
 use anyhow::{Context, Result};
-use quadray::Scene;
+use quadray::{PixelWindow, Scene};
 use std::time::Instant;
 
 /// Runs the render subcommand.
@@ -37,6 +37,19 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     s.max_depth = args.max_depth.unwrap_or(s.max_depth);
     let mut settings = s.render_settings();
     settings.seed = args.seed;
+    if let Some(crop) = args.crop {
+        let window = PixelWindow::from_normalized(crop, settings.width, settings.height)
+            .ok_or_else(|| {
+                StatusError::usage(format!(
+                    "--crop {}: the window holds the top-left corner of no pixel of the {}x{} image \
+                     (the pixels a window covers)",
+                    crop.map(|v| v.to_string()).join(","),
+                    settings.width,
+                    settings.height
+                ))
+            })?;
+        settings.crop = Some(window);
+    }
     settings.validate()?;
     let loaded_at = Instant::now();
 
@@ -53,7 +66,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
     }
 
-    let bar = RowBar::new(settings.height, args.quiet);
+    let bar = RowBar::new(settings.window().height(), args.quiet);
     let cpu_start = cpu_time::ProcessTime::try_now().ok();
     let (rendered, aovs) =
         pool.install(|| quadray::render_with_aovs(&scene, &settings, selection, &bar))?;
@@ -61,9 +74,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let render_time = built_at.elapsed();
     let render_cpu = cpu_start.and_then(|t| t.try_elapsed().ok());
     match format {
-        Format::Exr if aovs.is_some() || args.half => {
-            write_exr(&rendered.film, aovs.as_ref(), args.half, &output)?
-        }
+        Format::Exr => write_exr(
+            &rendered.film,
+            aovs.as_ref(),
+            args.half,
+            &ExrFrame::of(&settings),
+            &output,
+        )?,
         Format::Png if args.pass != Pass::Combined => {
             let planes = scene.geometry().plane_object_indices();
             write_png_pass(args.pass, &rendered.film, aovs.as_ref(), &planes, &output)?;
@@ -101,10 +118,21 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             );
             eprintln!("{}", crate::check::structure_line(&scene));
         }
+        let window = settings.window();
+        let size = match settings.crop {
+            Some(_) => format!(
+                "{}x{} window at ({}, {}) of {}x{}",
+                window.width(),
+                window.height(),
+                window.x0,
+                window.y0,
+                settings.width,
+                settings.height
+            ),
+            None => format!("{}x{}", settings.width, settings.height),
+        };
         eprintln!(
-            "{}x{}, {} spp: {} camera + {} shadow + {} reflection rays in {:.3} s ({:.2} Mrays/s) -> {}",
-            settings.width,
-            settings.height,
+            "{size}, {} spp: {} camera + {} shadow + {} reflection rays in {:.3} s ({:.2} Mrays/s) -> {}",
             settings.spp,
             c.camera,
             c.shadow,

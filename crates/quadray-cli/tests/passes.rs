@@ -153,6 +153,72 @@ fn exr_passes_read_back_in_an_independent_reader() {
 }
 
 #[test]
+fn a_crop_window_is_placed_in_the_full_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = pass_scene(&dir);
+    let whole = tmp(&dir, "whole.png");
+    let o = quadray(&["render", &scene, "-o", whole.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Of 9 columns, [0.3, 0.7] covers 3..7 (ceil(2.7), ceil(6.3)); of 9 rows, [0.5, 1] covers 5..9.
+    let crop = ["--crop", "0.3,0.7,0.5,1"];
+    let png = tmp(&dir, "crop.png");
+    let o = quadray(
+        &[
+            &["render", &scene, "-o", png.to_str().unwrap(), "-q"],
+            &crop[..],
+        ]
+        .concat(),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (whole, part) = (
+        image::open(&whole).unwrap().to_rgb8(),
+        image::open(&png).unwrap().to_rgb8(),
+    );
+    assert_eq!(part.dimensions(), (4, 4));
+    for (x, y, p) in part.enumerate_pixels() {
+        assert_eq!(p, whole.get_pixel(x + 3, y + 5), "pixel ({x}, {y})");
+    }
+    let exr = tmp(&dir, "crop.exr");
+    let o = quadray(
+        &[
+            &[
+                "render",
+                &scene,
+                "-o",
+                exr.to_str().unwrap(),
+                "--aov",
+                "depth",
+                "-q",
+            ],
+            &crop[..],
+        ]
+        .concat(),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let Some(info) = oiiotool(&["--info", "-v", exr.to_str().unwrap()]) else {
+        return;
+    };
+    for fact in [
+        "4 x    4, 5 channel",
+        "pixel data origin: x=3, y=5",
+        "full/display size: 9 x 9",
+    ] {
+        assert!(info.contains(fact), "{fact} missing from {info}");
+    }
+    // A window without a pixel is a usage error.
+    let o = quadray(&[
+        "render",
+        &scene,
+        "-o",
+        png.to_str().unwrap(),
+        "--crop",
+        "0.3,0.7,0.5,0.51",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--crop 0.3,0.7,0.5,0.51"));
+}
+
+#[test]
 fn png_shows_one_pass_and_bad_pass_options_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let scene = pass_scene(&dir);

@@ -87,7 +87,8 @@ pub use quadric::{
     ClipBox, Coefficients, Quadric, QuadricClass, QuadricError, QuadricKind, QuadricSurface,
 };
 pub use render::{
-    NoProgress, Progress, RenderError, RenderSettings, Rendered, render, render_with_aovs,
+    NoProgress, PixelWindow, Progress, RenderError, RenderSettings, Rendered, render,
+    render_with_aovs,
 };
 pub use scene::{MAX_COORDINATE, Scene, SceneDescription, SceneError};
 pub use shape::{LocalPrim, PrimRef, SurfaceGeometry, SurfaceHit};

@@ -34,6 +34,75 @@ pub struct RenderSettings {
     pub seed: u32,
     /// The integrator's recursion limits.
     pub whitted: Whitted,
+    /// Render only this window of the image (`None`: all of it). Every pixel in the window is
+    /// bit-identical to the same pixel of the whole render.
+    pub crop: Option<PixelWindow>,
+}
+
+/// A rectangle of pixels inside the full image: columns `x0..x1`, rows `y0..y1` (half-open),
+/// counted from the top-left pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelWindow {
+    /// First column.
+    pub x0: u32,
+    /// First row.
+    pub y0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// One past the last row.
+    pub y1: u32,
+}
+
+impl PixelWindow {
+    /// The whole of a `width` × `height` image.
+    pub fn full(width: u32, height: u32) -> PixelWindow {
+        PixelWindow {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+
+    /// The pixels a normalised crop window `[x0, x1] × [y0, y1]` (fractions of the width and
+    /// height, from the top-left) covers in a `width` × `height` image, rounded as pbrt's
+    /// `--cropwindow` does (each edge up to the next pixel boundary), so that adjacent windows
+    /// sharing an edge cover every pixel exactly once. `None` unless `0 <= x0 < x1 <= 1` and the
+    /// same for y, or when the window holds no pixel.
+    pub fn from_normalized(
+        [x0, x1, y0, y1]: [f64; 4],
+        width: u32,
+        height: u32,
+    ) -> Option<PixelWindow> {
+        let ordered =
+            |a: f64, b: f64| (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) && a < b;
+        if !(ordered(x0, x1) && ordered(y0, y1)) {
+            return None;
+        }
+        let edge = |t: f64, n: u32| ((n as f64 * t).ceil() as u32).min(n);
+        let window = PixelWindow {
+            x0: edge(x0, width),
+            y0: edge(y0, height),
+            x1: edge(x1, width),
+            y1: edge(y1, height),
+        };
+        (window.width() > 0 && window.height() > 0).then_some(window)
+    }
+
+    /// Columns in the window.
+    pub fn width(&self) -> u32 {
+        self.x1.saturating_sub(self.x0)
+    }
+
+    /// Rows in the window.
+    pub fn height(&self) -> u32 {
+        self.y1.saturating_sub(self.y0)
+    }
+
+    /// Whether the window is non-empty and lies inside a `width` × `height` image.
+    pub fn fits(&self, width: u32, height: u32) -> bool {
+        self.x0 < self.x1 && self.y0 < self.y1 && self.x1 <= width && self.y1 <= height
+    }
 }
 
 impl Default for RenderSettings {
@@ -44,6 +113,7 @@ impl Default for RenderSettings {
             spp: 1,
             seed: 0,
             whitted: Whitted::default(),
+            crop: None,
         }
     }
 }
@@ -67,6 +137,16 @@ pub enum RenderError {
     /// Depth outside 1..=MAX_DEPTH.
     #[error("max depth must be in 1..={MAX_DEPTH}, got {0}")]
     Depth(u32),
+    /// A crop window that is empty or reaches outside the image.
+    #[error("crop window {window:?} is empty or outside the {width}x{height} image")]
+    Crop {
+        /// The window asked for.
+        window: PixelWindow,
+        /// Image width.
+        width: u32,
+        /// Image height.
+        height: u32,
+    },
     /// The camera cannot produce rays at this aspect.
     #[error("camera: {0}")]
     Camera(#[from] crate::camera::CameraError),
@@ -96,7 +176,22 @@ impl RenderSettings {
         if !(1..=MAX_DEPTH).contains(&self.whitted.max_depth) {
             return Err(RenderError::Depth(self.whitted.max_depth));
         }
+        if let Some(window) = self.crop
+            && !window.fits(self.width, self.height)
+        {
+            return Err(RenderError::Crop {
+                window,
+                width: self.width,
+                height: self.height,
+            });
+        }
         Ok(())
+    }
+
+    /// The pixels to render: the crop window, or the whole image.
+    pub fn window(&self) -> PixelWindow {
+        self.crop
+            .unwrap_or_else(|| PixelWindow::full(self.width, self.height))
     }
 }
 
@@ -116,8 +211,10 @@ impl Progress for NoProgress {
 /// A finished render.
 #[derive(Clone, Debug)]
 pub struct Rendered {
-    /// The image.
+    /// The image: the pixels of [`Rendered::window`].
     pub film: Film,
+    /// Where the film lies in the full image ([`RenderSettings::window`]).
+    pub window: PixelWindow,
     /// Rays traced, by kind.
     pub counts: RayCounts,
 }
@@ -142,32 +239,37 @@ pub fn render_with_aovs(
 ) -> Result<(Rendered, Option<Aovs>), RenderError> {
     settings.validate()?;
     let (w, h) = (settings.width, settings.height);
+    let window = settings.window();
+    let (ww, wh) = (window.width() as usize, window.height() as usize);
     let camera = scene.camera().prepare(w as f64 / h as f64)?;
     let forward = (scene.camera().to - scene.camera().from).normalize();
-    let mut film = Film::new(w, h);
+    let mut film = Film::new(window.width(), window.height());
     // Pass samples are allocated and computed only when a pass is selected.
     let mut aov_samples = if selection.any() {
-        vec![AovSample::MISS; w as usize * h as usize]
+        vec![AovSample::MISS; ww * wh]
     } else {
         Vec::new()
     };
     let aov_rows: Vec<Option<&mut [AovSample]>> = if selection.any() {
-        aov_samples.chunks_mut(w as usize).map(Some).collect()
+        aov_samples.chunks_mut(ww).map(Some).collect()
     } else {
-        (0..h).map(|_| None).collect()
+        (0..wh).map(|_| None).collect()
     };
     let totals = Mutex::new(RayCounts::default());
     let spp = settings.spp;
     let inv_spp = 1.0 / spp as f32;
     film.pixels_mut()
-        .par_chunks_mut(w as usize)
+        .par_chunks_mut(ww)
         .zip(aov_rows)
         .enumerate()
-        .for_each(|(y, (row, mut aov_row))| {
-            let y = y as u32;
+        .for_each(|(row_index, (row, mut aov_row))| {
+            // Pixels are sampled by their position in the full image, so a window's pixels equal
+            // the whole render's.
+            let y = window.y0 + row_index as u32;
             let mut counts = RayCounts::default();
-            for (x, pixel) in row.iter_mut().enumerate() {
-                let pattern = pixel_pattern(x as u32, y, settings.seed);
+            for (column, pixel) in row.iter_mut().enumerate() {
+                let x = window.x0 + column as u32;
+                let pattern = pixel_pattern(x, y, settings.seed);
                 let mut sum = Vec3::ZERO;
                 for s in 0..spp {
                     let (dx, dy) = sample_2d(s, spp, pattern);
@@ -176,7 +278,7 @@ pub fn render_with_aovs(
                         Some(aovs) if s == 0 => {
                             let (radiance, hit) =
                                 settings.whitted.camera_ray_hit(scene, &ray, &mut counts);
-                            aovs[x] = AovSample::from_hit(
+                            aovs[column] = AovSample::from_hit(
                                 scene,
                                 selection,
                                 ray.origin,
@@ -197,7 +299,80 @@ pub fn render_with_aovs(
     let counts = totals.into_inner().unwrap_or_else(|e| e.into_inner());
     let aovs = selection
         .any()
-        .then(|| Aovs::new(w, h, selection, aov_samples))
+        .then(|| Aovs::new(window.width(), window.height(), selection, aov_samples))
         .flatten();
-    Ok((Rendered { film, counts }, aovs))
+    Ok((
+        Rendered {
+            film,
+            window,
+            counts,
+        },
+        aovs,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normalized_windows_round_like_pbrt_and_tile_exactly() {
+        let w = PixelWindow::from_normalized([0.0, 0.5, 0.25, 1.0], 101, 40).unwrap();
+        assert_eq!((w.x0, w.x1, w.y0, w.y1), (0, 51, 10, 40));
+        // Thirds of 100 columns: ceil(33.3) = 34, ceil(66.7) = 67; neighbours share their edge.
+        let thirds: Vec<PixelWindow> = (0..3)
+            .map(|i| {
+                let (a, b) = (i as f64 / 3.0, (i + 1) as f64 / 3.0);
+                PixelWindow::from_normalized([a, b, 0.0, 1.0], 100, 1).unwrap()
+            })
+            .collect();
+        assert_eq!(thirds.iter().map(|w| w.width()).sum::<u32>(), 100);
+        assert_eq!(thirds[0].x1, thirds[1].x0);
+        assert_eq!(thirds[1].x1, thirds[2].x0);
+        for bad in [
+            [0.5, 0.5, 0.0, 1.0],
+            [0.6, 0.5, 0.0, 1.0],
+            [-0.1, 0.5, 0.0, 1.0],
+            [0.0, 1.5, 0.0, 1.0],
+            [f64::NAN, 1.0, 0.0, 1.0],
+        ] {
+            assert_eq!(PixelWindow::from_normalized(bad, 100, 100), None, "{bad:?}");
+        }
+        // A window too thin to hold a pixel centre's column is empty.
+        assert_eq!(
+            PixelWindow::from_normalized([0.501, 0.502, 0.0, 1.0], 100, 100),
+            None
+        );
+    }
+
+    #[test]
+    fn windows_outside_the_image_are_refused() {
+        let mut s = RenderSettings {
+            width: 10,
+            height: 10,
+            ..RenderSettings::default()
+        };
+        s.crop = Some(PixelWindow {
+            x0: 5,
+            y0: 0,
+            x1: 11,
+            y1: 10,
+        });
+        assert!(matches!(s.validate(), Err(RenderError::Crop { .. })));
+        s.crop = Some(PixelWindow {
+            x0: 5,
+            y0: 3,
+            x1: 5,
+            y1: 10,
+        });
+        assert!(s.validate().is_err());
+        s.crop = Some(PixelWindow {
+            x0: 2,
+            y0: 3,
+            x1: 5,
+            y1: 10,
+        });
+        assert_eq!(s.validate(), Ok(()));
+        assert_eq!(s.window().width(), 3);
+    }
 }
