@@ -3,10 +3,17 @@
 use crate::args::CheckArgs;
 use anyhow::{Context, Result};
 use quadray::Scene;
+use std::time::Instant;
 
 /// Runs the check subcommand: exit status 0 when the scene is valid, with a summary on stdout.
 pub fn run(args: &CheckArgs) -> Result<()> {
+    let start = Instant::now();
     let loaded = crate::args::load_scene_for(&args.scene, &args.set, &Default::default(), None)?;
+    log::info!(
+        "loaded {} in {:.3} s",
+        args.scene.display(),
+        start.elapsed().as_secs_f64()
+    );
     for note in &loaded.notes {
         eprintln!("note: {note}");
     }
@@ -20,25 +27,19 @@ pub fn run(args: &CheckArgs) -> Result<()> {
             );
         }
     }
+    let built_at = Instant::now();
     let scene = Scene::new(loaded.description)
         .with_context(|| format!("invalid scene {}", args.scene.display()))?;
+    log_built(&scene, built_at);
     for warning in
         crate::warnings::scene_warnings(&args.scene, &scene, settings.width, settings.height)
     {
         eprintln!("warning: {warning}");
     }
-    let g = scene.geometry();
-    let triangles: usize = g.meshes.iter().map(|m| m.triangle_count()).sum();
     println!(
-        "{}: ok: {} spheres, {} planes, {} quadrics, {} meshes ({} triangles), {} lights, {} materials; {}x{}, {} spp, max depth {}",
+        "{}: ok: {}; {}x{}, {} spp, max depth {}",
         args.scene.display(),
-        g.spheres.len(),
-        g.planes.len(),
-        g.quadrics.len(),
-        g.meshes.len(),
-        triangles,
-        scene.lights().len(),
-        scene.materials().len(),
+        contents_line(&scene),
         settings.width,
         settings.height,
         settings.spp,
@@ -46,6 +47,32 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     );
     println!("{}", structure_line(&scene));
     Ok(())
+}
+
+/// What a scene holds, counted: shapes by kind, lights, materials.
+pub(crate) fn contents_line(scene: &Scene) -> String {
+    let g = scene.geometry();
+    let triangles: usize = g.meshes.iter().map(|m| m.triangle_count()).sum();
+    format!(
+        "{} spheres, {} planes, {} quadrics, {} meshes ({} triangles), {} lights, {} materials",
+        g.spheres.len(),
+        g.planes.len(),
+        g.quadrics.len(),
+        g.meshes.len(),
+        triangles,
+        scene.lights().len(),
+        scene.materials().len(),
+    )
+}
+
+/// Logs (at `-v`) that the scene was built, since `since`, with what it holds.
+pub(crate) fn log_built(scene: &Scene, since: Instant) {
+    log::info!(
+        "built the scene and its BVH in {:.3} s: {}",
+        since.elapsed().as_secs_f64(),
+        contents_line(scene)
+    );
+    log::info!("{}", structure_line(scene));
 }
 
 /// What the scene stores against what it stands for once instances are expanded, and the

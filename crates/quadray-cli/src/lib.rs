@@ -12,6 +12,7 @@ pub mod compare_cmd;
 mod convert;
 pub mod gallery;
 mod label;
+pub mod logging;
 pub mod output;
 pub mod passes;
 mod progress;

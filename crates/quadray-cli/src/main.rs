@@ -6,6 +6,7 @@ use std::process::ExitCode;
 fn main() -> ExitCode {
     // clap prints its own usage errors and exits with status 2.
     let cli = quadray_cli::args::Cli::parse();
+    quadray_cli::logging::init(quadray_cli::logging::level(cli.verbose));
     let is_compare = matches!(cli.command, quadray_cli::args::Command::Compare(_));
     match quadray_cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,

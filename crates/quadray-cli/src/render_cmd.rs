@@ -24,6 +24,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     };
     let loaded =
         crate::args::load_scene_for(&args.scene, &args.set, &options, args.camera.as_ref())?;
+    log::info!(
+        "loaded {} in {:.3} s",
+        args.scene.display(),
+        start.elapsed().as_secs_f64()
+    );
     for note in &loaded.notes {
         if !args.quiet {
             eprintln!("note: {note}");
@@ -57,6 +62,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = pool
         .install(|| Scene::new(loaded.description))
         .with_context(|| format!("invalid scene {}", args.scene.display()))?;
+    crate::check::log_built(&scene, loaded_at);
     let built_at = Instant::now();
     if !args.quiet {
         for warning in
@@ -73,6 +79,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     bar.finish();
     let render_time = built_at.elapsed();
     let render_cpu = cpu_start.and_then(|t| t.try_elapsed().ok());
+    log::info!(
+        "rendered {} rows of {} spp on {} threads in {:.3} s",
+        settings.window().height(),
+        settings.spp,
+        pool.current_num_threads(),
+        render_time.as_secs_f64()
+    );
+    let write_start = Instant::now();
     match format {
         Format::Exr => write_exr(
             &rendered.film,
@@ -99,6 +113,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         _ => write_film(&rendered.film, &output)?,
     }
+    log::info!(
+        "wrote {} in {:.3} s",
+        output.display(),
+        write_start.elapsed().as_secs_f64()
+    );
 
     if !args.quiet {
         let c = rendered.counts;

@@ -317,3 +317,35 @@ fn simd_paths_render_identical_images() {
         "the two traversal paths rendered different images"
     );
 }
+
+#[test]
+fn verbose_logs_each_phase_and_every_file_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = tmp(&dir, "v.png");
+    let scene = scene("defense.toml");
+    let out = out.to_str().unwrap();
+    let run = |verbosity: &[&str]| {
+        let o = quadray(&[&["render", &scene, "--res", "32x18", "-o", out], verbosity].concat());
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let quiet = run(&[]);
+    assert!(!quiet.contains("info:"), "{quiet}");
+    let v = run(&["-v"]);
+    for phase in [
+        "info: loaded ",
+        "info: built the scene and its BVH in ",
+        "info: rendered 18 rows of ",
+        "info: wrote ",
+    ] {
+        assert!(v.contains(phase), "{phase} missing from {v}");
+    }
+    assert!(!v.contains("debug:"), "{v}");
+    // -vv adds every file read, and -v works before the subcommand too.
+    let o = quadray(&["-vv", "render", &scene, "--res", "32x18", "-o", out]);
+    let vv = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        vv.contains("debug: read ") && vv.contains("defense.toml"),
+        "{vv}"
+    );
+}

@@ -54,7 +54,15 @@ pub fn decode_image(bytes: &[u8], encoding: ColorEncoding) -> Result<Image, Stri
 pub fn read_image(path: &Path, encoding: ColorEncoding) -> Result<Image, String> {
     let bytes = crate::read_limited::read(path, crate::read_limited::MAX_IMAGE_BYTES)
         .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
-    decode_image(&bytes, encoding).map_err(|e| format!("cannot decode `{}`: {e}", path.display()))
+    let image = decode_image(&bytes, encoding)
+        .map_err(|e| format!("cannot decode `{}`: {e}", path.display()))?;
+    log::debug!(
+        "decoded {}: {}x{}",
+        path.display(),
+        image.width(),
+        image.height()
+    );
+    Ok(image)
 }
 
 /// Resolves a file reference written in another file against that file's folder `base`.

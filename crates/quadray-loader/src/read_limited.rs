@@ -44,6 +44,7 @@ pub fn read(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
     if bytes.len() as u64 > limit {
         return Err(too_large(bytes.len() as u64));
     }
+    log::debug!("read {} ({} bytes)", path.display(), bytes.len());
     Ok(bytes)
 }
 
