@@ -57,8 +57,8 @@ pub enum Command {
 pub struct RenderArgs {
     /// The scene file.
     pub scene: PathBuf,
-    /// Output image; the extension picks the format (.png or .exr). Default: the scene's name
-    /// with .png, beside the scene.
+    /// Output image; the extension picks the format (.png or .exr). Default: the scene's
+    /// `[output]` file, else the scene's name with .png, beside the scene.
     #[arg(short, long, value_name = "OUT", value_parser = parse_image_output)]
     pub output: Option<PathBuf>,
     /// Samples per pixel (overrides the scene).

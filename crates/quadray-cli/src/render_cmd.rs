@@ -11,12 +11,10 @@ use std::time::Instant;
 
 /// Runs the render subcommand.
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let output = args
-        .output
-        .clone()
-        .unwrap_or_else(|| crate::args::default_output(&args.scene));
-    let format = check_writable(&output)?;
-    let selection = pass_selection(args, format)?;
+    // An output given on the command line is checked before the (possibly long) load.
+    if let Some(output) = &args.output {
+        pass_selection(args, check_writable(output)?)?;
+    }
     let start = Instant::now();
     let options = quadray_loader::ImportOptions {
         scene: args.gltf_scene.clone(),
@@ -29,6 +27,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         args.scene.display(),
         start.elapsed().as_secs_f64()
     );
+    // -o, else the scene's [output], else the scene's name with .png beside it.
+    let output = args
+        .output
+        .clone()
+        .or_else(|| loaded.output.clone())
+        .unwrap_or_else(|| crate::args::default_output(&args.scene));
+    let format = check_writable(&output)?;
+    let selection = pass_selection(args, format)?;
     for note in &loaded.notes {
         if !args.quiet {
             eprintln!("note: {note}");

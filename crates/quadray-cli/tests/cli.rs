@@ -196,7 +196,7 @@ fn seeds_decorrelate_renders_and_repeat_exactly() {
     assert_ne!(a, other);
 }
 
-/// Without `-o`, `render` writes the scene's name with .png beside the scene.
+/// Without `-o`, `render` writes the scene's `[output]`, else its name with .png beside it.
 #[test]
 fn the_output_defaults_to_a_png_beside_the_scene() {
     let dir = tempfile::tempdir().unwrap();
@@ -206,6 +206,26 @@ fn the_output_defaults_to_a_png_beside_the_scene() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let img = image::open(tmp(&dir, "ball.png")).unwrap();
     assert_eq!((img.width(), img.height()), (8, 6));
+
+    // The scene's [output] (relative to the scene's folder) replaces that default; -o wins over it.
+    let text = std::fs::read_to_string(&copy).unwrap() + "\n[output]\nfile = \"out/ball.exr\"\n";
+    std::fs::write(&copy, text).unwrap();
+    std::fs::create_dir(tmp(&dir, "out")).unwrap();
+    let o = quadray(&["render", copy.to_str().unwrap(), "--res", "8x6", "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(tmp(&dir, "out/ball.exr").is_file());
+    let chosen = tmp(&dir, "chosen.png");
+    let o = quadray(&[
+        "render",
+        copy.to_str().unwrap(),
+        "--res",
+        "8x6",
+        "-q",
+        "-o",
+        chosen.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(chosen.is_file());
 }
 
 /// `--version` names the program, and `--help` lists every subcommand and the exit statuses.

@@ -104,6 +104,7 @@ pub fn scene_from_import(
             geometry: imported.geometry,
         },
         settings,
+        output: None,
         material_names,
         notes,
     })

@@ -101,6 +101,24 @@ impl Builder<'_> {
         Ok(camera)
     }
 
+    /// The `[output]` file, resolved against the scene file's folder; it must name a PNG or EXR.
+    pub(super) fn output(&self, o: &OutputSpec) -> Result<PathBuf, LoadError> {
+        let written = o.file.get_ref();
+        let is_image = Path::new(written)
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("exr"));
+        if !is_image || written.trim().is_empty() {
+            return Err(self.err(
+                o.file.span(),
+                "output.file",
+                format!("must name a .png or .exr file, got \"{written}\""),
+            ));
+        }
+        let folder = self.path.parent().unwrap_or(Path::new(""));
+        Ok(folder.join(written))
+    }
+
     pub(super) fn render(&self, r: &RenderSpec) -> Result<(SceneSettings, Vec3), LoadError> {
         let mut s = SceneSettings::default();
         if let Some(res) = &r.resolution {

@@ -19,7 +19,7 @@ use quadray::{
 };
 use std::collections::HashMap;
 use std::ops::Range;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use toml::Spanned;
 
 /// The scene format version this loader reads.
@@ -88,6 +88,9 @@ pub struct LoadedScene {
     pub description: SceneDescription,
     /// The render settings from the `[render]` table.
     pub settings: SceneSettings,
+    /// The image `quadray render` writes when no `-o` is given (the `[output]` table's file,
+    /// resolved against the scene file's folder); `None` for the default beside the scene.
+    pub output: Option<PathBuf>,
     /// Material names, by material index.
     pub material_names: Vec<String>,
     /// What the loader assumed or skipped (a default camera or light, an unsupported primitive),
@@ -280,6 +283,11 @@ impl Builder<'_> {
             ));
         }
         let (mut settings, background) = self.render(&file.render)?;
+        let output = file
+            .output
+            .as_ref()
+            .map(|o| self.output(o.get_ref()))
+            .transpose()?;
         let mut notes = Vec::new();
 
         let mut names = HashMap::new();
@@ -402,6 +410,7 @@ impl Builder<'_> {
                 geometry,
             },
             settings,
+            output,
             material_names,
             notes,
         })

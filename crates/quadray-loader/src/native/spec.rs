@@ -13,6 +13,7 @@ pub(super) struct SceneFile {
     pub(super) camera: Option<Spanned<CameraSpec>>,
     #[serde(default)]
     pub(super) render: RenderSpec,
+    pub(super) output: Option<Spanned<OutputSpec>>,
     #[serde(default, rename = "material")]
     pub(super) materials: Vec<Spanned<MaterialSpec>>,
     #[serde(default, rename = "sphere")]
@@ -112,6 +113,13 @@ pub(super) struct RenderSpec {
     pub(super) spp: Option<Spanned<i64>>,
     pub(super) max_depth: Option<Spanned<i64>>,
     pub(super) background: Option<Spanned<V3>>,
+}
+
+/// `[output]`: where `quadray render SCENE` writes when no `-o` is given.
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct OutputSpec {
+    pub(super) file: Spanned<String>,
 }
 
 #[derive(Clone, Deserialize)]

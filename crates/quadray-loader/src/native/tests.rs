@@ -357,3 +357,14 @@ fn vectors_and_matrices_of_the_wrong_length_are_refused() {
     );
     assert!(e.contains("exactly 4 values, got 5"), "{e}");
 }
+
+#[test]
+fn output_is_resolved_beside_the_scene_and_must_be_an_image() {
+    let text = format!("{MINIMAL}[output]\nfile = \"renders/a.exr\"\n");
+    let s = parse_scene(&text, Path::new("scenes/t.toml")).unwrap();
+    assert_eq!(s.output, Some(PathBuf::from("scenes/renders/a.exr")));
+    assert_eq!(parse("").unwrap().output, None);
+    let e = error("[output]\nfile = \"a.jpg\"\n");
+    assert!(e.contains("t.toml:10:") && e.contains("output.file"), "{e}");
+    assert!(error("[output]\nfile = \"a.png\"\nformat = 1\n").contains("format"));
+}
