@@ -15,25 +15,20 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         start.elapsed().as_secs_f64()
     );
     for note in &loaded.notes {
-        eprintln!("note: {note}");
+        eprintln!("{}", crate::warnings::note_line(note));
     }
     let settings = loaded.settings;
-    for (i, q) in loaded.description.geometry.quadrics.iter().enumerate() {
-        if !q.is_visible() {
-            eprintln!(
-                "warning: {}: quadric[{i}] ({}) does not reach into its clip box: nothing of it will show",
-                args.scene.display(),
-                q.class()
-            );
-        }
-    }
     let built_at = Instant::now();
     let scene = Scene::new(loaded.description)
         .with_context(|| format!("invalid scene {}", args.scene.display()))?;
     log_built(&scene, built_at);
-    for warning in
-        crate::warnings::scene_warnings(&args.scene, &scene, settings.width, settings.height)
-    {
+    for warning in crate::warnings::scene_warnings(
+        &args.scene,
+        &scene,
+        &loaded.material_names,
+        settings.width,
+        settings.height,
+    ) {
         eprintln!("warning: {warning}");
     }
     println!(

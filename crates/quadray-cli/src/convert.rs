@@ -9,7 +9,7 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
     let loaded = quadray_loader::load_any(&args.scene)?;
     for note in &loaded.notes {
         if !args.quiet {
-            eprintln!("note: {note}");
+            eprintln!("{}", crate::warnings::note_line(note));
         }
     }
     // Validate first: a scene quadray would refuse to render is not worth exporting.
@@ -19,7 +19,7 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
         .with_context(|| format!("writing {}", args.output.display()))?;
     if !args.quiet {
         for note in notes {
-            eprintln!("note: {note}");
+            eprintln!("{}", crate::warnings::note_line(&note));
         }
         let g = &loaded.description.geometry;
         eprintln!(

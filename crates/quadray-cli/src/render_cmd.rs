@@ -37,7 +37,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let selection = pass_selection(args, format)?;
     for note in &loaded.notes {
         if !args.quiet {
-            eprintln!("note: {note}");
+            eprintln!("{}", crate::warnings::note_line(note));
         }
     }
     let mut s = loaded.settings;
@@ -71,9 +71,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     crate::check::log_built(&scene, loaded_at);
     let built_at = Instant::now();
     if !args.quiet {
-        for warning in
-            crate::warnings::scene_warnings(&args.scene, &scene, settings.width, settings.height)
-        {
+        for warning in crate::warnings::scene_warnings(
+            &args.scene,
+            &scene,
+            &loaded.material_names,
+            settings.width,
+            settings.height,
+        ) {
             eprintln!("warning: {warning}");
         }
     }

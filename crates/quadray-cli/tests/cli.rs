@@ -113,10 +113,84 @@ fn dark_and_empty_views_are_warned_about() {
     .unwrap();
     let lit = tmp(&dir, "lit.toml");
     std::fs::write(&lit, base.to_string() + light).unwrap();
+    // An ellipsoid 1.1 wide, 10^6 + 1/3 from its coefficients' origin (printed to 17 digits): see
+    // quadray::quadric::conditioning, whose test measures the surface moving.
+    let far = tmp(&dir, "far.toml");
+    let quadric = |coefficients: &str, clip: &str| {
+        format!(
+            "[[quadric]]\nkind = \"general\"\ncoefficients = [{coefficients}]\nclip = {clip}\n\
+             material = \"m\"\n"
+        )
+    };
+    let far_ellipsoid = quadric(
+        "1, 1, 1e6, 0, 0, 0, -2000000.6666666667, 0, 0, 1000000666665.5677",
+        "{ min = [999999.1, -1.2, -0.0012], max = [1000001.5, 1.2, 0.0012] }",
+    );
+    std::fs::write(
+        &far,
+        base.replace(
+            "from = [0, -5, 1]\nto = [0, 0, 0]",
+            "from = [1000000.3, -5, 1]\nto = [1000000.3, 0, 0]",
+        ) + light
+            + &far_ellipsoid,
+    )
+    .unwrap();
+    // The same ellipsoid about its own centre, placed by a transform: nothing to say.
+    let placed = tmp(&dir, "placed.toml");
+    std::fs::write(
+        &placed,
+        std::fs::read_to_string(&far).unwrap().replace(
+            &far_ellipsoid,
+            &(quadric(
+                "1, 1, 1e6, 0, 0, 0, 0, 0, 0, -1.21",
+                "{ min = [-1.2, -1.2, -0.0012], max = [1.2, 1.2, 0.0012] }",
+            ) + "transform = { translate = [1000000.3333333333, 0, 0] }\n"),
+        ),
+    )
+    .unwrap();
+    let outside = tmp(&dir, "outside.toml");
+    std::fs::write(
+        &outside,
+        base.to_string()
+            + light
+            + &quadric(
+                "1, 1, 1, 0, 0, 0, 0, 0, 0, -1",
+                "{ min = [2, 2, 2], max = [3, 3, 3] }",
+            ),
+    )
+    .unwrap();
+    // An OBJ whose material has an image texture but whose faces have no texture coordinates.
+    image::RgbImage::from_pixel(2, 2, image::Rgb([200, 30, 30]))
+        .save(tmp(&dir, "red.png"))
+        .unwrap();
+    std::fs::write(
+        tmp(&dir, "red.mtl"),
+        "newmtl red\nKd 1 1 1\nmap_Kd red.png\n",
+    )
+    .unwrap();
+    let no_uv = tmp(&dir, "no-uv.obj");
+    std::fs::write(
+        &no_uv,
+        "mtllib red.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
+    )
+    .unwrap();
     for (file, expected) in [
         (&unlit, Some("has no lights")),
         (&away, Some("the camera sees none")),
         (&lit, None),
+        (&far, Some("cannot hold the surface")),
+        (&far, Some("translate = [1000000.3333")),
+        (&placed, None),
+        (
+            &outside,
+            Some("quadric[0] (ellipsoid) does not reach into its clip box"),
+        ),
+        (
+            &no_uv,
+            Some(
+                "material \"red\" has an image texture read through texture coordinates (set 0), which 1 mesh using it lacks",
+            ),
+        ),
     ] {
         let path = file.to_str().unwrap();
         let out = tmp(&dir, "o.png");
