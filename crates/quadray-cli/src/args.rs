@@ -113,24 +113,38 @@ pub struct RenderArgs {
 }
 
 /// Loads the scene at `path` with the command line's `--set` overrides (native scenes only),
-/// import options and camera choice.
+/// import options, camera choice and `--res`. The resolution is known while loading, so that a
+/// camera made to frame a scene that has none fits the image being rendered.
 pub fn load_scene_for(
     path: &Path,
     set: &[quadray_loader::Override],
     options: &quadray_loader::ImportOptions,
     camera: Option<&quadray_loader::Selector>,
+    res: Option<(u32, u32)>,
 ) -> anyhow::Result<quadray_loader::LoadedScene> {
-    if set.is_empty() {
-        return Ok(quadray_loader::load_any_with(path, options, camera)?);
-    }
     let native = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    crate::usage_ensure(
-        native,
-        "--set overrides values of .toml scenes; OBJ and glTF files have no such keys",
-    )?;
-    Ok(quadray_loader::load_scene_with(path, set)?)
+    if !native {
+        crate::usage_ensure(
+            set.is_empty(),
+            "--set overrides values of .toml scenes; OBJ and glTF files have no such keys",
+        )?;
+        let options = quadray_loader::ImportOptions {
+            resolution: res.map(|(w, h)| [w, h]),
+            ..options.clone()
+        };
+        return Ok(quadray_loader::load_any_with(path, &options, camera)?);
+    }
+    // In a native scene `--res` is the [render] resolution, as `--set` would write it.
+    let mut overrides = set.to_vec();
+    if let Some((w, h)) = res {
+        overrides.push(quadray_loader::Override {
+            key: "render.resolution".into(),
+            value: format!("[{w}, {h}]"),
+        });
+    }
+    Ok(quadray_loader::load_scene_with(path, &overrides)?)
 }
 
 /// Arguments of `quadray convert`.

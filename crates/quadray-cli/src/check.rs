@@ -8,7 +8,8 @@ use std::time::Instant;
 /// Runs the check subcommand: exit status 0 when the scene is valid, with a summary on stdout.
 pub fn run(args: &CheckArgs) -> Result<()> {
     let start = Instant::now();
-    let loaded = crate::args::load_scene_for(&args.scene, &args.set, &Default::default(), None)?;
+    let loaded =
+        crate::args::load_scene_for(&args.scene, &args.set, &Default::default(), None, None)?;
     log::info!(
         "loaded {} in {:.3} s",
         args.scene.display(),

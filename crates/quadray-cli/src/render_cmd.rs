@@ -20,8 +20,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene: args.gltf_scene.clone(),
         ..Default::default()
     };
-    let loaded =
-        crate::args::load_scene_for(&args.scene, &args.set, &options, args.camera.as_ref())?;
+    let loaded = crate::args::load_scene_for(
+        &args.scene,
+        &args.set,
+        &options,
+        args.camera.as_ref(),
+        args.res,
+    )?;
     log::info!(
         "loaded {} in {:.3} s",
         args.scene.display(),

@@ -254,3 +254,68 @@ fn refusals_exit_nonzero_and_name_the_problem() {
         assert!(!dir.path().join("d.png").exists());
     }
 }
+
+/// A model without a camera is framed to fill the image up to a 5% margin: for a cube the bounds
+/// are the model, so its silhouette reaches the margin on one axis and stays inside on the other.
+#[test]
+fn a_model_without_a_camera_fills_the_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = dir.path().join("cube.obj");
+    let mut obj = String::new();
+    for i in 0..8 {
+        let bit = |b: u32| if i & b == 0 { -1.0 } else { 1.0 };
+        obj += &format!("v {} {} {}\n", bit(1), bit(2) * 0.5, bit(4) * 2.0);
+    }
+    // Faces with outward winding, 1-based.
+    for f in [
+        "1 3 4 2", "5 6 8 7", "1 2 6 5", "3 7 8 4", "1 5 7 3", "2 4 8 6",
+    ] {
+        obj += &format!("f {f}\n");
+    }
+    std::fs::write(&cube, obj).unwrap();
+    for (w, h) in [(160u32, 120u32), (200, 80), (80, 160)] {
+        let out = dir.path().join("cube.png");
+        let res = format!("{w}x{h}");
+        let cube = cube.to_str().unwrap();
+        // --res is known while loading: the framing fits that image.
+        let o = quadray(&[
+            "render",
+            cube,
+            "-o",
+            out.to_str().unwrap(),
+            "--res",
+            &res,
+            "-q",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let (_, _, pixels) = png(&out);
+        let background = [pixels[0], pixels[1], pixels[2]];
+        let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                let i = 3 * (y * w + x) as usize;
+                if pixels[i..i + 3] != background {
+                    (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
+                }
+            }
+        }
+        let margins = [
+            x0 as f64 / w as f64,
+            y0 as f64 / h as f64,
+            1.0 - x1 as f64 / w as f64,
+            1.0 - y1 as f64 / h as f64,
+        ];
+        println!("{res}: margins {margins:?}");
+        assert!(margins.iter().all(|m| *m > 0.03), "{res}: {margins:?}");
+        assert!(margins.iter().any(|m| *m < 0.08), "{res}: {margins:?}");
+        // Centred: opposite margins equal to a pixel or two.
+        assert!(
+            (margins[0] - margins[2]).abs() <= 2.5 / w as f64,
+            "{res}: {margins:?}"
+        );
+        assert!(
+            (margins[1] - margins[3]).abs() <= 2.5 / h as f64,
+            "{res}: {margins:?}"
+        );
+    }
+}

@@ -54,6 +54,9 @@ pub struct ImportOptions {
     /// Skip the file's materials and textures (every surface gets material 0 of an empty list,
     /// which the caller replaces): for a native scene's material override.
     pub skip_materials: bool,
+    /// The output resolution when the caller already knows it (a command line's `--res`): it
+    /// replaces the file's own, and a camera made to frame the file fits its aspect.
+    pub resolution: Option<[u32; 2]>,
 }
 
 /// The rotation taking y-up file coordinates to quadray's z-up world: (x, y, z) → (x, −z, y).
@@ -437,18 +440,93 @@ pub fn default_key_light(camera: &Camera) -> Light {
     }
 }
 
-/// A perspective camera framing bounds `(lo, hi)`: from the front-right and above (a three-quarter
-/// view; the front of a y-up file faces −y after import), far enough for the bounding sphere to
-/// fit a 40° vertical field of view with a margin.
-pub fn framing_camera(bounds: Option<(DVec3, DVec3)>) -> Camera {
+/// Share of the image's width and height the framed bounds may fill: a 5% margin on each side.
+const FRAMING_FILL: f64 = 0.9;
+
+/// A perspective camera framing bounds `(lo, hi)` in an image of `aspect` (width / height): from
+/// the front-right and above (a three-quarter view; the front of a y-up file faces −y after
+/// import), with a 40° vertical field of view. The camera keeps that direction and moves as close
+/// as it can while the eight corners of the bounds stay inside the image with a 5% margin, its
+/// target shifted sideways so the projected box is centred (as "frame all" does in a modeller).
+pub fn framing_camera(bounds: Option<(DVec3, DVec3)>, aspect: f64) -> Camera {
     const VFOV: f64 = 40.0;
-    let (center, radius) = match bounds {
-        Some((lo, hi)) => ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-6)),
-        None => (DVec3::ZERO, 1.0),
+    const YAW: f64 = -65.0;
+    const PITCH: f64 = 25.0;
+    let Some((lo, hi)) = bounds.filter(|(lo, hi)| lo.is_finite() && hi.is_finite()) else {
+        return Camera::orbit(DVec3::ZERO, YAW, PITCH, 3.0, VFOV);
     };
-    // sin(half fov) = radius / distance puts the sphere's silhouette at the image's top and bottom.
-    let distance = radius / (VFOV * 0.5).to_radians().sin() * 1.1;
-    Camera::orbit(center, -65.0, 25.0, distance, VFOV)
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-6);
+    let unit = Camera::orbit(centre, YAW, PITCH, 1.0, VFOV);
+    let forward = (unit.to - unit.from).normalize();
+    let up = unit.up.normalize();
+    let right = forward.cross(up);
+    let half_height = (VFOV * 0.5).to_radians().tan() * FRAMING_FILL;
+    let half_width = half_height * aspect.clamp(1e-3, 1e3);
+    // Each corner as (depth offset along the view, x, y) relative to the centre: at distance d
+    // its depth is d + offset, and it is inside when |x − shift| ≤ half_width · depth (same in y).
+    let corners: Vec<DVec3> = (0..8)
+        .map(|i| {
+            let pick = |bit: usize, a: f64, b: f64| if i & bit == 0 { a } else { b };
+            let v = DVec3::new(
+                pick(1, lo.x, hi.x),
+                pick(2, lo.y, hi.y),
+                pick(4, lo.z, hi.z),
+            ) - centre;
+            DVec3::new(v.dot(forward), v.dot(right), v.dot(up))
+        })
+        .collect();
+    // The shifts that keep every corner inside, per axis, at distance d: an interval (maybe empty).
+    let shifts = |d: f64, axis: usize, half: f64| {
+        corners
+            .iter()
+            .fold((f64::NEG_INFINITY, f64::INFINITY), |(low, high), c| {
+                let depth = d + c.x;
+                (
+                    low.max(c[axis] - half * depth),
+                    high.min(c[axis] + half * depth),
+                )
+            })
+    };
+    let fits = |d: f64| {
+        let (x, y) = (shifts(d, 1, half_width), shifts(d, 2, half_height));
+        corners.iter().all(|c| d + c.x > 0.0) && x.0 <= x.1 && y.0 <= y.1
+    };
+    // Fitting is monotone in d: bisect between a distance that fits (the bounding sphere's, which
+    // any direction and shift 0 satisfies) and zero.
+    let mut far = radius / half_height.min(half_width).atan().sin() + radius;
+    let mut near = 0.0;
+    for _ in 0..64 {
+        let mid = 0.5 * (near + far);
+        if fits(mid) {
+            far = mid;
+        } else {
+            near = mid;
+        }
+    }
+    // Centre the projected box: the shift at which its projections reach equally far to both
+    // sides, (max + min) of (c − s) / depth = 0, decreasing in s; it lies in the shifts that fit.
+    let centred = |axis: usize, half: f64| {
+        let (mut low, mut high) = shifts(far, axis, half);
+        for _ in 0..64 {
+            let s = 0.5 * (low + high);
+            let (lowest, highest) =
+                corners
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
+                        let p = (c[axis] - s) / (far + c.x);
+                        (a.min(p), b.max(p))
+                    });
+            if lowest + highest > 0.0 {
+                low = s;
+            } else {
+                high = s;
+            }
+        }
+        0.5 * (low + high)
+    };
+    let target = centre + right * centred(1, half_width) + up * centred(2, half_height);
+    Camera::orbit(target, YAW, PITCH, far, VFOV)
 }
 
 #[cfg(test)]
@@ -486,17 +564,40 @@ mod tests {
     }
 
     #[test]
-    fn framing_camera_sees_the_whole_bounding_sphere() {
+    fn framing_camera_fits_the_bounds_to_the_image() {
         let lo = DVec3::new(-1.0, -2.0, 0.0);
         let hi = DVec3::new(3.0, 2.0, 1.0);
-        let cam = framing_camera(Some((lo, hi)));
-        let center = (lo + hi) * 0.5;
-        assert!((cam.to - center).length() < 1e-12);
-        let r = (hi - lo).length() * 0.5;
-        let half = (20f64).to_radians();
-        // The angle subtended by the bounding sphere is within the half field of view.
-        assert!((r / (cam.from - center).length()).asin() < half);
-        let key = default_key_light(&cam);
-        key.validate().unwrap();
+        for aspect in [0.5, 4.0 / 3.0, 16.0 / 9.0, 3.0] {
+            let cam = framing_camera(Some((lo, hi)), aspect);
+            let frame = cam.prepare(aspect).unwrap();
+            // Project the corners through the camera itself: every one inside the 5% margin, and
+            // the box touching the margin on at least one side (the closest such camera).
+            let (mut min, mut max) = (glam::DVec2::splat(1.0), glam::DVec2::splat(0.0));
+            for i in 0..8 {
+                let p = DVec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                );
+                let uv = frame.project(p).expect("in front of the camera");
+                min = min.min(uv);
+                max = max.max(uv);
+            }
+            assert!(min.min_element() > 0.05 - 1e-9 && max.max_element() < 0.95 + 1e-9);
+            let touches = [min.x, min.y, 1.0 - max.x, 1.0 - max.y]
+                .iter()
+                .any(|m| (m - 0.05).abs() < 1e-6);
+            assert!(touches, "aspect {aspect}: {min} .. {max}");
+            // Centred: equal margins on opposite sides.
+            assert!(
+                (min.x - (1.0 - max.x)).abs() < 1e-6,
+                "aspect {aspect}: {min} .. {max}"
+            );
+            assert!(
+                (min.y - (1.0 - max.y)).abs() < 1e-6,
+                "aspect {aspect}: {min} .. {max}"
+            );
+            default_key_light(&cam).validate().unwrap();
+        }
     }
 }

@@ -59,7 +59,7 @@ pub fn load_any_with(
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let imported = match ext.as_deref() {
+    let mut imported = match ext.as_deref() {
         Some("toml") => return load_scene(path),
         Some("obj") => obj::import_obj(path, options)?,
         Some("gltf" | "glb") => gltf::import_gltf(path, options)?,
@@ -73,5 +73,8 @@ pub fn load_any_with(
             ));
         }
     };
+    if let Some(resolution) = options.resolution {
+        imported.hints.resolution = Some(resolution);
+    }
     standalone::scene_from_import(imported, path, camera)
 }

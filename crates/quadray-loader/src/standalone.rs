@@ -41,6 +41,9 @@ pub fn scene_from_import(
     }
     let mut notes = imported.notes.clone();
     let mut settings = SceneSettings::default();
+    if let Some([w, h]) = imported.hints.resolution {
+        (settings.width, settings.height) = (w, h);
+    }
     let chosen = match camera {
         Some(sel) => Some(
             crate::import::select_camera(&imported.cameras, sel)
@@ -63,7 +66,9 @@ pub fn scene_from_import(
     };
     let camera = match chosen {
         Some(c) => {
-            if let Some(aspect) = c.aspect {
+            if let Some(aspect) = c.aspect
+                && imported.hints.resolution.is_none()
+            {
                 settings.height = ((settings.width as f64 / aspect).round() as u32)
                     .clamp(1, quadray::render::MAX_SIDE);
             }
@@ -71,10 +76,13 @@ pub fn scene_from_import(
         }
         None => {
             notes.push(
-                "no camera in the file: using one that frames its bounds from the front-right, above"
+                "no camera in the file: using one that fits its bounds to the image from the front-right, above"
                     .into(),
             );
-            framing_camera(imported.bounds())
+            framing_camera(
+                imported.bounds(),
+                settings.width as f64 / settings.height as f64,
+            )
         }
     };
     let mut lights = imported.lights;
@@ -86,9 +94,6 @@ pub fn scene_from_import(
         lights.push(default_key_light(&camera));
     }
     let hints = &imported.hints;
-    if let Some([w, h]) = hints.resolution {
-        (settings.width, settings.height) = (w, h);
-    }
     settings.spp = hints.spp.unwrap_or(settings.spp);
     settings.max_depth = hints.max_depth.unwrap_or(settings.max_depth);
     let background = hints

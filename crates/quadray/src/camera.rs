@@ -149,11 +149,48 @@ impl CameraFrame {
     pub fn origin(&self) -> DVec3 {
         self.origin
     }
+
+    /// The image position (u, v) at which `point` appears, the inverse of [`CameraFrame::ray`];
+    /// `None` for a point behind a perspective camera. Positions outside [0, 1]² are off the image.
+    pub fn project(&self, point: DVec3) -> Option<glam::DVec2> {
+        let d = point - self.origin;
+        let depth = if self.orthographic {
+            1.0
+        } else {
+            d.dot(self.forward)
+        };
+        if depth <= 0.0 {
+            return None;
+        }
+        // `right` and `up` carry the image's half extents: divide by their squared lengths.
+        let sx = d.dot(self.right) / (depth * self.right.length_squared());
+        let sy = d.dot(self.up) / (depth * self.up.length_squared());
+        Some(glam::DVec2::new((sx + 1.0) * 0.5, (1.0 - sy) * 0.5))
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn project_inverts_ray() {
+        let perspective = Camera::orbit(DVec3::new(1.0, 2.0, 3.0), 30.0, 20.0, 7.0, 50.0);
+        let orthographic = Camera {
+            projection: Projection::Orthographic { height: 3.0 },
+            ..perspective
+        };
+        for camera in [perspective, orthographic] {
+            let frame = camera.prepare(16.0 / 9.0).unwrap();
+            for (u, v) in [(0.5, 0.5), (0.1, 0.8), (1.2, -0.3)] {
+                let ray = frame.ray(u, v);
+                let p = frame.project(ray.origin + ray.dir * 4.0).unwrap();
+                assert!((p - glam::DVec2::new(u, v)).length() < 1e-12, "{p}");
+            }
+        }
+        let frame = perspective.prepare(1.0).unwrap();
+        assert_eq!(frame.project(perspective.from * 2.0 - perspective.to), None);
+    }
 
     #[test]
     fn centre_ray_looks_at_target() {

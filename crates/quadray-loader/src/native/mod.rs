@@ -350,6 +350,7 @@ impl Builder<'_> {
                     .transpose()?,
                 up: self.up_axis(&spec.up, &format!("{key}.up"))?,
                 skip_materials: false,
+                resolution: None,
             };
             let path = include::resolve(self.path, spec.path.get_ref());
             let imported = include::import_file(&path, &options)
@@ -397,7 +398,10 @@ impl Builder<'_> {
                 }
                 None => {
                     notes.push("no [camera] and no included camera: using one that frames the scene's bounds".into());
-                    framing_camera(geometry_bounds(&geometry))
+                    framing_camera(
+                        geometry_bounds(&geometry),
+                        settings.width as f64 / settings.height as f64,
+                    )
                 }
             },
         };
