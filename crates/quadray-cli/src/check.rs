@@ -23,15 +23,13 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     let scene = Scene::new(loaded.description)
         .with_context(|| format!("invalid scene {}", args.scene.display()))?;
     log_built(&scene, built_at);
-    for warning in crate::warnings::scene_warnings(
+    crate::warnings::print(
         &args.scene,
         &scene,
         &loaded.material_names,
         settings.width,
         settings.height,
-    ) {
-        eprintln!("warning: {warning}");
-    }
+    );
     println!(
         "{}: ok: {}; {}x{}, {} spp, max depth {}",
         args.scene.display(),

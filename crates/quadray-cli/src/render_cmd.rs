@@ -76,15 +76,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     crate::check::log_built(&scene, loaded_at);
     let built_at = Instant::now();
     if !args.quiet {
-        for warning in crate::warnings::scene_warnings(
+        crate::warnings::print(
             &args.scene,
             &scene,
             &loaded.material_names,
             settings.width,
             settings.height,
-        ) {
-            eprintln!("warning: {warning}");
-        }
+        );
     }
 
     let bar = RowBar::new(settings.window().height(), args.quiet);

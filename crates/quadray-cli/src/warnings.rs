@@ -10,6 +10,13 @@ use std::path::Path;
 /// millisecond and miss only objects smaller than a grid cell.
 const PROBE: (u32, u32) = (32, 18);
 
+/// Prints [`scene_warnings`] on stderr, each after `warning: `.
+pub fn print(path: &Path, scene: &Scene, material_names: &[String], width: u32, height: u32) {
+    for warning in scene_warnings(path, scene, material_names, width, height) {
+        eprintln!("warning: {warning}");
+    }
+}
+
 /// What looks wrong about `scene` (loaded from `path` with materials named `material_names`, to
 /// be rendered at `width` × `height`), one line each, ready to print after `warning: `.
 pub fn scene_warnings(
