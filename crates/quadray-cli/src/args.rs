@@ -46,6 +46,8 @@ pub enum Command {
     Gallery(crate::gallery::GalleryArgs),
     /// Compare two images (PNG or EXR): RMSE, largest difference, share over a threshold, FLIP.
     Compare(crate::compare_cmd::CompareArgs),
+    /// Assemble the pieces of `render --tile I/N` into one image, checking they belong together.
+    Merge(crate::merge_cmd::MergeArgs),
     /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
     Completions(crate::shell::CompletionsArgs),
     /// Print the man page (roff), e.g. `quadray man > quadray.1`.
@@ -110,6 +112,10 @@ pub struct RenderArgs {
     /// full frame (data window inside the display window).
     #[arg(long, value_name = "X0,X1,Y0,Y1", value_parser = parse_crop)]
     pub crop: Option<[f64; 4]>,
+    /// Render piece I of N of the frame (I from 0) into an .exr, for `quadray merge`: one task of
+    /// a job array on a render farm (docs/distributed.md).
+    #[arg(long, value_name = "I/N", value_parser = crate::tiles::parse_piece, conflicts_with = "crop")]
+    pub tile: Option<crate::tiles::Piece>,
 }
 
 /// Loads the scene at `path` with the command line's `--set` overrides (native scenes only),

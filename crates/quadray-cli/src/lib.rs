@@ -10,17 +10,20 @@ mod check;
 pub mod compare;
 pub mod compare_cmd;
 mod convert;
+pub mod exr_file;
 pub mod gallery;
 mod label;
 pub mod logging;
+mod merge_cmd;
 pub mod output;
 pub mod passes;
 mod progress;
 pub mod quadric_cmd;
-mod render_cmd;
+pub mod render_cmd;
 pub mod shell;
 pub mod showcase;
 pub mod snippet;
+pub mod tiles;
 mod warnings;
 
 use clap::Parser;
@@ -93,6 +96,7 @@ pub fn run(cli: args::Cli) -> anyhow::Result<()> {
         args::Command::Quadric(a) => quadric_cmd::run(&a),
         args::Command::Gallery(a) => gallery::run(&a),
         args::Command::Compare(a) => compare_cmd::run(&a),
+        args::Command::Merge(a) => merge_cmd::run(&a),
         args::Command::Completions(a) => shell::completions(&a),
         args::Command::Man => shell::man(),
     }

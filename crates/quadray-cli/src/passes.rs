@@ -1,10 +1,10 @@
-//! Render passes on output: the beauty image and AOVs as one Blender-style EXR (dotted channel
-//! names in a single part, which compositors key on), or one pass at a time as an 8-bit PNG.
+//! Render passes on output: which passes a command line asks for, their Blender-style EXR channel
+//! names (dotted names in one part, which compositors key on; [`crate::exr_file`] writes them),
+//! and one pass at a time as an 8-bit PNG.
 
-use crate::output::{write_atomically, write_rgb8_png};
-use anyhow::{Result, anyhow, bail};
-use exr::prelude::*;
-use quadray::{AovSelection, Aovs, Film, PixelWindow, film::encode_srgb8};
+use crate::output::write_rgb8_png;
+use anyhow::{Result, anyhow};
+use quadray::{AovSelection, Aovs, Film, film::encode_srgb8};
 use std::ops::RangeInclusive;
 use std::path::Path;
 
@@ -60,6 +60,25 @@ pub fn selection_of(passes: &[Pass]) -> AovSelection {
         })
 }
 
+/// The passes `selection` holds, by their command-line names, comma-separated (`none` if none).
+pub fn names_of(selection: AovSelection) -> String {
+    let names: Vec<&str> = [
+        (selection.depth, "depth"),
+        (selection.normal, "normal"),
+        (selection.albedo, "albedo"),
+        (selection.object_id, "object-id"),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .map(|(_, name)| *name)
+    .collect();
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(",")
+    }
+}
+
 /// Channel names of the beauty image in a file with passes (Blender's view-layer naming).
 pub const COMBINED: [&str; 4] = [
     "ViewLayer.Combined.R",
@@ -83,120 +102,6 @@ pub const ALBEDO: [&str; 3] = [
 ];
 /// Channel name of the object-index pass.
 pub const INDEX_OB: &str = "ViewLayer.IndexOB.X";
-
-/// Writes the beauty image (half floats when `half`) and the passes `aovs` holds into one EXR,
-/// atomically. Without passes the channels are plain `R, G, B, A`, as any viewer expects; with
-/// passes they are Blender's `ViewLayer.*` names. Depth, normals, albedo and ids are always f32:
-/// half's 11-bit mantissa visibly steps depth. `frame` places the pixels in the full image: its
-/// size is the file's display window and its window the data window, as OpenEXR stores a crop.
-pub fn write_exr(
-    film: &Film,
-    aovs: Option<&Aovs>,
-    half: bool,
-    frame: &ExrFrame,
-    path: &Path,
-) -> Result<()> {
-    let (w, h) = (film.width() as usize, film.height() as usize);
-    if w == 0 || h == 0 {
-        bail!("cannot write an empty image");
-    }
-    if (frame.window.width(), frame.window.height()) != (film.width(), film.height())
-        || !frame.window.fits(frame.width, frame.height)
-    {
-        bail!("the image does not fit its place in the frame");
-    }
-    if let Some(a) = aovs
-        && (a.width() as usize, a.height() as usize) != (w, h)
-    {
-        bail!("passes and image differ in size");
-    }
-    let px = film.pixels();
-    let beauty = |c: usize| -> FlatSamples {
-        if c == 3 {
-            // The background is part of the image (a colour, not a hole): fully opaque.
-            return if half {
-                FlatSamples::F16(vec![f16::ONE; w * h])
-            } else {
-                FlatSamples::F32(vec![1.0; w * h])
-            };
-        }
-        if half {
-            FlatSamples::F16(px.iter().map(|p| f16::from_f32(p[c])).collect())
-        } else {
-            FlatSamples::F32(px.iter().map(|p| p[c]).collect())
-        }
-    };
-    let beauty_names: [&str; 4] = if aovs.is_some() {
-        COMBINED
-    } else {
-        ["R", "G", "B", "A"]
-    };
-    let mut channels: Vec<AnyChannel<FlatSamples>> = (0..4)
-        .map(|c| AnyChannel::new(beauty_names[c], beauty(c)))
-        .collect();
-    if let Some(a) = aovs {
-        let sel = a.selection();
-        let samples = a.samples();
-        let f32s = |f: &dyn Fn(&quadray::AovSample) -> f32| {
-            FlatSamples::F32(samples.iter().map(f).collect())
-        };
-        if sel.depth {
-            channels.push(AnyChannel::new(DEPTH, f32s(&|s| s.depth)));
-        }
-        if sel.normal {
-            for (c, name) in NORMAL.iter().enumerate() {
-                channels.push(AnyChannel::new(*name, f32s(&|s| s.normal[c])));
-            }
-        }
-        if sel.albedo {
-            for (c, name) in ALBEDO.iter().enumerate() {
-                channels.push(AnyChannel::new(*name, f32s(&|s| s.albedo[c])));
-            }
-        }
-        if sel.object_id {
-            // Blender stores the index as a float; ids below 2^24 are exact.
-            channels.push(AnyChannel::new(INDEX_OB, f32s(&|s| s.object_id as f32)));
-        }
-    }
-    let attributes = LayerAttributes {
-        layer_position: Vec2(frame.window.x0 as i32, frame.window.y0 as i32),
-        ..LayerAttributes::default()
-    };
-    let layer = Layer::new(
-        Vec2(w, h),
-        attributes,
-        Encoding::FAST_LOSSLESS,
-        AnyChannels::sort(SmallVec::from_vec(channels)),
-    );
-    let display = IntegerBounds::from_dimensions((frame.width as usize, frame.height as usize));
-    let image = Image::new(ImageAttributes::new(display), layer);
-    write_atomically(path, |tmp| {
-        image.write().to_file(tmp)?;
-        Ok(())
-    })
-}
-
-/// Where an EXR's pixels lie in the full image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ExrFrame {
-    /// Full image width (the display window).
-    pub width: u32,
-    /// Full image height.
-    pub height: u32,
-    /// The rendered pixels (the data window).
-    pub window: PixelWindow,
-}
-
-impl ExrFrame {
-    /// The frame of a render with `settings`: its full size and its window.
-    pub fn of(settings: &quadray::RenderSettings) -> ExrFrame {
-        ExrFrame {
-            width: settings.width,
-            height: settings.height,
-            window: settings.window(),
-        }
-    }
-}
 
 /// Share of hit depths the depth PNG spans when only planes are in view: the nearest hit to this
 /// quantile (the rest run to the horizon and clamp).

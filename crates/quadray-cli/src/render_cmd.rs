@@ -1,16 +1,103 @@
 //! `quadray render`: load, validate, render in parallel, write, report.
 
 use crate::args::RenderArgs;
+use crate::exr_file::{ExrFrame, ExrPart, write_exr, write_exr_parts};
 use crate::output::{Format, check_writable, write_film};
-use crate::passes::{ExrFrame, Pass, selection_of, write_exr, write_png_pass};
+use crate::passes::{Pass, selection_of, write_png_pass};
 use crate::progress::RowBar;
+use crate::tiles::{Piece, piece_bands};
 use crate::{StatusError, usage_ensure};
 use anyhow::{Context, Result};
-use quadray::{PixelWindow, Scene};
-use std::time::Instant;
+use quadray::{AovSelection, Aovs, PixelWindow, RayCounts, RenderSettings, Rendered, Scene};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// EXR attribute naming the scene a piece was rendered from (a hash of its inputs).
+pub const PIECE_SCENE: &str = "quadray.scene";
+/// EXR attribute with the render settings of a piece, which every piece of a frame shares.
+pub const PIECE_SETTINGS: &str = "quadray.settings";
+/// EXR attribute `I/N`: which piece of how many.
+pub const PIECE_INDEX: &str = "quadray.piece";
+
+/// Everything decided before rendering.
+struct Job {
+    settings: RenderSettings,
+    output: PathBuf,
+    format: Format,
+    selection: AovSelection,
+    loaded_in: Duration,
+}
 
 /// Runs the render subcommand.
 pub fn run(args: &RenderArgs) -> Result<()> {
+    let (loaded, job) = prepare(args)?;
+    let settings = job.settings;
+    let pool = crate::args::thread_pool(args.threads)?;
+    let build_start = Instant::now();
+    let scene = pool
+        .install(|| Scene::new(loaded.description))
+        .with_context(|| format!("invalid scene {}", args.scene.display()))?;
+    crate::check::log_built(&scene, build_start);
+    let built_in = build_start.elapsed();
+    if !args.quiet {
+        let names = &loaded.material_names;
+        crate::warnings::print(&args.scene, &scene, names, settings.width, settings.height);
+    }
+    // A piece renders its bands of rows; anything else the settings' window.
+    let windows = match args.tile {
+        Some(piece) => piece_bands(piece, settings.width, settings.height),
+        None => vec![settings.window()],
+    };
+    let render_start = Instant::now();
+    let cpu_start = cpu_time::ProcessTime::try_now().ok();
+    let parts = render_windows(args, &pool, &scene, &settings, &windows, job.selection)?;
+    let render_time = render_start.elapsed();
+    let render_cpu = cpu_start.and_then(|t| t.try_elapsed().ok());
+    let rows: u32 = windows.iter().map(|w| w.height()).sum();
+    log::info!(
+        "rendered {rows} rows of {} spp on {} threads in {:.3} s",
+        settings.spp,
+        pool.current_num_threads(),
+        render_time.as_secs_f64()
+    );
+    let write_start = Instant::now();
+    write_output(args, &job, &scene, &parts)?;
+    log::info!(
+        "wrote {} in {:.3} s",
+        job.output.display(),
+        write_start.elapsed().as_secs_f64()
+    );
+    if !args.quiet {
+        if args.stats {
+            let cpu =
+                render_cpu.map_or("unknown".to_string(), |d| format!("{:.3}", d.as_secs_f64()));
+            eprintln!(
+                "load {:.3} s, BVH build {:.3} s ({} bounded primitives, {:.1} MB), traversal {}, \
+                 threads {}, render CPU {cpu} s",
+                job.loaded_in.as_secs_f64(),
+                built_in.as_secs_f64(),
+                scene.accel().bounded_count(),
+                scene.accel().memory_bytes() as f64 / 1e6,
+                scene.accel().traversal_path(),
+                pool.current_num_threads(),
+            );
+            eprintln!("{}", crate::check::structure_line(&scene));
+        }
+        let mut counts = RayCounts::default();
+        for (rendered, _) in &parts {
+            counts += rendered.counts;
+        }
+        eprintln!(
+            "{}",
+            stats_line(args, &settings, rows, counts, render_time, &job.output)
+        );
+    }
+    Ok(())
+}
+
+/// Loads the scene and settles the settings, the output and the passes, refusing what cannot
+/// work before any rendering.
+fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
     // An output given on the command line is checked before the (possibly long) load.
     if let Some(output) = &args.output {
         pass_selection(args, check_writable(output)?)?;
@@ -27,10 +114,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         args.camera.as_ref(),
         args.res,
     )?;
+    let loaded_in = start.elapsed();
     log::info!(
         "loaded {} in {:.3} s",
         args.scene.display(),
-        start.elapsed().as_secs_f64()
+        loaded_in.as_secs_f64()
     );
     // -o, else the scene's [output], else the scene's name with .png beside it.
     let output = args
@@ -40,8 +128,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .unwrap_or_else(|| crate::args::default_output(&args.scene));
     let format = check_writable(&output)?;
     let selection = pass_selection(args, format)?;
-    for note in &loaded.notes {
-        if !args.quiet {
+    if !args.quiet {
+        for note in &loaded.notes {
             eprintln!("{}", crate::warnings::note_line(note));
         }
     }
@@ -66,51 +154,98 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             })?;
         settings.crop = Some(window);
     }
-    settings.validate()?;
-    let loaded_at = Instant::now();
-
-    let pool = crate::args::thread_pool(args.threads)?;
-    let scene = pool
-        .install(|| Scene::new(loaded.description))
-        .with_context(|| format!("invalid scene {}", args.scene.display()))?;
-    crate::check::log_built(&scene, loaded_at);
-    let built_at = Instant::now();
-    if !args.quiet {
-        crate::warnings::print(
-            &args.scene,
-            &scene,
-            &loaded.material_names,
-            settings.width,
-            settings.height,
-        );
+    if let Some(piece) = args.tile {
+        check_piece(piece, format, &settings)?;
     }
+    settings.validate()?;
+    let job = Job {
+        settings,
+        output,
+        format,
+        selection,
+        loaded_in,
+    };
+    Ok((loaded, job))
+}
 
-    let bar = RowBar::new(settings.window().height(), args.quiet);
-    let cpu_start = cpu_time::ProcessTime::try_now().ok();
-    let (rendered, aovs) =
-        pool.install(|| quadray::render_with_aovs(&scene, &settings, selection, &bar))?;
+/// Refuses a `--tile` that cannot make a piece: a PNG output, or more pieces than rows.
+fn check_piece(piece: Piece, format: Format, settings: &RenderSettings) -> Result<()> {
+    usage_ensure(
+        format == Format::Exr,
+        "--tile writes a piece as an .exr file (`quadray merge` assembles the pieces into a PNG or EXR)",
+    )?;
+    if piece.count > settings.height {
+        return Err(StatusError::usage(format!(
+            "--tile {piece}: the {}-row image cannot be cut into {} pieces",
+            settings.height, piece.count
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+/// Renders each window of the frame in turn (each in parallel over its rows).
+fn render_windows(
+    args: &RenderArgs,
+    pool: &rayon::ThreadPool,
+    scene: &Scene,
+    settings: &RenderSettings,
+    windows: &[PixelWindow],
+    selection: AovSelection,
+) -> Result<Vec<(Rendered, Option<Aovs>)>> {
+    let bar = RowBar::new(windows.iter().map(|w| w.height()).sum(), args.quiet);
+    let mut parts = Vec::with_capacity(windows.len());
+    for window in windows {
+        let settings = RenderSettings {
+            crop: Some(*window),
+            ..*settings
+        };
+        parts.push(pool.install(|| quadray::render_with_aovs(scene, &settings, selection, &bar))?);
+    }
     bar.finish();
-    let render_time = built_at.elapsed();
-    let render_cpu = cpu_start.and_then(|t| t.try_elapsed().ok());
-    log::info!(
-        "rendered {} rows of {} spp on {} threads in {:.3} s",
-        settings.window().height(),
-        settings.spp,
-        pool.current_num_threads(),
-        render_time.as_secs_f64()
-    );
-    let write_start = Instant::now();
-    match format {
+    Ok(parts)
+}
+
+/// Writes the rendered windows: one piece's bands, or one image (EXR, PNG, or a PNG pass).
+fn write_output(
+    args: &RenderArgs,
+    job: &Job,
+    scene: &Scene,
+    parts: &[(Rendered, Option<Aovs>)],
+) -> Result<()> {
+    let (settings, output) = (&job.settings, &job.output);
+    if let Some(piece) = args.tile {
+        let exr_parts: Vec<ExrPart> = parts
+            .iter()
+            .map(|(r, a)| ExrPart {
+                film: &r.film,
+                aovs: a.as_ref(),
+                window: r.window,
+            })
+            .collect();
+        let attributes = [
+            (PIECE_SCENE, scene_hash(args)?),
+            (
+                PIECE_SETTINGS,
+                settings_text(settings, job.selection, args.half),
+            ),
+            (PIECE_INDEX, piece.to_string()),
+        ];
+        let size = (settings.width, settings.height);
+        return write_exr_parts(&exr_parts, args.half, size, &attributes, output);
+    }
+    let (rendered, aovs) = &parts[0];
+    match job.format {
         Format::Exr => write_exr(
             &rendered.film,
             aovs.as_ref(),
             args.half,
-            &ExrFrame::of(&settings),
-            &output,
-        )?,
+            &ExrFrame::of(settings),
+            output,
+        ),
         Format::Png if args.pass != Pass::Combined => {
             let planes = scene.geometry().plane_object_indices();
-            write_png_pass(args.pass, &rendered.film, aovs.as_ref(), &planes, &output)?;
+            write_png_pass(args.pass, &rendered.film, aovs.as_ref(), &planes, output)?;
             if args.pass == Pass::Depth
                 && !args.quiet
                 && let Some((near, far)) = aovs
@@ -123,58 +258,77 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                      misses black"
                 );
             }
+            Ok(())
         }
-        _ => write_film(&rendered.film, &output)?,
+        Format::Png => write_film(&rendered.film, output),
     }
-    log::info!(
-        "wrote {} in {:.3} s",
-        output.display(),
-        write_start.elapsed().as_secs_f64()
-    );
+}
 
-    if !args.quiet {
-        let c = rendered.counts;
-        let secs = render_time.as_secs_f64();
-        if args.stats {
-            let cpu =
-                render_cpu.map_or("unknown".to_string(), |d| format!("{:.3}", d.as_secs_f64()));
-            eprintln!(
-                "load {:.3} s, BVH build {:.3} s ({} bounded primitives, {:.1} MB), traversal {}, \
-                 threads {}, render CPU {cpu} s",
-                (loaded_at - start).as_secs_f64(),
-                (built_at - loaded_at).as_secs_f64(),
-                scene.accel().bounded_count(),
-                scene.accel().memory_bytes() as f64 / 1e6,
-                scene.accel().traversal_path(),
-                pool.current_num_threads(),
-            );
-            eprintln!("{}", crate::check::structure_line(&scene));
-        }
-        let window = settings.window();
-        let size = match settings.crop {
-            Some(_) => format!(
-                "{}x{} window at ({}, {}) of {}x{}",
-                window.width(),
-                window.height(),
-                window.x0,
-                window.y0,
-                settings.width,
-                settings.height
-            ),
-            None => format!("{}x{}", settings.width, settings.height),
-        };
-        eprintln!(
-            "{size}, {} spp: {} camera + {} shadow + {} reflection rays in {:.3} s ({:.2} Mrays/s) -> {}",
-            settings.spp,
-            c.camera,
-            c.shadow,
-            c.reflection,
-            secs,
-            c.total() as f64 / secs.max(1e-9) / 1e6,
-            output.display()
-        );
-    }
-    Ok(())
+/// Identifies what a piece was rendered from: the scene file's bytes and every command-line
+/// choice that changes the scene (overrides, the glTF scene, the camera).
+fn scene_hash(args: &RenderArgs) -> Result<String> {
+    let bytes = std::fs::read(&args.scene)
+        .with_context(|| format!("reading {} again to identify it", args.scene.display()))?;
+    let choices = format!(
+        "{:?} {:?} {:?}",
+        args.set.iter().map(ToString::to_string).collect::<Vec<_>>(),
+        args.gltf_scene,
+        args.camera
+    );
+    Ok(crate::tiles::fnv1a_hex(&[&bytes, choices.as_bytes()]))
+}
+
+/// The settings every piece of one frame must share, as text (quadray's version included: two
+/// versions may render a pixel differently).
+fn settings_text(settings: &RenderSettings, selection: AovSelection, half: bool) -> String {
+    format!(
+        "quadray {}; {}x{}; spp {}; max depth {}; seed {}; passes {}; half {half}",
+        env!("CARGO_PKG_VERSION"),
+        settings.width,
+        settings.height,
+        settings.spp,
+        settings.whitted.max_depth,
+        settings.seed,
+        crate::passes::names_of(selection),
+    )
+}
+
+/// The final line: what was rendered, the rays by kind, the time and the output.
+fn stats_line(
+    args: &RenderArgs,
+    settings: &RenderSettings,
+    rows: u32,
+    c: RayCounts,
+    time: Duration,
+    output: &std::path::Path,
+) -> String {
+    let window = settings.window();
+    let size = match (args.tile, settings.crop) {
+        (Some(piece), _) => format!(
+            "piece {piece} ({rows} of {} rows) of {}x{}",
+            settings.height, settings.width, settings.height
+        ),
+        (None, Some(_)) => format!(
+            "{}x{} window at ({}, {}) of {}x{}",
+            window.width(),
+            window.height(),
+            window.x0,
+            window.y0,
+            settings.width,
+            settings.height
+        ),
+        (None, None) => format!("{}x{}", settings.width, settings.height),
+    };
+    let secs = time.as_secs_f64();
+    format!(
+        "{size}, {} spp: {} camera + {} shadow + {} reflection rays in {secs:.3} s ({:.2} Mrays/s) -> {}",
+        settings.spp,
+        c.camera,
+        c.shadow,
+        c.reflection,
+        c.total() as f64 / secs.max(1e-9) / 1e6,
+        output.display()
+    )
 }
 
 /// The passes to compute, checked against the output format before any work is done.

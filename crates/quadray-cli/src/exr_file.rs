@@ -1,0 +1,328 @@
+//! Renders as OpenEXR files: the beauty image and its passes in one part (a whole frame or a crop
+//! placed in it), several rectangles of one frame as the parts of a multi-part file (a piece of a
+//! distributed render), and reading such files back into a film and passes.
+
+use crate::output::write_atomically;
+use crate::passes::{ALBEDO, COMBINED, DEPTH, INDEX_OB, NORMAL};
+use anyhow::{Context, Result, bail};
+use exr::prelude::*;
+use quadray::{AovSample, AovSelection, Aovs, Film, PixelWindow};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Channel names of the beauty image in a file without passes.
+const RGBA: [&str; 4] = ["R", "G", "B", "A"];
+
+/// Where an EXR's pixels lie in the full image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ExrFrame {
+    /// Full image width (the display window).
+    pub width: u32,
+    /// Full image height.
+    pub height: u32,
+    /// The rendered pixels (the data window).
+    pub window: PixelWindow,
+}
+
+impl ExrFrame {
+    /// The frame of a render with `settings`: its full size and its window.
+    pub fn of(settings: &quadray::RenderSettings) -> ExrFrame {
+        ExrFrame {
+            width: settings.width,
+            height: settings.height,
+            window: settings.window(),
+        }
+    }
+}
+
+/// One rectangle of a render: its pixels, its passes, and where it lies in the frame.
+#[derive(Clone, Copy, Debug)]
+pub struct ExrPart<'a> {
+    /// The beauty image of the rectangle.
+    pub film: &'a Film,
+    /// Its passes, if any were rendered.
+    pub aovs: Option<&'a Aovs>,
+    /// Its place in the full frame.
+    pub window: PixelWindow,
+}
+
+/// Writes the beauty image (half floats when `half`) and the passes `aovs` holds into one EXR,
+/// atomically. Without passes the channels are plain `R, G, B, A`, as any viewer expects; with
+/// passes they are Blender's `ViewLayer.*` names. Depth, normals, albedo and ids are always f32:
+/// half's 11-bit mantissa visibly steps depth. `frame` places the pixels in the full image: its
+/// size is the file's display window and its window the data window, as OpenEXR stores a crop.
+pub fn write_exr(
+    film: &Film,
+    aovs: Option<&Aovs>,
+    half: bool,
+    frame: &ExrFrame,
+    path: &Path,
+) -> Result<()> {
+    let part = ExrPart {
+        film,
+        aovs,
+        window: frame.window,
+    };
+    let layer = layer(&part, half, frame, None)?;
+    let image = Image::new(display_attributes(frame, &[]), layer);
+    write_atomically(path, |tmp| {
+        image.write().to_file(tmp)?;
+        Ok(())
+    })
+}
+
+/// Writes rectangles of one `width` × `height` frame as the parts of one multi-part EXR (named
+/// `rows Y0-Y1`), atomically, with `attributes` as text attributes of every part.
+pub fn write_exr_parts(
+    parts: &[ExrPart<'_>],
+    half: bool,
+    (width, height): (u32, u32),
+    attributes: &[(&str, String)],
+    path: &Path,
+) -> Result<()> {
+    let Some(first) = parts.first() else {
+        bail!("cannot write a file without pixels");
+    };
+    let frame = |part: &ExrPart| ExrFrame {
+        width,
+        height,
+        window: part.window,
+    };
+    let name = |part: &ExrPart| format!("rows {}-{}", part.window.y0, part.window.y1);
+    let mut layers = SmallVec::new();
+    for part in parts {
+        layers.push(layer(part, half, &frame(part), Some(&name(part)))?);
+    }
+    let image = Image::new(display_attributes(&frame(first), attributes), layers);
+    write_atomically(path, |tmp| {
+        image.write().to_file(tmp)?;
+        Ok(())
+    })
+}
+
+/// The attributes every part shares: the display window and `attributes` as text.
+fn display_attributes(frame: &ExrFrame, attributes: &[(&str, String)]) -> ImageAttributes {
+    let display = IntegerBounds::from_dimensions((frame.width as usize, frame.height as usize));
+    let mut shared = ImageAttributes::new(display);
+    for (key, value) in attributes {
+        shared.other.insert(
+            Text::new_or_panic(*key),
+            AttributeValue::Text(Text::new_or_panic(value)),
+        );
+    }
+    shared
+}
+
+/// The channels of one rectangle, placed at its window, optionally named (multi-part files).
+fn layer(
+    part: &ExrPart<'_>,
+    half: bool,
+    frame: &ExrFrame,
+    name: Option<&str>,
+) -> Result<Layer<AnyChannels<FlatSamples>>> {
+    let (film, aovs) = (part.film, part.aovs);
+    let (w, h) = (film.width() as usize, film.height() as usize);
+    if w == 0 || h == 0 {
+        bail!("cannot write an empty image");
+    }
+    if (frame.window.width(), frame.window.height()) != (film.width(), film.height())
+        || !frame.window.fits(frame.width, frame.height)
+    {
+        bail!("the image does not fit its place in the frame");
+    }
+    if let Some(a) = aovs
+        && (a.width() as usize, a.height() as usize) != (w, h)
+    {
+        bail!("passes and image differ in size");
+    }
+    let px = film.pixels();
+    let beauty = |c: usize| -> FlatSamples {
+        if c == 3 {
+            // The background is part of the image (a colour, not a hole): fully opaque.
+            return if half {
+                FlatSamples::F16(vec![f16::ONE; w * h])
+            } else {
+                FlatSamples::F32(vec![1.0; w * h])
+            };
+        }
+        if half {
+            FlatSamples::F16(px.iter().map(|p| f16::from_f32(p[c])).collect())
+        } else {
+            FlatSamples::F32(px.iter().map(|p| p[c]).collect())
+        }
+    };
+    let beauty_names = if aovs.is_some() { COMBINED } else { RGBA };
+    let mut channels: Vec<AnyChannel<FlatSamples>> = (0..4)
+        .map(|c| AnyChannel::new(beauty_names[c], beauty(c)))
+        .collect();
+    if let Some(a) = aovs {
+        let sel = a.selection();
+        let samples = a.samples();
+        let f32s =
+            |f: &dyn Fn(&AovSample) -> f32| FlatSamples::F32(samples.iter().map(f).collect());
+        if sel.depth {
+            channels.push(AnyChannel::new(DEPTH, f32s(&|s| s.depth)));
+        }
+        if sel.normal {
+            for (c, name) in NORMAL.iter().enumerate() {
+                channels.push(AnyChannel::new(*name, f32s(&|s| s.normal[c])));
+            }
+        }
+        if sel.albedo {
+            for (c, name) in ALBEDO.iter().enumerate() {
+                channels.push(AnyChannel::new(*name, f32s(&|s| s.albedo[c])));
+            }
+        }
+        if sel.object_id {
+            // Blender stores the index as a float; ids below 2^24 are exact.
+            channels.push(AnyChannel::new(INDEX_OB, f32s(&|s| s.object_id as f32)));
+        }
+    }
+    let attributes = LayerAttributes {
+        layer_name: name.map(Text::new_or_panic),
+        layer_position: Vec2(frame.window.x0 as i32, frame.window.y0 as i32),
+        ..LayerAttributes::default()
+    };
+    Ok(Layer::new(
+        Vec2(w, h),
+        attributes,
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(SmallVec::from_vec(channels)),
+    ))
+}
+
+/// An EXR file read back: its full frame, its text attributes, and each part's rectangle with
+/// its channels by name.
+#[derive(Clone, Debug)]
+pub struct ReadExr {
+    /// Width and height of the display window.
+    pub size: (u32, u32),
+    /// Text attributes shared by the parts.
+    pub attributes: HashMap<String, String>,
+    /// Every part: its place in the frame and its channels, sorted by name.
+    pub parts: Vec<(PixelWindow, Vec<(String, FlatSamples)>)>,
+}
+
+/// Reads every part of the EXR at `path` (all channels, full resolution).
+pub fn read_exr(path: &Path) -> Result<ReadExr> {
+    let image = exr::prelude::read_all_flat_layers_from_file(path)
+        .with_context(|| format!("reading {}", path.display()))?;
+    let display = image.attributes.display_window;
+    if display.position != Vec2(0, 0) {
+        bail!(
+            "{}: the display window does not start at (0, 0)",
+            path.display()
+        );
+    }
+    let size = (display.size.0 as u32, display.size.1 as u32);
+    let text = |v: &AttributeValue| match v {
+        AttributeValue::Text(t) => Some(t.to_string()),
+        _ => None,
+    };
+    // Custom attributes written as shared come back as the first part's own.
+    let own = image
+        .layer_data
+        .iter()
+        .flat_map(|l| l.attributes.other.iter());
+    let attributes = image
+        .attributes
+        .other
+        .iter()
+        .chain(own)
+        .filter_map(|(k, v)| Some((k.to_string(), text(v)?)))
+        .collect();
+    let mut parts = Vec::new();
+    for layer in image.layer_data.iter() {
+        let Vec2(x0, y0) = layer.attributes.layer_position;
+        let (x0, y0) = (u32::try_from(x0)?, u32::try_from(y0)?);
+        let window = PixelWindow {
+            x0,
+            y0,
+            x1: x0 + layer.size.0 as u32,
+            y1: y0 + layer.size.1 as u32,
+        };
+        if !window.fits(size.0, size.1) {
+            bail!("{}: a part lies outside the frame", path.display());
+        }
+        let channels = layer
+            .channel_data
+            .list
+            .iter()
+            .map(|c| (c.name.to_string(), c.sample_data.clone()))
+            .collect();
+        parts.push((window, channels));
+    }
+    Ok(ReadExr {
+        size,
+        attributes,
+        parts,
+    })
+}
+
+/// Rebuilds a film, its passes and whether the beauty image was half floats from full-frame
+/// channels by name (as [`write_exr`] writes them); the inverse of the writer.
+pub fn film_and_aovs(
+    (width, height): (u32, u32),
+    channels: &HashMap<String, FlatSamples>,
+) -> Result<(Film, Option<Aovs>, bool)> {
+    let n = width as usize * height as usize;
+    let values = |name: &str| -> Option<Vec<f32>> {
+        channels.get(name).map(|s| s.values_as_f32().collect())
+    };
+    let names = if channels.contains_key(COMBINED[0]) {
+        COMBINED
+    } else {
+        RGBA
+    };
+    let rgb: Vec<Vec<f32>> = names[..3]
+        .iter()
+        .map(|name| values(name).context(format!("no {name} channel")))
+        .collect::<Result<_>>()?;
+    let half = matches!(channels.get(names[0]), Some(FlatSamples::F16(_)));
+    let pixels = (0..n)
+        .map(|i| glam::Vec3::new(rgb[0][i], rgb[1][i], rgb[2][i]))
+        .collect();
+    let film = Film::from_pixels(width, height, pixels).context("channel sizes differ")?;
+    let selection = AovSelection {
+        depth: channels.contains_key(DEPTH),
+        normal: channels.contains_key(NORMAL[0]),
+        albedo: channels.contains_key(ALBEDO[0]),
+        object_id: channels.contains_key(INDEX_OB),
+    };
+    if !selection.any() {
+        return Ok((film, None, half));
+    }
+    let triple = |names: [&str; 3], on: bool| -> Result<Option<[Vec<f32>; 3]>> {
+        if !on {
+            return Ok(None);
+        }
+        let [a, b, c] = names.map(values);
+        Ok(Some([
+            a.context("incomplete pass")?,
+            b.context("incomplete pass")?,
+            c.context("incomplete pass")?,
+        ]))
+    };
+    let (depth, ids) = (values(DEPTH), values(INDEX_OB));
+    let (normal, albedo) = (
+        triple(NORMAL, selection.normal)?,
+        triple(ALBEDO, selection.albedo)?,
+    );
+    let v3 = |t: &Option<[Vec<f32>; 3]>, i: usize| {
+        t.as_ref().map_or(glam::Vec3::ZERO, |[a, b, c]| {
+            glam::Vec3::new(a[i], b[i], c[i])
+        })
+    };
+    let samples = (0..n)
+        .map(|i| AovSample {
+            depth: depth.as_ref().map_or(quadray::aov::NO_HIT_DEPTH, |d| d[i]),
+            normal: v3(&normal, i),
+            albedo: v3(&albedo, i),
+            object_id: ids
+                .as_ref()
+                .map_or(quadray::aov::NO_HIT_OBJECT, |d| d[i] as u32),
+        })
+        .collect();
+    let aovs = Aovs::new(width, height, selection, samples).context("channel sizes differ")?;
+    Ok((film, Some(aovs), half))
+}

@@ -1,0 +1,259 @@
+//! `quadray merge`: assembles the pieces of a frame rendered by `render --tile I/N` into the
+//! image one process would have written, after checking that they belong together.
+
+use crate::exr_file::{ExrFrame, film_and_aovs, read_exr, write_exr};
+use crate::output::{Format, check_writable, write_film};
+use crate::render_cmd::{PIECE_INDEX, PIECE_SCENE, PIECE_SETTINGS};
+use crate::tiles::{Piece, parse_piece, piece_bands};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use exr::prelude::FlatSamples;
+use quadray::PixelWindow;
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+/// Arguments of `quadray merge`.
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// The pieces (`render --tile I/N` outputs), in any order.
+    #[arg(required = true, value_name = "PIECE.exr")]
+    pub pieces: Vec<PathBuf>,
+    /// The merged image: .exr keeps every pass, .png shows the beauty image.
+    #[arg(short, long, value_name = "OUT", value_parser = crate::args::parse_image_output,
+          required_unless_present = "missing")]
+    pub output: Option<PathBuf>,
+    /// Print the indices of the pieces still to render, one per line, and merge nothing.
+    #[arg(long)]
+    pub missing: bool,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// One piece as read: which it is, what it came from, and its rectangles' channels.
+struct ReadPiece {
+    path: PathBuf,
+    piece: Piece,
+    scene: String,
+    settings: String,
+    size: (u32, u32),
+    parts: Vec<(PixelWindow, Vec<(String, FlatSamples)>)>,
+}
+
+impl ReadPiece {
+    /// The channel names and sample types of its first rectangle.
+    fn channels(&self) -> Vec<String> {
+        self.parts[0]
+            .1
+            .iter()
+            .map(|(name, samples)| {
+                let kind = if matches!(samples, FlatSamples::F16(_)) {
+                    "half"
+                } else {
+                    "float"
+                };
+                format!("{name} ({kind})")
+            })
+            .collect()
+    }
+}
+
+/// Runs the merge subcommand.
+pub fn run(args: &MergeArgs) -> Result<()> {
+    let format = args.output.as_deref().map(check_writable).transpose()?;
+    let pieces = args
+        .pieces
+        .iter()
+        .map(|p| read_piece(p))
+        .collect::<Result<Vec<_>>>()?;
+    let count = check_together(&pieces)?;
+    let mut by_index: BTreeMap<u32, Vec<&Path>> = BTreeMap::new();
+    for p in &pieces {
+        by_index.entry(p.piece.index).or_default().push(&p.path);
+    }
+    let missing: Vec<u32> = (0..count).filter(|i| !by_index.contains_key(i)).collect();
+    if args.missing {
+        for i in missing {
+            println!("{i}");
+        }
+        return Ok(());
+    }
+    let mut problems: Vec<String> = by_index
+        .iter()
+        .filter(|(_, paths)| paths.len() > 1)
+        .map(|(i, paths)| {
+            let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+            format!(
+                "piece {i}/{count} is given {} times: {}",
+                paths.len(),
+                names.join(", ")
+            )
+        })
+        .collect();
+    if !missing.is_empty() {
+        let list: Vec<String> = missing.iter().map(u32::to_string).collect();
+        problems.push(format!(
+            "pieces missing: {} (of {count}, numbered from 0; render each with --tile I/{count}, \
+             and `merge --missing` lists them)",
+            list.join(", ")
+        ));
+    }
+    if !problems.is_empty() {
+        bail!("the pieces do not make one frame: {}", problems.join("; "));
+    }
+    let (width, height) = pieces[0].size;
+    let channels = assemble(&pieces, (width, height))?;
+    let (film, aovs, half) = film_and_aovs((width, height), &channels)?;
+    let output = args
+        .output
+        .as_ref()
+        .expect("clap requires -o without --missing");
+    match format.expect("checked with the output") {
+        Format::Exr => {
+            let frame = ExrFrame {
+                width,
+                height,
+                window: PixelWindow::full(width, height),
+            };
+            write_exr(&film, aovs.as_ref(), half, &frame, output)?;
+        }
+        Format::Png => write_film(&film, output)?,
+    }
+    if !args.quiet {
+        eprintln!(
+            "{width}x{height} from {count} pieces -> {}",
+            output.display()
+        );
+    }
+    Ok(())
+}
+
+/// Reads a piece and the attributes `render --tile` wrote into it.
+fn read_piece(path: &Path) -> Result<ReadPiece> {
+    let read = read_exr(path)?;
+    let attribute = |key: &str| {
+        read.attributes.get(key).cloned().with_context(|| {
+            format!(
+                "{}: not a piece of a quadray render (no {key} attribute; pieces come from \
+                 `quadray render --tile I/N`)",
+                path.display()
+            )
+        })
+    };
+    let piece = parse_piece(&attribute(PIECE_INDEX)?)
+        .map_err(|e| anyhow::anyhow!("{}: {PIECE_INDEX}: {e}", path.display()))?;
+    if read.parts.is_empty() {
+        bail!("{}: the file holds no pixels", path.display());
+    }
+    Ok(ReadPiece {
+        path: path.to_path_buf(),
+        piece,
+        scene: attribute(PIECE_SCENE)?,
+        settings: attribute(PIECE_SETTINGS)?,
+        size: read.size,
+        parts: read.parts,
+    })
+}
+
+/// Checks that every piece comes from the same scene and settings, cuts the frame the same way,
+/// holds the same passes and exactly its own rows; returns the piece count.
+fn check_together(pieces: &[ReadPiece]) -> Result<u32> {
+    let first = &pieces[0];
+    let mut problems = Vec::new();
+    for p in pieces {
+        let name = p.path.display();
+        if p.scene != first.scene {
+            problems.push(format!(
+                "{name} was rendered from another scene than {} (scene hash {} against {})",
+                first.path.display(),
+                p.scene,
+                first.scene
+            ));
+        }
+        if p.settings != first.settings {
+            problems.push(format!(
+                "{name} was rendered with other settings than {} ({} against {})",
+                first.path.display(),
+                p.settings,
+                first.settings
+            ));
+        }
+        if p.piece.count != first.piece.count {
+            problems.push(format!(
+                "{name} is piece {} of a frame cut into {} pieces, {} of one cut into {}",
+                p.piece,
+                p.piece.count,
+                first.path.display(),
+                first.piece.count
+            ));
+        }
+        if p.channels() != first.channels()
+            || p.parts.iter().any(|(_, c)| c.len() != p.parts[0].1.len())
+        {
+            problems.push(format!(
+                "{name} holds other passes ({}) than {} ({})",
+                p.channels().join(", "),
+                first.path.display(),
+                first.channels().join(", ")
+            ));
+        }
+        let (w, h) = p.size;
+        let expected = piece_bands(p.piece, w, h);
+        let rows: Vec<PixelWindow> = p.parts.iter().map(|(window, _)| *window).collect();
+        if p.size == first.size && rows != expected {
+            problems.push(format!(
+                "{name} does not hold the rows of piece {} (its parts overlap other pieces or \
+                 leave rows out)",
+                p.piece
+            ));
+        }
+    }
+    if !problems.is_empty() {
+        bail!("the pieces do not make one frame: {}", problems.join("; "));
+    }
+    Ok(first.piece.count)
+}
+
+/// Copies every piece's rectangles into full-frame channels by name.
+fn assemble(
+    pieces: &[ReadPiece],
+    (width, height): (u32, u32),
+) -> Result<HashMap<String, FlatSamples>> {
+    let n = width as usize * height as usize;
+    let mut channels: HashMap<String, FlatSamples> = HashMap::new();
+    for (name, samples) in &pieces[0].parts[0].1 {
+        let empty = match samples {
+            FlatSamples::F16(_) => FlatSamples::F16(vec![Default::default(); n]),
+            FlatSamples::F32(_) => FlatSamples::F32(vec![0.0; n]),
+            FlatSamples::U32(_) => FlatSamples::U32(vec![0; n]),
+        };
+        channels.insert(name.clone(), empty);
+    }
+    for piece in pieces {
+        for (window, parts) in &piece.parts {
+            let w = window.width() as usize;
+            for (name, samples) in parts {
+                let target = channels
+                    .get_mut(name)
+                    .context("a channel the first piece lacks")?;
+                for row in 0..window.height() as usize {
+                    let at = (window.y0 as usize + row) * width as usize + window.x0 as usize;
+                    let from = row * w..(row + 1) * w;
+                    match (&mut *target, samples) {
+                        (FlatSamples::F16(t), FlatSamples::F16(s)) => {
+                            t[at..at + w].copy_from_slice(&s[from])
+                        }
+                        (FlatSamples::F32(t), FlatSamples::F32(s)) => {
+                            t[at..at + w].copy_from_slice(&s[from])
+                        }
+                        (FlatSamples::U32(t), FlatSamples::U32(s)) => {
+                            t[at..at + w].copy_from_slice(&s[from])
+                        }
+                        _ => bail!("{}: channel {name} changes type", piece.path.display()),
+                    }
+                }
+            }
+        }
+    }
+    Ok(channels)
+}

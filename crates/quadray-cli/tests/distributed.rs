@@ -1,0 +1,215 @@
+//! One frame over many processes: `render --tile I/N` pieces merged by `quadray merge` are the
+//! one-process render byte for byte, and every way pieces can fail to fit together is refused
+//! with a message that says which.
+
+mod common;
+use common::{quadray, scene, tmp};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+/// Render settings shared by every run of this file: small, with passes, several samples.
+const SETTINGS: [&str; 6] = ["--res", "61x37", "--spp", "3", "--aov", "depth,normal"];
+
+fn ok(o: Output) -> Output {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+fn render(scene_file: &str, out: &Path, extra: &[&str]) -> Output {
+    let out = out.to_str().unwrap();
+    quadray(
+        &[
+            &["render", scene_file, "-o", out, "-q"],
+            &SETTINGS[..],
+            extra,
+        ]
+        .concat(),
+    )
+}
+
+fn piece(dir: &tempfile::TempDir, i: u32, n: u32) -> PathBuf {
+    let path = tmp(dir, &format!("part-{i:02}-of-{n:02}.exr"));
+    ok(render(
+        &scene("defense.toml"),
+        &path,
+        &["--tile", &format!("{i}/{n}")],
+    ));
+    path
+}
+
+fn merge(pieces: &[PathBuf], extra: &[&str]) -> Output {
+    let names: Vec<&str> = pieces.iter().map(|p| p.to_str().unwrap()).collect();
+    quadray(&[&["merge"], &names[..], extra].concat())
+}
+
+#[test]
+fn merged_pieces_are_the_one_process_render_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let (one_exr, one_png) = (tmp(&dir, "one.exr"), tmp(&dir, "one.png"));
+    ok(render(&scene("defense.toml"), &one_exr, &[]));
+    let png_settings = ["--res", "61x37", "--spp", "3"];
+    let out = one_png.to_str().unwrap();
+    ok(quadray(
+        &[
+            &["render", &scene("defense.toml"), "-o", out, "-q"],
+            &png_settings[..],
+        ]
+        .concat(),
+    ));
+    for n in [1, 3, 7] {
+        let pieces: Vec<PathBuf> = (0..n).map(|i| piece(&dir, i, n)).collect();
+        let (exr, png) = (tmp(&dir, "merged.exr"), tmp(&dir, "merged.png"));
+        ok(merge(&pieces, &["-o", exr.to_str().unwrap(), "-q"]));
+        ok(merge(&pieces, &["-o", png.to_str().unwrap(), "-q"]));
+        assert!(
+            std::fs::read(&exr).unwrap() == std::fs::read(&one_exr).unwrap(),
+            "{n} pieces: EXR"
+        );
+        assert!(
+            std::fs::read(&png).unwrap() == std::fs::read(&one_png).unwrap(),
+            "{n} pieces: PNG"
+        );
+    }
+}
+
+#[test]
+fn pieces_that_do_not_fit_together_are_refused_with_the_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let pieces: Vec<PathBuf> = (0..3).map(|i| piece(&dir, i, 3)).collect();
+    let out = tmp(&dir, "merged.exr");
+    let out_arg = ["-o", out.to_str().unwrap()];
+    let refused = |set: &[PathBuf], says: &[&str]| {
+        let o = merge(set, &out_arg);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        for text in says {
+            assert!(err.contains(text), "{text:?} missing from {err}");
+        }
+        assert!(!out.exists(), "nothing is written");
+    };
+    // A missing piece, and --missing listing it for a retry loop.
+    refused(
+        &[pieces[0].clone(), pieces[2].clone()],
+        &["pieces missing: 1 (of 3"],
+    );
+    let listed = ok(merge(
+        &[pieces[0].clone(), pieces[2].clone()],
+        &["--missing"],
+    ));
+    assert_eq!(String::from_utf8_lossy(&listed.stdout), "1\n");
+    let complete = ok(merge(&pieces, &["--missing"]));
+    assert!(complete.stdout.is_empty());
+    // The same piece twice.
+    let again = tmp(&dir, "again.exr");
+    std::fs::copy(&pieces[1], &again).unwrap();
+    refused(
+        &[&pieces[..], &[again]].concat(),
+        &["piece 1/3 is given 2 times"],
+    );
+    // A piece of another scene.
+    let other = tmp(&dir, "other.exr");
+    ok(render(&scene("quadrics.toml"), &other, &["--tile", "1/3"]));
+    refused(
+        &[pieces[0].clone(), other, pieces[2].clone()],
+        &["other.exr was rendered from another scene"],
+    );
+    // A piece rendered with other settings.
+    let seeded = tmp(&dir, "seeded.exr");
+    ok(render(
+        &scene("defense.toml"),
+        &seeded,
+        &["--tile", "1/3", "--seed", "9"],
+    ));
+    refused(
+        &[pieces[0].clone(), seeded, pieces[2].clone()],
+        &["seeded.exr was rendered with other settings", "seed 9"],
+    );
+    // A piece of a frame cut another way.
+    let quarter = tmp(&dir, "quarter.exr");
+    ok(render(&scene("defense.toml"), &quarter, &["--tile", "1/4"]));
+    refused(
+        &[pieces[0].clone(), quarter, pieces[2].clone()],
+        &["cut into 4 pieces"],
+    );
+    // An image that is not a piece.
+    let plain = tmp(&dir, "plain.exr");
+    ok(render(&scene("defense.toml"), &plain, &[]));
+    refused(&[plain], &["plain.exr: not a piece of a quadray render"]);
+}
+
+/// A task killed while it renders leaves no piece behind (pieces are written atomically), so
+/// `merge --missing` names it and a re-run completes the frame.
+#[test]
+fn a_killed_piece_is_simply_rendered_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let pieces: Vec<PathBuf> = (0..3)
+        .map(|i| tmp(&dir, &format!("part-{i}.exr")))
+        .collect();
+    for i in [0, 2] {
+        ok(render(
+            &scene("defense.toml"),
+            &pieces[i],
+            &["--tile", &format!("{i}/3")],
+        ));
+    }
+    let mut child = Command::new(env!("CARGO_BIN_EXE_quadray"))
+        .args([
+            "render",
+            &scene("defense.toml"),
+            "-o",
+            pieces[1].to_str().unwrap(),
+        ])
+        .args([
+            "--tile",
+            "1/3",
+            "--res",
+            "1600x1200",
+            "--spp",
+            "16",
+            "-t",
+            "1",
+            "-q",
+        ])
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(150));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!pieces[1].exists(), "a killed task leaves no piece");
+    let present: Vec<PathBuf> = pieces.iter().filter(|p| p.exists()).cloned().collect();
+    let listed = ok(merge(&present, &["--missing"]));
+    assert_eq!(String::from_utf8_lossy(&listed.stdout), "1\n");
+    ok(render(
+        &scene("defense.toml"),
+        &pieces[1],
+        &["--tile", "1/3"],
+    ));
+    ok(merge(
+        &pieces,
+        &["-o", tmp(&dir, "frame.exr").to_str().unwrap(), "-q"],
+    ));
+}
+
+#[test]
+fn tile_options_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = tmp(&dir, "p.exr");
+    let png = tmp(&dir, "p.png");
+    let s = scene("defense.toml");
+    for (args, says) in [
+        (vec!["--tile", "3/3"], "--tile"),
+        (vec!["--tile", "0/38"], "cannot be cut into 38 pieces"),
+        (vec!["--tile", "0/2", "--crop", "0,1,0,0.5"], "--crop"),
+    ] {
+        let o = render(&s, &exr, &args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains(says),
+            "{args:?}"
+        );
+    }
+    let o = quadray(&["render", &s, "-o", png.to_str().unwrap(), "--tile", "0/2"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("writes a piece as an .exr"));
+}
