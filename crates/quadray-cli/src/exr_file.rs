@@ -183,10 +183,16 @@ fn layer(
         layer_position: Vec2(frame.window.x0 as i32, frame.window.y0 as i32),
         ..LayerAttributes::default()
     };
+    // Increasing line order makes the writer put compressed blocks in file order whatever order
+    // its threads finish them in: the same image gives the same bytes on every run.
+    let encoding = Encoding {
+        line_order: LineOrder::Increasing,
+        ..Encoding::FAST_LOSSLESS
+    };
     Ok(Layer::new(
         Vec2(w, h),
         attributes,
-        Encoding::FAST_LOSSLESS,
+        encoding,
         AnyChannels::sort(SmallVec::from_vec(channels)),
     ))
 }
