@@ -101,14 +101,13 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     if !problems.is_empty() {
         bail!("the pieces do not make one frame: {}", problems.join("; "));
     }
+    let (Some(output), Some(format)) = (&args.output, format) else {
+        bail!("merge needs -o OUT.exr or OUT.png (or --missing)");
+    };
     let (width, height) = pieces[0].size;
     let channels = assemble(&pieces, (width, height))?;
     let (film, aovs, half) = film_and_aovs((width, height), &channels)?;
-    let output = args
-        .output
-        .as_ref()
-        .expect("clap requires -o without --missing");
-    match format.expect("checked with the output") {
+    match format {
         Format::Exr => {
             let frame = ExrFrame {
                 width,
@@ -145,6 +144,8 @@ fn read_piece(path: &Path) -> Result<ReadPiece> {
     if read.parts.is_empty() {
         bail!("{}: the file holds no pixels", path.display());
     }
+    quadray::render::check_resolution(read.size.0, read.size.1)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     Ok(ReadPiece {
         path: path.to_path_buf(),
         piece,

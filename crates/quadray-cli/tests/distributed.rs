@@ -136,6 +136,9 @@ fn pieces_that_do_not_fit_together_are_refused_with_the_reason() {
     let plain = tmp(&dir, "plain.exr");
     ok(render(&scene("defense.toml"), &plain, &[]));
     refused(&[plain], &["plain.exr: not a piece of a quadray render"]);
+    let junk = tmp(&dir, "junk.exr");
+    std::fs::write(&junk, "not an image").unwrap();
+    refused(&[junk], &["reading", "junk.exr"]);
 }
 
 /// A task killed while it renders leaves no piece behind (pieces are written atomically), so
