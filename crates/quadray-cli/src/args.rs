@@ -116,6 +116,29 @@ pub struct RenderArgs {
     /// a job array on a render farm (docs/distributed.md).
     #[arg(long, value_name = "I/N", value_parser = crate::tiles::parse_piece, conflicts_with = "crop")]
     pub tile: Option<crate::tiles::Piece>,
+    /// A turntable of N frames: frame `--frame I` turns the camera 360·I/N degrees about the
+    /// vertical axis through its target; a run of # in the output becomes the frame number
+    /// (`-o turn-###.png`, Blender's convention), so one task per frame writes its own file.
+    #[arg(long, value_name = "N", requires = "frame", value_parser = clap::value_parser!(u32).range(1..))]
+    pub orbit_frames: Option<u32>,
+    /// The frame of `--orbit-frames` to render, from 0.
+    #[arg(long, value_name = "I", requires = "orbit_frames")]
+    pub frame: Option<u32>,
+}
+
+/// `path` with its last run of `#` replaced by `frame`, zero-padded to the run's length; `None`
+/// when the file name has no `#`.
+pub fn numbered_output(path: &Path, frame: u32) -> Option<PathBuf> {
+    let name = path.file_name()?.to_str()?;
+    let end = name.rfind('#')? + 1;
+    let start = name[..end].trim_end_matches('#').len();
+    let numbered = format!(
+        "{}{frame:0width$}{}",
+        &name[..start],
+        &name[end..],
+        width = end - start
+    );
+    Some(path.with_file_name(numbered))
 }
 
 /// Loads the scene at `path` with the command line's `--set` overrides (native scenes only),
@@ -300,6 +323,17 @@ mod tests {
         ] {
             assert!(parse_crop(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn frame_numbers_fill_the_hashes() {
+        let at = |p: &str, f| numbered_output(Path::new(p), f);
+        assert_eq!(
+            at("out/turn-###.png", 7),
+            Some(PathBuf::from("out/turn-007.png"))
+        );
+        assert_eq!(at("t#.exr", 1234), Some(PathBuf::from("t1234.exr")));
+        assert_eq!(at("#a/turn.png", 1), None, "only the file name counts");
     }
 
     #[test]

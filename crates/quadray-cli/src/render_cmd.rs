@@ -107,7 +107,7 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
         scene: args.gltf_scene.clone(),
         ..Default::default()
     };
-    let loaded = crate::args::load_scene_for(
+    let mut loaded = crate::args::load_scene_for(
         &args.scene,
         &args.set,
         &options,
@@ -121,11 +121,29 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
         loaded_in.as_secs_f64()
     );
     // -o, else the scene's [output], else the scene's name with .png beside it.
-    let output = args
+    let mut output = args
         .output
         .clone()
         .or_else(|| loaded.output.clone())
         .unwrap_or_else(|| crate::args::default_output(&args.scene));
+    if let (Some(frames), Some(frame)) = (args.orbit_frames, args.frame) {
+        usage_ensure(
+            frame < frames,
+            &format!(
+                "--frame {frame}: a turntable of {frames} frames has frames 0 to {}",
+                frames - 1
+            ),
+        )?;
+        output = crate::args::numbered_output(&output, frame).ok_or_else(|| {
+            StatusError::usage(format!(
+                "--orbit-frames: the output {} needs a run of # for the frame number \
+                 (e.g. turn-###.png), or every frame would overwrite the last",
+                output.display()
+            ))
+        })?;
+        let camera = &mut loaded.description.camera;
+        *camera = camera.orbited(360.0 * frame as f64 / frames as f64);
+    }
     let format = check_writable(&output)?;
     let selection = pass_selection(args, format)?;
     if !args.quiet {
@@ -265,15 +283,17 @@ fn write_output(
 }
 
 /// Identifies what a piece was rendered from: the scene file's bytes and every command-line
-/// choice that changes the scene (overrides, the glTF scene, the camera).
+/// choice that changes the scene (overrides, the glTF scene, the camera, the turntable frame).
 fn scene_hash(args: &RenderArgs) -> Result<String> {
     let bytes = std::fs::read(&args.scene)
         .with_context(|| format!("reading {} again to identify it", args.scene.display()))?;
     let choices = format!(
-        "{:?} {:?} {:?}",
+        "{:?} {:?} {:?} {:?} {:?}",
         args.set.iter().map(ToString::to_string).collect::<Vec<_>>(),
         args.gltf_scene,
-        args.camera
+        args.camera,
+        args.orbit_frames,
+        args.frame
     );
     Ok(crate::tiles::fnv1a_hex(&[&bytes, choices.as_bytes()]))
 }

@@ -217,3 +217,76 @@ fn tile_options_are_checked() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("writes a piece as an .exr"));
 }
+
+/// A turntable from one scene file, one task per frame: frame I of N turns the camera 360·I/N
+/// degrees about the vertical through its target and writes its own numbered file.
+#[test]
+fn orbit_frames_turn_the_camera_and_number_the_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene("defense.toml");
+    let pattern = tmp(&dir, "turn-###.png");
+    let small = ["--res", "64x36", "-q"];
+    for frame in ["0", "30"] {
+        let args = [
+            "render",
+            &s,
+            "-o",
+            pattern.to_str().unwrap(),
+            "--orbit-frames",
+            "120",
+        ];
+        ok(quadray(
+            &[&args[..], &["--frame", frame], &small[..]].concat(),
+        ));
+    }
+    // Frame 0 is the scene's own view; frame 30 of 120 the camera a quarter turn round, which
+    // --set writes by hand (cos 90° rounds, so compared within compare's tolerance).
+    let plain = tmp(&dir, "plain.png");
+    ok(quadray(
+        &[&["render", &s, "-o", plain.to_str().unwrap()], &small[..]].concat(),
+    ));
+    assert_eq!(
+        std::fs::read(tmp(&dir, "turn-000.png")).unwrap(),
+        std::fs::read(&plain).unwrap()
+    );
+    let quarter = tmp(&dir, "quarter.png");
+    let set = ["--set", "camera.from=[9.5, 0.0, 3.6]"];
+    ok(quadray(
+        &[
+            &["render", &s, "-o", quarter.to_str().unwrap()],
+            &set[..],
+            &small[..],
+        ]
+        .concat(),
+    ));
+    let turned = tmp(&dir, "turn-030.png");
+    ok(quadray(&[
+        "compare",
+        quarter.to_str().unwrap(),
+        turned.to_str().unwrap(),
+    ]));
+    // Without a # the frames would overwrite each other: refused.
+    let o = quadray(&[
+        "render",
+        &s,
+        "-o",
+        plain.to_str().unwrap(),
+        "--orbit-frames",
+        "4",
+        "--frame",
+        "1",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("needs a run of #"));
+    let o = quadray(&[
+        "render",
+        &s,
+        "-o",
+        pattern.to_str().unwrap(),
+        "--orbit-frames",
+        "4",
+        "--frame",
+        "4",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+}

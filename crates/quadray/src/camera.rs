@@ -76,6 +76,17 @@ impl Camera {
         }
     }
 
+    /// The same camera turned `degrees` about the vertical (+z) axis through its target,
+    /// counter-clockwise seen from above: a turntable frame.
+    pub fn orbited(&self, degrees: f64) -> Camera {
+        let turn = glam::DQuat::from_rotation_z(degrees.to_radians());
+        Camera {
+            from: self.to + turn * (self.from - self.to),
+            up: turn * self.up,
+            ..*self
+        }
+    }
+
     /// Checks the camera and precomputes its frame for an image of the given aspect ratio (width / height).
     pub fn prepare(&self, aspect: f64) -> Result<CameraFrame, CameraError> {
         if !(self.from.is_finite() && self.to.is_finite() && self.up.is_finite()) {
@@ -172,6 +183,20 @@ impl CameraFrame {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn orbiting_turns_about_the_target() {
+        let cam = Camera {
+            from: DVec3::new(0.0, -9.5, 3.6),
+            to: DVec3::new(0.0, 0.0, 0.9),
+            up: DVec3::Z,
+            projection: Projection::Perspective { vfov_deg: 40.0 },
+        };
+        let quarter = cam.orbited(90.0);
+        assert!((quarter.from - DVec3::new(9.5, 0.0, 3.6)).length() < 1e-12);
+        assert_eq!(quarter.to, cam.to);
+        assert!((cam.orbited(360.0).from - cam.from).length() < 1e-12);
+    }
 
     #[test]
     fn project_inverts_ray() {
