@@ -16,7 +16,6 @@
 //! grow.
 
 use super::Quadric;
-use crate::math::solve_quadratic;
 use glam::DVec3;
 
 /// Relative displacement ([`RoundingSensitivity::relative`]) above which the rounding of a
@@ -69,13 +68,7 @@ impl Quadric {
                     let mut base = DVec3::ZERO;
                     base[p] = grid(i);
                     base[q] = grid(j);
-                    // f(base + t·e) is quadratic in t: its coefficients from three samples.
-                    let (f0, f1, fm) = (
-                        self.eval_local(base),
-                        self.eval_local(base + e),
-                        self.eval_local(base - e),
-                    );
-                    let roots = solve_quadratic((f1 + fm) * 0.5 - f0, (f1 - fm) * 0.25, f0);
+                    let roots = self.roots_on_line(&|t| base + t * e);
                     for &t in roots.as_slice().iter().filter(|t| t.abs() <= 1.0) {
                         let x = centre + half * (base + t * e);
                         let gradient = 2.0 * (a * x + b);

@@ -2,7 +2,7 @@
 //! spans, and whether anything of the surface shows at all.
 
 use super::Quadric;
-use crate::math::solve_quadratic;
+use crate::math::{Roots, solve_quadratic};
 use glam::DVec3;
 
 impl Quadric {
@@ -90,18 +90,21 @@ impl Quadric {
         inside: &impl Fn(DVec3) -> bool,
         note: &mut impl FnMut(f64),
     ) {
-        // f(line(z)) is quadratic in z: recover its coefficients from three samples.
+        for &z in self.roots_on_line(&line).as_slice() {
+            if inside(line(z)) {
+                note(z);
+            }
+        }
+    }
+
+    /// The parameters t at which the local-frame line `t -> line(t)` (affine in t) meets the
+    /// surface: f(line(t)) is quadratic in t, its coefficients recovered from three samples.
+    pub(super) fn roots_on_line(&self, line: &impl Fn(f64) -> DVec3) -> Roots {
         let (f0, f1, fm) = (
             self.eval_local(line(0.0)),
             self.eval_local(line(1.0)),
             self.eval_local(line(-1.0)),
         );
-        let qa = (f1 + fm) * 0.5 - f0;
-        let qb = (f1 - fm) * 0.25;
-        for &z in solve_quadratic(qa, qb, f0).as_slice() {
-            if inside(line(z)) {
-                note(z);
-            }
-        }
+        solve_quadratic((f1 + fm) * 0.5 - f0, (f1 - fm) * 0.25, f0)
     }
 }
