@@ -101,12 +101,8 @@ fn read_exr(path: &Path) -> Result<LinearImage> {
         .map(|c| c.name.to_string())
         .collect();
     let find = |name: &str| names.iter().position(|n| n == name);
-    let rgb = [crate::passes::COMBINED[..3].to_vec(), vec!["R", "G", "B"]]
-        .into_iter()
-        .find_map(|set| {
-            let idx: Option<Vec<usize>> = set.iter().map(|n| find(n)).collect();
-            idx
-        });
+    let rgb = crate::exr_file::beauty_channels(|name| find(name).is_some())
+        .map(|set| set.map(|name| find(name).unwrap_or_default()));
     let Some(rgb) = rgb else {
         bail!(
             "no colour channels (ViewLayer.Combined.R/G/B or R/G/B) among {}",

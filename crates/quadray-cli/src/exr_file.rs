@@ -1,17 +1,56 @@
 //! Renders as OpenEXR files: the beauty image and its passes in one part (a whole frame or a crop
-//! placed in it), several rectangles of one frame as the parts of a multi-part file (a piece of a
+//! placed in it) under Blender's channel names (dotted names in one part, which compositors key
+//! on), several rectangles of one frame as the parts of a multi-part file (a piece of a
 //! distributed render), and reading such files back into a film and passes.
 
-use crate::output::write_atomically;
-use crate::passes::{ALBEDO, COMBINED, DEPTH, INDEX_OB, NORMAL};
 use anyhow::{Context, Result, bail};
 use exr::prelude::*;
 use quadray::{AovSample, AovSelection, Aovs, Film, PixelWindow};
 use std::collections::HashMap;
 use std::path::Path;
 
+/// Channel names of the beauty image in a file with passes (Blender's view-layer naming).
+pub const COMBINED: [&str; 4] = [
+    "ViewLayer.Combined.R",
+    "ViewLayer.Combined.G",
+    "ViewLayer.Combined.B",
+    "ViewLayer.Combined.A",
+];
+/// Channel name of the depth pass.
+pub const DEPTH: &str = "ViewLayer.Depth.Z";
+/// Channel names of the normal pass.
+pub const NORMAL: [&str; 3] = [
+    "ViewLayer.Normal.X",
+    "ViewLayer.Normal.Y",
+    "ViewLayer.Normal.Z",
+];
+/// Channel names of the albedo pass.
+pub const ALBEDO: [&str; 3] = [
+    "ViewLayer.Albedo.R",
+    "ViewLayer.Albedo.G",
+    "ViewLayer.Albedo.B",
+];
+/// Channel name of the object-index pass.
+pub const INDEX_OB: &str = "ViewLayer.IndexOB.X";
+
 /// Channel names of the beauty image in a file without passes.
-const RGBA: [&str; 4] = ["R", "G", "B", "A"];
+pub const RGBA: [&str; 4] = ["R", "G", "B", "A"];
+
+/// The beauty image's colour channels among the channels `present` reports: Blender's
+/// `ViewLayer.Combined.R/G/B` in a file with passes, else plain `R, G, B`.
+pub fn beauty_channels(present: impl Fn(&str) -> bool) -> Option<[&'static str; 3]> {
+    [COMBINED, RGBA]
+        .into_iter()
+        .map(|names| [names[0], names[1], names[2]])
+        .find(|names| names.iter().all(|n| present(n)))
+}
+
+/// Writes an EXR image to `path` through a temporary file beside it, renamed once complete
+/// ([`quadray_loader::atomic_file`]): a failed write leaves an older `path` as it was.
+fn write_image(path: &Path, write: impl FnOnce(&Path) -> exr::error::UnitResult) -> Result<()> {
+    quadray_loader::atomic_file::replace_with(path, write)
+        .with_context(|| format!("writing {}", path.display()))
+}
 
 /// Where an EXR's pixels lie in the full image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -65,10 +104,7 @@ pub fn write_exr(
     };
     let layer = layer(&part, half, frame, None)?;
     let image = Image::new(display_attributes(frame, &[]), layer);
-    write_atomically(path, |tmp| {
-        image.write().to_file(tmp)?;
-        Ok(())
-    })
+    write_image(path, |tmp| image.write().to_file(tmp))
 }
 
 /// Writes rectangles of one `width` × `height` frame as the parts of one multi-part EXR (named
@@ -94,10 +130,7 @@ pub fn write_exr_parts(
         layers.push(layer(part, half, &frame(part), Some(&name(part)))?);
     }
     let image = Image::new(display_attributes(&frame(first), attributes), layers);
-    write_atomically(path, |tmp| {
-        image.write().to_file(tmp)?;
-        Ok(())
-    })
+    write_image(path, |tmp| image.write().to_file(tmp))
 }
 
 /// The attributes every part shares: the display window and `attributes` as text.
@@ -275,15 +308,9 @@ pub fn film_and_aovs(
     let values = |name: &str| -> Option<Vec<f32>> {
         channels.get(name).map(|s| s.values_as_f32().collect())
     };
-    let names = if channels.contains_key(COMBINED[0]) {
-        COMBINED
-    } else {
-        RGBA
-    };
-    let rgb: Vec<Vec<f32>> = names[..3]
-        .iter()
-        .map(|name| values(name).context(format!("no {name} channel")))
-        .collect::<Result<_>>()?;
+    let names = beauty_channels(|name| channels.contains_key(name))
+        .context("no colour channels (ViewLayer.Combined.R/G/B or R/G/B)")?;
+    let rgb: Vec<Vec<f32>> = names.iter().filter_map(|name| values(name)).collect();
     let half = matches!(channels.get(names[0]), Some(FlatSamples::F16(_)));
     let pixels = (0..n)
         .map(|i| glam::Vec3::new(rgb[0][i], rgb[1][i], rgb[2][i]))

@@ -48,11 +48,17 @@ fn parent_dir(path: &Path) -> PathBuf {
 
 /// Writes `film` to `path`; an existing file is replaced only once the new one is complete.
 pub fn write_film(film: &Film, path: &Path) -> Result<()> {
-    let format = Format::from_path(path)?;
-    write_atomically(path, |tmp| match format {
-        Format::Png => write_png(film, tmp),
-        Format::Exr => write_exr(film, tmp),
-    })
+    match Format::from_path(path)? {
+        Format::Png => write_atomically(path, |tmp| write_png(film, tmp)),
+        Format::Exr => {
+            let frame = crate::exr_file::ExrFrame {
+                width: film.width(),
+                height: film.height(),
+                window: quadray::PixelWindow::full(film.width(), film.height()),
+            };
+            crate::exr_file::write_exr(film, None, false, &frame, path)
+        }
+    }
 }
 
 /// Writes through `write` into a temporary file beside `path` (keeping the image extension, which
@@ -96,15 +102,6 @@ fn write_png(film: &Film, path: &Path) -> Result<()> {
         image::ColorType::Rgb8,
         image::ImageFormat::Png,
     )?;
-    Ok(())
-}
-
-fn write_exr(film: &Film, path: &Path) -> Result<()> {
-    let w = film.width() as usize;
-    exr::prelude::write_rgba_file(path, w, film.height() as usize, |x, y| {
-        let p = film.pixels()[y * w + x];
-        (p.x, p.y, p.z, 1.0f32)
-    })?;
     Ok(())
 }
 

@@ -1,6 +1,5 @@
-//! Render passes on output: which passes a command line asks for, their Blender-style EXR channel
-//! names (dotted names in one part, which compositors key on; [`crate::exr_file`] writes them),
-//! and one pass at a time as an 8-bit PNG.
+//! Render passes on output: which passes a command line asks for, and one pass at a time as an
+//! 8-bit PNG ([`crate::exr_file`] writes them all into an EXR).
 
 use crate::output::write_rgb8_png;
 use anyhow::{Result, anyhow};
@@ -78,30 +77,6 @@ pub fn names_of(selection: AovSelection) -> String {
         names.join(",")
     }
 }
-
-/// Channel names of the beauty image in a file with passes (Blender's view-layer naming).
-pub const COMBINED: [&str; 4] = [
-    "ViewLayer.Combined.R",
-    "ViewLayer.Combined.G",
-    "ViewLayer.Combined.B",
-    "ViewLayer.Combined.A",
-];
-/// Channel name of the depth pass.
-pub const DEPTH: &str = "ViewLayer.Depth.Z";
-/// Channel names of the normal pass.
-pub const NORMAL: [&str; 3] = [
-    "ViewLayer.Normal.X",
-    "ViewLayer.Normal.Y",
-    "ViewLayer.Normal.Z",
-];
-/// Channel names of the albedo pass.
-pub const ALBEDO: [&str; 3] = [
-    "ViewLayer.Albedo.R",
-    "ViewLayer.Albedo.G",
-    "ViewLayer.Albedo.B",
-];
-/// Channel name of the object-index pass.
-pub const INDEX_OB: &str = "ViewLayer.IndexOB.X";
 
 /// Share of hit depths the depth PNG spans when only planes are in view: the nearest hit to this
 /// quantile (the rest run to the horizon and clamp).
