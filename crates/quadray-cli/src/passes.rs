@@ -51,26 +51,28 @@ pub fn selection_of(passes: &[Pass]) -> AovSelection {
     passes
         .iter()
         .map(|p| p.channels())
-        .fold(AovSelection::NONE, |a, b| AovSelection {
-            depth: a.depth || b.depth,
-            normal: a.normal || b.normal,
-            albedo: a.albedo || b.albedo,
-            object_id: a.object_id || b.object_id,
-        })
+        .fold(AovSelection::NONE, union)
 }
 
-/// The passes `selection` holds, by their command-line names, comma-separated (`none` if none).
+/// The passes either selection computes.
+fn union(a: AovSelection, b: AovSelection) -> AovSelection {
+    AovSelection {
+        depth: a.depth || b.depth,
+        normal: a.normal || b.normal,
+        albedo: a.albedo || b.albedo,
+        object_id: a.object_id || b.object_id,
+    }
+}
+
+/// The passes `selection` holds, by their command-line names, comma-separated (`none` if none):
+/// the inverse of [`selection_of`].
 pub fn names_of(selection: AovSelection) -> String {
-    let names: Vec<&str> = [
-        (selection.depth, "depth"),
-        (selection.normal, "normal"),
-        (selection.albedo, "albedo"),
-        (selection.object_id, "object-id"),
-    ]
-    .iter()
-    .filter(|(on, _)| *on)
-    .map(|(_, name)| *name)
-    .collect();
+    use clap::ValueEnum;
+    let names: Vec<String> = Pass::value_variants()
+        .iter()
+        .filter(|p| **p != Pass::Combined && union(selection, p.channels()) == selection)
+        .filter_map(|p| p.to_possible_value().map(|v| v.get_name().to_string()))
+        .collect();
     if names.is_empty() {
         "none".into()
     } else {
@@ -196,4 +198,17 @@ pub fn write_png_pass(
 ) -> Result<()> {
     let bytes = pass_rgb8(pass, film, aovs, planes)?;
     write_rgb8_png(film.width(), film.height(), &bytes, path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pass_names_invert_the_selection() {
+        assert_eq!(names_of(AovSelection::NONE), "none");
+        let s = selection_of(&[Pass::ObjectId, Pass::Depth]);
+        assert_eq!(names_of(s), "depth,object-id");
+        assert_eq!(selection_of(&[Pass::Normal]), Pass::Normal.channels());
+    }
 }
