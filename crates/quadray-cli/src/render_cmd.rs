@@ -151,10 +151,8 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
             eprintln!("{}", crate::warnings::note_line(note));
         }
     }
+    // --res is already in the loaded settings: the loader needed it to frame a camera-less scene.
     let mut s = loaded.settings;
-    if let Some((w, h)) = args.res {
-        (s.width, s.height) = (w, h);
-    }
     s.spp = args.spp.unwrap_or(s.spp);
     s.max_depth = args.max_depth.unwrap_or(s.max_depth);
     let mut settings = s.render_settings();
