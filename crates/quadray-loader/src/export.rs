@@ -20,8 +20,8 @@
 
 use crate::export_document::{Document, looking, set_matrix};
 use crate::export_shapes::ShapeWriter;
+use crate::framing::geometry_bounds;
 use crate::gltf_light::LUMENS_PER_WATT;
-use crate::import::geometry_bounds;
 use crate::native::LoadedScene;
 use crate::quadrics_ext::{self, NodeExtension, RootExtension, ShapeDef};
 use crate::tessellate;

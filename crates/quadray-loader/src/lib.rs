@@ -14,6 +14,7 @@ pub mod error;
 pub mod export;
 pub mod export_document;
 pub mod export_shapes;
+pub mod framing;
 pub mod gltf;
 pub mod gltf_accessor;
 pub mod gltf_camera;

@@ -3,7 +3,8 @@
 //! default key light), and a note for every assumption.
 
 use crate::error::{LoadError, LoadErrorKind};
-use crate::import::{Imported, Selector, default_key_light, framing_camera};
+use crate::framing::{default_key_light, framing_camera};
+use crate::import::{Imported, Selector};
 use crate::native::{LoadedScene, SceneSettings};
 use glam::Vec3;
 use quadray::SceneDescription;

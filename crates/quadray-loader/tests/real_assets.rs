@@ -431,7 +431,7 @@ fn orientation_test_arrows_touch_their_targets() {
                 .filter(|m| m.material() == id as u32)
                 .collect();
             if name == "BaseMaterial" {
-                let (lo, hi) = quadray_loader::import::geometry_bounds(&quadray::Geometry {
+                let (lo, hi) = quadray_loader::framing::geometry_bounds(&quadray::Geometry {
                     meshes: meshes.into_iter().cloned().collect(),
                     ..Default::default()
                 })

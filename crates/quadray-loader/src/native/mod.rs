@@ -6,9 +6,8 @@
 //! flat table rather than serde-tagged enums, because tagged enums lose spans (toml-rs #535).
 
 use crate::error::{LoadError, LoadErrorKind, Location};
-use crate::import::{
-    ImportOptions, Selector, UpAxis, framing_camera, geometry_bounds, select_camera,
-};
+use crate::framing::{framing_camera, geometry_bounds};
+use crate::import::{ImportOptions, Selector, UpAxis, select_camera};
 use crate::include;
 use crate::suggest::did_you_mean;
 use glam::{DVec3, Vec3};
