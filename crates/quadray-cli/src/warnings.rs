@@ -2,7 +2,7 @@
 //! `check` and `render` on stderr, never fatal.
 
 use quadray::quadric::ROUNDING_WARNING;
-use quadray::{Geometry, Mesh, Quadric, Scene, Texture};
+use quadray::{Geometry, Level, Mesh, Quadric, Scene, Texture};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -116,19 +116,20 @@ fn three_digits(x: f64) -> String {
 /// Every quadric of the scene with a label naming it: `quadric[i]` in the scene, `quadric[j] of
 /// prototype p` inside an instanced prototype.
 fn quadrics(g: &Geometry) -> impl Iterator<Item = (String, &Quadric)> {
-    let top = g
-        .quadrics
-        .iter()
-        .enumerate()
-        .map(|(i, q)| (format!("quadric[{i}]"), q));
-    let placed = g.prototypes.iter().enumerate().flat_map(|(p, proto)| {
-        proto
-            .quadrics
-            .iter()
-            .enumerate()
-            .map(move |(j, q)| (format!("quadric[{j}] of prototype {p}"), q))
-    });
-    top.chain(placed)
+    levels(g).enumerate().flat_map(|(level, l)| {
+        l.quadrics.iter().enumerate().map(move |(i, q)| {
+            let label = match level {
+                0 => format!("quadric[{i}]"),
+                p => format!("quadric[{i}] of prototype {}", p - 1),
+            };
+            (label, q)
+        })
+    })
+}
+
+/// The scene's own shapes (level 0), then each prototype's.
+fn levels(g: &Geometry) -> impl Iterator<Item = Level<'_>> {
+    (0..=g.prototypes.len()).map(|level| g.level(level))
 }
 
 /// One line per material whose image texture is read through texture coordinates that shapes
@@ -149,20 +150,14 @@ fn missing_texture_coordinates<'a>(
     let mut lacking: BTreeMap<u32, BTreeMap<&str, usize>> = BTreeMap::new();
     // Every shape as (material, kind, its mesh if it is one).
     let g = scene.geometry();
-    let prototypes = || g.prototypes.iter();
-    let shapes = g
-        .spheres
-        .iter()
-        .chain(prototypes().flat_map(|p| p.spheres.iter()))
-        .map(|s| (s.material, "sphere", None))
-        .chain(g.planes.iter().map(|p| (p.material, "plane", None)))
-        .chain(quadrics(g).map(|(_, q)| (q.material(), "quadric", None)))
-        .chain(
-            g.meshes
-                .iter()
-                .chain(prototypes().flat_map(|p| p.meshes.iter()))
-                .map(|m| (m.material(), "mesh", Some(m))),
-        );
+    let shapes = levels(g)
+        .flat_map(|l| {
+            let spheres = l.spheres.iter().map(|s| (s.material, "sphere", None));
+            let quadrics = l.quadrics.iter().map(|q| (q.material(), "quadric", None));
+            let meshes = l.meshes.iter().map(|m| (m.material(), "mesh", Some(m)));
+            spheres.chain(quadrics).chain(meshes)
+        })
+        .chain(g.planes.iter().map(|p| (p.material, "plane", None)));
     for (material, kind, mesh) in shapes {
         let Some(set) = needs_set(material) else {
             continue;
