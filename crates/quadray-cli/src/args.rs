@@ -66,6 +66,9 @@ pub struct RenderArgs {
     /// Samples per pixel (overrides the scene).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: Option<u32>,
+    /// Adaptive sampling (overrides the scene's `[render]` choice).
+    #[command(flatten)]
+    pub sampling: crate::sampling_args::SamplingArgs,
     /// Resolution as WIDTHxHEIGHT (overrides the scene).
     #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
     pub res: Option<(u32, u32)>,

@@ -32,6 +32,14 @@ pub const ALBEDO: [&str; 3] = [
 ];
 /// Channel name of the object-index pass.
 pub const INDEX_OB: &str = "ViewLayer.IndexOB.X";
+/// Channel name of the per-pixel sample count (Cycles' "Debug Sample Count" pass).
+pub const SAMPLE_COUNT: &str = "ViewLayer.Debug Sample Count.X";
+/// Channel names of the samples' variance (pbrt-v4's `Variance` channels, in the view layer).
+pub const VARIANCE: [&str; 3] = [
+    "ViewLayer.Variance.R",
+    "ViewLayer.Variance.G",
+    "ViewLayer.Variance.B",
+];
 
 /// Channel names of the beauty image in a file without passes.
 pub const RGBA: [&str; 4] = ["R", "G", "B", "A"];
@@ -210,6 +218,18 @@ fn layer(
             // Blender stores the index as a float; ids below 2^24 are exact.
             channels.push(AnyChannel::new(INDEX_OB, f32s(&|s| s.object_id as f32)));
         }
+        if sel.sample_count {
+            // As a float, like Blender's; counts up to MAX_SPP are exact.
+            channels.push(AnyChannel::new(
+                SAMPLE_COUNT,
+                f32s(&|s| s.sample_count as f32),
+            ));
+        }
+        if sel.variance {
+            for (c, name) in VARIANCE.iter().enumerate() {
+                channels.push(AnyChannel::new(*name, f32s(&|s| s.variance[c])));
+            }
+        }
     }
     let attributes = LayerAttributes {
         layer_name: name.map(Text::new_or_panic),
@@ -321,6 +341,8 @@ pub fn film_and_aovs(
         normal: channels.contains_key(NORMAL[0]),
         albedo: channels.contains_key(ALBEDO[0]),
         object_id: channels.contains_key(INDEX_OB),
+        sample_count: channels.contains_key(SAMPLE_COUNT),
+        variance: channels.contains_key(VARIANCE[0]),
     };
     if !selection.any() {
         return Ok((film, None, half));
@@ -336,10 +358,11 @@ pub fn film_and_aovs(
             c.context("incomplete pass")?,
         ]))
     };
-    let (depth, ids) = (values(DEPTH), values(INDEX_OB));
-    let (normal, albedo) = (
+    let (depth, ids, counts) = (values(DEPTH), values(INDEX_OB), values(SAMPLE_COUNT));
+    let (normal, albedo, variance) = (
         triple(NORMAL, selection.normal)?,
         triple(ALBEDO, selection.albedo)?,
+        triple(VARIANCE, selection.variance)?,
     );
     let v3 = |t: &Option<[Vec<f32>; 3]>, i: usize| {
         t.as_ref().map_or(glam::Vec3::ZERO, |[a, b, c]| {
@@ -354,6 +377,8 @@ pub fn film_and_aovs(
             object_id: ids
                 .as_ref()
                 .map_or(quadray::aov::NO_HIT_OBJECT, |d| d[i] as u32),
+            sample_count: counts.as_ref().map_or(0, |d| d[i] as u32),
+            variance: v3(&variance, i),
         })
         .collect();
     let aovs = Aovs::new(width, height, selection, samples).context("channel sizes differ")?;

@@ -20,6 +20,7 @@ pub mod passes;
 mod progress;
 pub mod quadric_cmd;
 pub mod render_cmd;
+pub mod sampling_args;
 pub mod shell;
 pub mod showcase;
 pub mod snippet;

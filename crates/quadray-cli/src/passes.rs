@@ -20,6 +20,10 @@ pub enum Pass {
     Albedo,
     /// 1-based object index, 0 for the background.
     ObjectId,
+    /// Samples taken in each pixel (varies when sampling is adaptive).
+    SampleCount,
+    /// Sample variance of each pixel's linear RGB samples.
+    Variance,
 }
 
 impl Pass {
@@ -33,6 +37,8 @@ impl Pass {
             Pass::Normal => s.normal = true,
             Pass::Albedo => s.albedo = true,
             Pass::ObjectId => s.object_id = true,
+            Pass::SampleCount => s.sample_count = true,
+            Pass::Variance => s.variance = true,
         }
         s
     }
@@ -61,6 +67,8 @@ fn union(a: AovSelection, b: AovSelection) -> AovSelection {
         normal: a.normal || b.normal,
         albedo: a.albedo || b.albedo,
         object_id: a.object_id || b.object_id,
+        sample_count: a.sample_count || b.sample_count,
+        variance: a.variance || b.variance,
     }
 }
 
@@ -117,7 +125,8 @@ pub fn depth_display_range(
 /// at the nearest hit to a dark grey at [`depth_display_range`]'s far end and beyond (misses
 /// black); normals as (n + 1)/2 without
 /// encoding (the usual normal-map colours; misses black); object ids as distinct colours
-/// (background black).
+/// (background black); sample counts as grey on a log2 scale up to the largest count; variance as
+/// its square root (the samples' standard deviation), sRGB-encoded.
 pub fn pass_rgb8(
     pass: Pass,
     film: &Film,
@@ -166,8 +175,30 @@ pub fn pass_rgb8(
             .iter()
             .flat_map(|p| id_colour(p.object_id))
             .collect(),
+        Pass::SampleCount => {
+            let s = samples()?;
+            let most = s.iter().map(|p| p.sample_count).max().unwrap_or(1).max(2);
+            s.iter()
+                .flat_map(|p| [sample_count_grey(p.sample_count, most); 3])
+                .collect()
+        }
+        Pass::Variance => samples()?
+            .iter()
+            .flat_map(|p| {
+                p.variance
+                    .to_array()
+                    .map(|v| encode_srgb8(v.max(0.0).sqrt()))
+            })
+            .collect(),
     };
     Ok(bytes)
+}
+
+/// The grey showing a pixel's sample count: black at one sample, white at `most`, on a log2
+/// scale (each doubling, one adaptive round, is an equal step).
+fn sample_count_grey(count: u32, most: u32) -> u8 {
+    let t = (count.max(1) as f64).log2() / (most as f64).log2();
+    (255.0 * t.clamp(0.0, 1.0)).round() as u8
 }
 
 /// A saturated colour for object `id`, far from its neighbours' (golden-angle hues); black for 0.

@@ -1,4 +1,5 @@
-//! A row progress bar on stderr, drawn only when stderr is a terminal.
+//! A row progress bar on stderr, drawn only when stderr is a terminal; an adaptive render
+//! restarts it each round and shows the error still to go.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -14,9 +15,9 @@ impl RowBar {
             ProgressDrawTarget::stderr()
         };
         let bar = ProgressBar::with_draw_target(Some(rows as u64), target);
-        if let Ok(style) =
-            ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} rows, eta {eta}")
-        {
+        if let Ok(style) = ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:40}] {pos}/{len} rows, eta {eta} {msg}",
+        ) {
             bar.set_style(style.progress_chars("=> "));
         }
         RowBar(bar)
@@ -31,5 +32,20 @@ impl RowBar {
 impl quadray::Progress for RowBar {
     fn row_done(&self) {
         self.0.inc(1);
+    }
+
+    /// Starts the bar over for the next adaptive round, showing the error still to go.
+    fn round_done(&self, round: &quadray::adaptive::RoundSummary) {
+        if round.active == 0 {
+            return;
+        }
+        self.0.set_message(format!(
+            "round {}: {:.1}% of pixels above error {} (worst {:.3})",
+            round.round + 1,
+            100.0 * round.active as f64 / round.pixels.max(1) as f64,
+            round.target_error,
+            round.worst_error
+        ));
+        self.0.set_position(0);
     }
 }

@@ -8,7 +8,9 @@ use crate::progress::RowBar;
 use crate::tiles::{Piece, piece_bands};
 use crate::{StatusError, usage_ensure};
 use anyhow::{Context, Result};
-use quadray::{AovSelection, Aovs, PixelWindow, RayCounts, RenderSettings, Rendered, Scene};
+use quadray::{
+    AovSelection, Aovs, PixelWindow, RayCounts, RenderSettings, Rendered, SamplingStats, Scene,
+};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -87,9 +89,22 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         for (rendered, _) in &parts {
             counts += rendered.counts;
         }
+        let windows: Vec<(SamplingStats, u64)> = parts
+            .iter()
+            .map(|(r, _)| (r.sampling, r.film.pixels().len() as u64))
+            .collect();
+        let sampling = SamplingStats::merged(&windows).context("nothing was rendered")?;
         eprintln!(
             "{}",
-            stats_line(args, &settings, rows, counts, render_time, &job.output)
+            stats_line(
+                args,
+                &settings,
+                rows,
+                counts,
+                &sampling,
+                render_time,
+                &job.output
+            )
         );
     }
     Ok(())
@@ -155,6 +170,7 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
     let mut s = loaded.settings;
     s.spp = args.spp.unwrap_or(s.spp);
     s.max_depth = args.max_depth.unwrap_or(s.max_depth);
+    s.adaptive = args.sampling.resolve(args.spp, s.adaptive)?;
     let mut settings = s.render_settings();
     settings.seed = args.seed;
     if let Some(crop) = args.crop {
@@ -300,11 +316,17 @@ fn scene_hash(args: &RenderArgs) -> Result<String> {
 /// versions may render a pixel differently).
 fn settings_text(settings: &RenderSettings, selection: AovSelection, half: bool) -> String {
     format!(
-        "quadray {}; {}x{}; spp {}; max depth {}; seed {}; passes {}; half {half}",
+        "quadray {}; {}x{}; {}; max depth {}; seed {}; passes {}; half {half}",
         env!("CARGO_PKG_VERSION"),
         settings.width,
         settings.height,
-        settings.spp,
+        match &settings.adaptive {
+            None => format!("spp {}", settings.spp),
+            Some(a) => format!(
+                "adaptive: target error {}, spp {}..{}, time limit {:?}",
+                a.target_error, a.min_spp, a.max_spp, a.time_limit
+            ),
+        },
         settings.whitted.max_depth,
         settings.seed,
         crate::passes::names_of(selection),
@@ -317,6 +339,7 @@ fn stats_line(
     settings: &RenderSettings,
     rows: u32,
     c: RayCounts,
+    sampling: &SamplingStats,
     time: Duration,
     output: &std::path::Path,
 ) -> String {
@@ -339,8 +362,8 @@ fn stats_line(
     };
     let secs = time.as_secs_f64();
     format!(
-        "{size}, {} spp: {} camera + {} shadow + {} reflection rays in {secs:.3} s ({:.2} Mrays/s) -> {}",
-        settings.spp,
+        "{size}, {}: {} camera + {} shadow + {} reflection rays in {secs:.3} s ({:.2} Mrays/s) -> {}",
+        sampling.summary(),
         c.camera,
         c.shadow,
         c.reflection,

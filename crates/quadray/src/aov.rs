@@ -1,11 +1,12 @@
 //! Arbitrary output variables (AOVs): per-pixel facts about the first surface a camera ray meets,
 //! for compositing beside the beauty image.
 //!
-//! Every pass is taken from the **first hit of the first sample** of a pixel, not averaged: an
+//! Every surface pass is taken from the **first hit of the first sample** of a pixel, not averaged: an
 //! average of depths or object ids across an edge is a value that belongs to no surface. With one
 //! sample per pixel that sample is the pixel centre; with more, it is the pixel's first stratified
 //! sample, so edges in the passes are aliased while the beauty image is not. Passes are computed
-//! only when asked for: a render without them does no extra work.
+//! only when asked for: a render without them does no extra work. Two passes describe the sampling
+//! instead of the surface: the pixel's sample count and the variance of its samples.
 
 use crate::geometry::Geometry;
 use crate::scene::Scene;
@@ -29,6 +30,10 @@ pub struct AovSelection {
     pub albedo: bool,
     /// 1-based object index (see [`Geometry::object_index`]); 0 where nothing is hit.
     pub object_id: bool,
+    /// Samples the pixel received (the same everywhere unless sampling is adaptive).
+    pub sample_count: bool,
+    /// Sample variance of the pixel's linear RGB samples ([`crate::film::PixelEstimate::variance`]).
+    pub variance: bool,
 }
 
 impl AovSelection {
@@ -38,11 +43,18 @@ impl AovSelection {
         normal: false,
         albedo: false,
         object_id: false,
+        sample_count: false,
+        variance: false,
     };
 
     /// Whether any pass is selected.
     pub fn any(&self) -> bool {
-        self.depth || self.normal || self.albedo || self.object_id
+        self.depth
+            || self.normal
+            || self.albedo
+            || self.object_id
+            || self.sample_count
+            || self.variance
     }
 }
 
@@ -57,6 +69,10 @@ pub struct AovSample {
     pub albedo: Vec3,
     /// 1-based object index, or [`NO_HIT_OBJECT`].
     pub object_id: u32,
+    /// Samples taken in the pixel (filled in after sampling).
+    pub sample_count: u32,
+    /// Sample variance of the pixel's linear RGB samples (filled in after sampling).
+    pub variance: Vec3,
 }
 
 impl AovSample {
@@ -66,7 +82,20 @@ impl AovSample {
         normal: Vec3::ZERO,
         albedo: Vec3::ZERO,
         object_id: NO_HIT_OBJECT,
+        sample_count: 0,
+        variance: Vec3::ZERO,
     };
+
+    /// Sets the selected sampling passes: the pixel's sample count and its samples' variance
+    /// (`None` where it was not estimated, which only happens when the pass is not selected).
+    pub fn fill_sampling(&mut self, selection: AovSelection, count: u32, variance: Option<Vec3>) {
+        if selection.sample_count {
+            self.sample_count = count;
+        }
+        if selection.variance {
+            self.variance = variance.unwrap_or(Vec3::ZERO);
+        }
+    }
 
     /// The selected passes of a camera ray starting at `origin` with direction `dir`, given its
     /// first hit; `forward` is the camera's unit viewing axis.
@@ -244,6 +273,8 @@ mod tests {
             normal: true,
             albedo: true,
             object_id: true,
+            sample_count: true,
+            variance: true,
         }
     }
 

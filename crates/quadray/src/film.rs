@@ -1,6 +1,7 @@
-//! The film: a linear f32 RGB image, and its sRGB encoding for 8-bit outputs.
+//! The film: a linear f32 RGB image, its sRGB encoding for 8-bit outputs, and the running
+//! per-pixel estimate (mean, variance, error) that adaptive sampling decides by.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 /// A linear, scene-referred RGB image, row-major from the top-left pixel.
 #[derive(Clone, Debug, PartialEq)]
@@ -63,6 +64,104 @@ impl Film {
     }
 }
 
+/// Display values below this count as this in a pixel's relative error: near-black pixels are
+/// judged by their absolute error, so noise a viewer cannot see does not draw samples.
+pub const ERROR_FLOOR: f64 = 0.1;
+
+/// The number of aligned runs of samples ("batches") a pixel's error is estimated from.
+pub const ERROR_BATCHES: u32 = 8;
+
+/// One pixel's running estimate from its samples so far: the linear RGB mean that the image
+/// shows and the RGB variance (Welford's online algorithm, in f64), and the display-value sums
+/// that the pixel's error is estimated from.
+///
+/// The **display value** of a sample is the mean of its three sRGB-encoded channels
+/// ([`encode_srgb`]: clamped to [0, 1], the value a viewer sees). The pixel's **relative error**
+/// ([`PixelEstimate::relative_error`]) is the standard error of its mean display value divided by
+/// that mean, or by [`ERROR_FLOOR`] where the mean is below it.
+///
+/// The standard error is estimated by **batch means**: the n samples (n = 2^k, n >= 8) are split
+/// into [`ERROR_BATCHES`] aligned runs of n/8, and SE² = Σ(bᵢ − b̄)² / (8 · 7) over the runs'
+/// means bᵢ. With [`crate::sampler::progressive_2d`] each aligned run is itself a stratified net,
+/// so its mean has the stratified error: the estimate follows the error stratification leaves
+/// (for an edge it falls about as n^-3/4, not n^-1/2 as the samples' plain variance would say),
+/// and with 7 degrees of freedom it is rarely fooled by two halves agreeing by chance.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelEstimate {
+    count: u32,
+    rgb_mean: DVec3,
+    rgb_m2: DVec3,
+    /// Sums of the display values of each aligned run of `batch_size` samples.
+    batch_sums: [f32; ERROR_BATCHES as usize],
+}
+
+impl PixelEstimate {
+    /// Adds one sample's linear radiance (the pixel's next sample in its sequence).
+    pub fn add(&mut self, radiance: Vec3) {
+        let index = self.count;
+        self.count += 1;
+        let n = self.count as f64;
+        // Welford: m_n = m_{n-1} + (x - m_{n-1}) / n, M2_n = M2_{n-1} + (x - m_{n-1})(x - m_n).
+        let x = radiance.as_dvec3();
+        let delta = x - self.rgb_mean;
+        self.rgb_mean += delta / n;
+        self.rgb_m2 += delta * (x - self.rgb_mean);
+        // Past 8 · 2^j samples the runs double: pairs of runs merge into the first half.
+        if index >= ERROR_BATCHES && index.is_power_of_two() {
+            let half = ERROR_BATCHES as usize / 2;
+            for i in 0..half {
+                self.batch_sums[i] = self.batch_sums[2 * i] + self.batch_sums[2 * i + 1];
+            }
+            self.batch_sums[half..].fill(0.0);
+        }
+        let display = radiance.to_array().map(encode_srgb).iter().sum::<f32>() / 3.0;
+        self.batch_sums[(index / Self::batch_size(index + 1)) as usize] += display;
+    }
+
+    /// The length of the runs when `count` samples are taken: the smallest power of two that
+    /// makes 8 runs hold them (at least 1).
+    fn batch_size(count: u32) -> u32 {
+        (count.next_power_of_two() / ERROR_BATCHES).max(1)
+    }
+
+    /// Samples taken.
+    pub fn count(&self) -> u32 {
+        self.count
+    }
+
+    /// The mean linear RGB of the samples (zero before any sample).
+    pub fn mean(&self) -> Vec3 {
+        self.rgb_mean.as_vec3()
+    }
+
+    /// The unbiased sample variance of each linear RGB channel (zero below two samples).
+    pub fn variance(&self) -> Vec3 {
+        if self.count < 2 {
+            return Vec3::ZERO;
+        }
+        (self.rgb_m2 / (self.count - 1) as f64).as_vec3()
+    }
+
+    /// The relative standard error of the mean display value (see the type's documentation):
+    /// infinite below [`ERROR_BATCHES`] samples, where it is unknown. At a count that is not a
+    /// power of two only the complete runs count.
+    pub fn relative_error(&self) -> f64 {
+        if self.count < ERROR_BATCHES {
+            return f64::INFINITY;
+        }
+        let size = Self::batch_size(self.count);
+        let full = (self.count / size).min(ERROR_BATCHES) as usize;
+        let means: Vec<f64> = self.batch_sums[..full]
+            .iter()
+            .map(|&sum| sum as f64 / size as f64)
+            .collect();
+        let mean = means.iter().sum::<f64>() / full as f64;
+        let spread = means.iter().map(|b| (b - mean).powi(2)).sum::<f64>();
+        let standard_error = (spread / ((full - 1) * full) as f64).sqrt();
+        standard_error / mean.max(ERROR_FLOOR)
+    }
+}
+
 /// The sRGB transfer function (IEC 61966-2-1) applied to a clamped linear value, as an 8-bit code.
 pub fn encode_srgb8(linear: f32) -> u8 {
     (encode_srgb(linear) * 255.0 + 0.5) as u8
@@ -104,5 +203,63 @@ mod tests {
         assert_eq!(encode_srgb8(7.0), 255);
         assert_eq!(encode_srgb8(-1.0), 0);
         assert_eq!(encode_srgb8(0.5), 188);
+    }
+
+    /// Welford's estimates match the two-pass formulas; the error is the batch-means standard
+    /// error over 8 aligned runs, whatever order the runs merged in.
+    #[test]
+    fn estimates_match_the_direct_formulas() {
+        let samples: Vec<f32> = (0..64)
+            .map(|i| ((i * 37 % 64) as f32 / 63.0).powi(2))
+            .collect();
+        let mut e = PixelEstimate::default();
+        for (k, &v) in samples.iter().enumerate() {
+            e.add(Vec3::splat(v));
+            let n = k + 1;
+            if n < 8 {
+                assert!(e.relative_error().is_infinite());
+                continue;
+            }
+            if !n.is_power_of_two() {
+                continue;
+            }
+            let ys: Vec<f64> = samples[..n]
+                .iter()
+                .map(|&v| encode_srgb(v) as f64)
+                .collect();
+            let batches: Vec<f64> = ys
+                .chunks(n / 8)
+                .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+                .collect();
+            let m = batches.iter().sum::<f64>() / 8.0;
+            let se = (batches.iter().map(|b| (b - m).powi(2)).sum::<f64>() / 56.0).sqrt();
+            let expected = se / m.max(ERROR_FLOOR);
+            assert!(
+                (e.relative_error() - expected).abs() < 1e-6 * expected.max(1e-3),
+                "n {n}"
+            );
+        }
+        let n = samples.len() as f64;
+        let mean = samples.iter().map(|&v| v as f64).sum::<f64>() / n;
+        let var = samples
+            .iter()
+            .map(|&v| (v as f64 - mean).powi(2))
+            .sum::<f64>()
+            / (n - 1.0);
+        assert!((e.mean().x as f64 - mean).abs() < 1e-7);
+        assert!((e.variance().y as f64 - var).abs() < 1e-7);
+
+        let mut flat = PixelEstimate::default();
+        for _ in 0..8 {
+            flat.add(Vec3::new(0.3, 0.3, 0.3));
+        }
+        assert_eq!(flat.relative_error(), 0.0);
+        assert_eq!(flat.variance(), Vec3::ZERO);
+        // Near-black pixels are judged against the floor, not their own tiny mean.
+        let mut dark = PixelEstimate::default();
+        for i in 0..8 {
+            dark.add(Vec3::splat(if i % 2 == 0 { 0.0 } else { 0.0002 }));
+        }
+        assert!(dark.relative_error() < 0.05, "{}", dark.relative_error());
     }
 }

@@ -47,6 +47,7 @@
 //! ```
 
 pub mod accel;
+pub mod adaptive;
 pub mod aov;
 pub mod camera;
 pub mod film;
@@ -69,6 +70,7 @@ pub mod texture;
 pub mod triangle;
 
 pub use accel::{AccelStats, SimdPath, simd_path};
+pub use adaptive::{Adaptive, AdaptiveError, SamplingStats};
 pub use aov::{AovSample, AovSelection, Aovs};
 pub use camera::{Camera, CameraError, CameraFrame, Projection};
 pub use film::Film;

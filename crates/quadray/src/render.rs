@@ -1,11 +1,13 @@
 //! Rendering a scene to a film in parallel over rows with rayon, deterministically.
 
+use crate::adaptive::{self, Adaptive, AdaptiveError, SamplingStats};
 use crate::aov::{AovSample, AovSelection, Aovs};
-use crate::film::Film;
+use crate::camera::CameraFrame;
+use crate::film::{Film, PixelEstimate};
 use crate::integrator::{RayCounts, Whitted};
 use crate::sampler::{pixel_pattern, sample_2d};
 use crate::scene::Scene;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use std::sync::Mutex;
 
@@ -27,7 +29,8 @@ pub struct RenderSettings {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
-    /// Samples per pixel (1: the pixel centre; more: stratified jitter).
+    /// Samples per pixel (1: the pixel centre; more: stratified jitter). Ignored when
+    /// [`RenderSettings::adaptive`] is set.
     pub spp: u32,
     /// Sample set: 0 is the default; another value jitters every pixel with an unrelated pattern
     /// (a statistically independent render, e.g. a reference to measure error against).
@@ -37,6 +40,8 @@ pub struct RenderSettings {
     /// Render only this window of the image (`None`: all of it). Every pixel in the window is
     /// bit-identical to the same pixel of the whole render.
     pub crop: Option<PixelWindow>,
+    /// Error-targeted adaptive sampling instead of `spp` samples in every pixel.
+    pub adaptive: Option<Adaptive>,
 }
 
 /// A rectangle of pixels inside the full image: columns `x0..x1`, rows `y0..y1` (half-open),
@@ -114,6 +119,7 @@ impl Default for RenderSettings {
             seed: 0,
             whitted: Whitted::default(),
             crop: None,
+            adaptive: None,
         }
     }
 }
@@ -147,6 +153,9 @@ pub enum RenderError {
         /// Image height.
         height: u32,
     },
+    /// Adaptive sampling settings outside their limits.
+    #[error("adaptive sampling: {0}")]
+    Adaptive(#[from] AdaptiveError),
     /// The camera cannot produce rays at this aspect.
     #[error("camera: {0}")]
     Camera(#[from] crate::camera::CameraError),
@@ -173,6 +182,9 @@ impl RenderSettings {
         if !(1..=MAX_SPP).contains(&self.spp) {
             return Err(RenderError::Spp(self.spp));
         }
+        if let Some(adaptive) = &self.adaptive {
+            adaptive.validate()?;
+        }
         if !(1..=MAX_DEPTH).contains(&self.whitted.max_depth) {
             return Err(RenderError::Depth(self.whitted.max_depth));
         }
@@ -197,8 +209,11 @@ impl RenderSettings {
 
 /// Receives progress while rendering (implemented by front ends, e.g. a progress bar).
 pub trait Progress: Sync {
-    /// Called after each finished row.
+    /// Called after each finished row (of each round, when sampling is adaptive).
     fn row_done(&self);
+
+    /// Called after each round of adaptive sampling, with where the image stands.
+    fn round_done(&self, _round: &adaptive::RoundSummary) {}
 }
 
 /// A progress sink that ignores everything.
@@ -217,6 +232,8 @@ pub struct Rendered {
     pub window: PixelWindow,
     /// Rays traced, by kind.
     pub counts: RayCounts,
+    /// Samples taken per pixel, and the error reached when sampling was adaptive.
+    pub sampling: SamplingStats,
 }
 
 /// Renders `scene` on the current rayon pool. Every pixel depends only on its own position, so the
@@ -238,23 +255,122 @@ pub fn render_with_aovs(
     progress: &dyn Progress,
 ) -> Result<(Rendered, Option<Aovs>), RenderError> {
     settings.validate()?;
-    let (w, h) = (settings.width, settings.height);
-    let window = settings.window();
-    let (ww, wh) = (window.width() as usize, window.height() as usize);
-    let camera = scene.camera().prepare(w as f64 / h as f64)?;
-    let forward = (scene.camera().to - scene.camera().from).normalize();
+    let context = SampleContext::new(scene, settings, selection)?;
+    match settings.adaptive {
+        Some(adaptive) => adaptive::render_adaptive(&context, &adaptive, progress),
+        None => render_uniform(&context, progress),
+    }
+}
+
+/// What every camera sample of one render needs: the scene, the prepared camera and the passes.
+pub(crate) struct SampleContext<'a> {
+    /// The scene being rendered.
+    pub scene: &'a Scene,
+    /// The settings being rendered.
+    pub settings: &'a RenderSettings,
+    /// The pixels to render.
+    pub window: PixelWindow,
+    /// The passes to fill besides the beauty image.
+    pub selection: AovSelection,
+    camera: CameraFrame,
+    forward: DVec3,
+}
+
+impl<'a> SampleContext<'a> {
+    fn new(
+        scene: &'a Scene,
+        settings: &'a RenderSettings,
+        selection: AovSelection,
+    ) -> Result<SampleContext<'a>, RenderError> {
+        let aspect = settings.width as f64 / settings.height as f64;
+        Ok(SampleContext {
+            scene,
+            settings,
+            window: settings.window(),
+            selection,
+            camera: scene.camera().prepare(aspect)?,
+            forward: (scene.camera().to - scene.camera().from).normalize(),
+        })
+    }
+
+    /// The radiance of the camera ray through `(dx, dy)` inside pixel `(x, y)` of the full image;
+    /// with `aov`, also the pixel's surface passes from the ray's first hit.
+    pub fn trace(
+        &self,
+        (x, y): (u32, u32),
+        (dx, dy): (f64, f64),
+        aov: Option<&mut AovSample>,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
+        let (w, h) = (self.settings.width as f64, self.settings.height as f64);
+        let ray = self.camera.ray((x as f64 + dx) / w, (y as f64 + dy) / h);
+        let whitted = &self.settings.whitted;
+        match aov {
+            Some(aov) => {
+                let (radiance, hit) = whitted.camera_ray_hit(self.scene, &ray, counts);
+                *aov = AovSample::from_hit(
+                    self.scene,
+                    self.selection,
+                    ray.origin,
+                    ray.dir,
+                    self.forward,
+                    hit.as_ref(),
+                );
+                radiance
+            }
+            None => whitted.camera_ray(self.scene, &ray, counts),
+        }
+    }
+
+    /// One pass sample per pixel of the window when any pass is selected, else nothing.
+    pub fn aov_buffer(&self) -> Vec<AovSample> {
+        let pixels = self.window.width() as usize * self.window.height() as usize;
+        if self.selection.any() {
+            vec![AovSample::MISS; pixels]
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// The buffer's rows (all `None` when it is empty: no pass selected).
+    pub fn aov_rows<'b>(&self, buffer: &'b mut [AovSample]) -> Vec<Option<&'b mut [AovSample]>> {
+        if buffer.is_empty() {
+            (0..self.window.height()).map(|_| None).collect()
+        } else {
+            buffer
+                .chunks_mut(self.window.width() as usize)
+                .map(Some)
+                .collect()
+        }
+    }
+
+    /// The passes of the finished window, or `None` when none was selected.
+    pub fn finish_aovs(&self, samples: Vec<AovSample>) -> Option<Aovs> {
+        self.selection
+            .any()
+            .then(|| {
+                Aovs::new(
+                    self.window.width(),
+                    self.window.height(),
+                    self.selection,
+                    samples,
+                )
+            })
+            .flatten()
+    }
+}
+
+/// `settings.spp` samples in every pixel, by correlated multi-jittered sampling.
+fn render_uniform(
+    context: &SampleContext<'_>,
+    progress: &dyn Progress,
+) -> Result<(Rendered, Option<Aovs>), RenderError> {
+    let (settings, window, selection) = (context.settings, context.window, context.selection);
+    let ww = window.width() as usize;
     let mut film = Film::new(window.width(), window.height());
     // Pass samples are allocated and computed only when a pass is selected.
-    let mut aov_samples = if selection.any() {
-        vec![AovSample::MISS; ww * wh]
-    } else {
-        Vec::new()
-    };
-    let aov_rows: Vec<Option<&mut [AovSample]>> = if selection.any() {
-        aov_samples.chunks_mut(ww).map(Some).collect()
-    } else {
-        (0..wh).map(|_| None).collect()
-    };
+    let mut aov_samples = context.aov_buffer();
+    let aov_rows = context.aov_rows(&mut aov_samples);
     let totals = Mutex::new(RayCounts::default());
     let spp = settings.spp;
     let inv_spp = 1.0 / spp as f32;
@@ -270,44 +386,36 @@ pub fn render_with_aovs(
             for (column, pixel) in row.iter_mut().enumerate() {
                 let x = window.x0 + column as u32;
                 let pattern = pixel_pattern(x, y, settings.seed);
+                let mut aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
+                // The variance pass needs the running estimate; the image keeps its f32 sum.
+                let mut estimate = selection.variance.then(PixelEstimate::default);
                 let mut sum = Vec3::ZERO;
                 for s in 0..spp {
-                    let (dx, dy) = sample_2d(s, spp, pattern);
-                    let ray = camera.ray((x as f64 + dx) / w as f64, (y as f64 + dy) / h as f64);
-                    match aov_row.as_deref_mut() {
-                        Some(aovs) if s == 0 => {
-                            let (radiance, hit) =
-                                settings.whitted.camera_ray_hit(scene, &ray, &mut counts);
-                            aovs[column] = AovSample::from_hit(
-                                scene,
-                                selection,
-                                ray.origin,
-                                ray.dir,
-                                forward,
-                                hit.as_ref(),
-                            );
-                            sum += radiance;
-                        }
-                        _ => sum += settings.whitted.camera_ray(scene, &ray, &mut counts),
+                    let offset = sample_2d(s, spp, pattern);
+                    let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
+                    let radiance = context.trace((x, y), offset, first_hit, &mut counts);
+                    if let Some(e) = &mut estimate {
+                        e.add(radiance);
                     }
+                    sum += radiance;
                 }
                 *pixel = sum * inv_spp;
+                if let Some(aov) = aov {
+                    aov.fill_sampling(selection, spp, estimate.map(|e| e.variance()));
+                }
             }
             *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
             progress.row_done();
         });
     let counts = totals.into_inner().unwrap_or_else(|e| e.into_inner());
-    let aovs = selection
-        .any()
-        .then(|| Aovs::new(window.width(), window.height(), selection, aov_samples))
-        .flatten();
     Ok((
         Rendered {
             film,
             window,
             counts,
+            sampling: SamplingStats::uniform(spp),
         },
-        aovs,
+        context.finish_aovs(aov_samples),
     ))
 }
 

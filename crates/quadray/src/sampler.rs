@@ -85,6 +85,48 @@ pub fn sample_2d(s: u32, count: u32, pattern: u32) -> (f64, f64) {
     )
 }
 
+/// Point `index` of pixel `pattern`'s progressive sequence in the unit pixel: the first two
+/// dimensions of the Sobol sequence, Owen-scrambled per pixel (hash-based nested uniform
+/// scrambling, Burley, "Practical Hash-based Owen Scrambling", JCGT 9(4), 2020).
+///
+/// Unlike [`sample_2d`], the points do not depend on a total count: every prefix of 2^k points is
+/// a (0, k, 2)-net (one point in each of the 2^k elementary intervals of every shape), so samples
+/// added in rounds keep the stratification of the ones before them. The scramble keeps that
+/// property and decorrelates the pixels.
+pub fn progressive_2d(index: u32, pattern: u32) -> (f64, f64) {
+    // Dimension 0 of Sobol is the van der Corput sequence (the index's bits reversed); dimension
+    // 1 uses the direction numbers v_k = v_{k-1} ^ (v_{k-1} >> 1), v_0 = 2^31.
+    let x = index.reverse_bits();
+    let mut y = 0u32;
+    let mut direction = 1u32 << 31;
+    let mut bits = index;
+    while bits != 0 {
+        if bits & 1 != 0 {
+            y ^= direction;
+        }
+        bits >>= 1;
+        direction ^= direction >> 1;
+    }
+    let x = owen_scramble(x, pattern.wrapping_mul(0x8da6b343));
+    let y = owen_scramble(y, pattern.wrapping_mul(0xd8163841) ^ 0x6c50b47c);
+    // 2^-32 keeps the coordinates below 1.
+    let unit = 1.0 / 4294967296.0;
+    (x as f64 * unit, y as f64 * unit)
+}
+
+/// Nested uniform (Owen) scrambling of a 32-bit binary fraction keyed by `seed`: each bit is
+/// flipped by a hash of the bits above it. It works on the reversed bits, where Laine and Karras's
+/// hash flips each bit by the bits below it.
+fn owen_scramble(value: u32, seed: u32) -> u32 {
+    let mut v = value.reverse_bits();
+    v = v.wrapping_add(seed);
+    v ^= v.wrapping_mul(0x6c50b47c);
+    v ^= v.wrapping_mul(0xb82f1e52);
+    v ^= v.wrapping_mul(0xc7afe638);
+    v ^= v.wrapping_mul(0x8d22f6e6);
+    v.reverse_bits()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -138,5 +180,53 @@ mod tests {
     #[test]
     fn one_sample_is_the_pixel_centre() {
         assert_eq!(sample_2d(0, 1, 123), (0.5, 0.5));
+    }
+
+    /// Every power-of-two prefix of a pixel's progressive sequence is a (0, k, 2)-net: for each
+    /// split of 2^k into 2^i columns by 2^(k-i) rows, every cell holds exactly one point.
+    #[test]
+    fn progressive_prefixes_are_nets() {
+        for pattern in [
+            pixel_pattern(0, 0, 0),
+            pixel_pattern(17, 42, 0),
+            pixel_pattern(3, 9, 5),
+        ] {
+            for k in 0..=8u32 {
+                let n = 1u32 << k;
+                let pts: Vec<_> = (0..n).map(|i| progressive_2d(i, pattern)).collect();
+                for i in 0..=k {
+                    let (cols, rows) = (1u32 << i, 1u32 << (k - i));
+                    let mut seen = vec![false; n as usize];
+                    for &(x, y) in &pts {
+                        assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
+                        let cell = (y * rows as f64) as u32 * cols + (x * cols as f64) as u32;
+                        assert!(
+                            !seen[cell as usize],
+                            "k {k}, {cols}x{rows}: cell {cell} twice"
+                        );
+                        seen[cell as usize] = true;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The scramble differs between pixels: two pixels' first points are unrelated.
+    #[test]
+    fn progressive_sequences_differ_between_pixels() {
+        let a = progressive_2d(0, pixel_pattern(1, 1, 0));
+        let b = progressive_2d(0, pixel_pattern(2, 1, 0));
+        assert_ne!(a, b);
+        // The mean of many pixels' first points is near the pixel centre (unbiased scramble).
+        let n = 4096;
+        let mean = (0..n)
+            .map(|i| progressive_2d(0, pixel_pattern(i, 7, 0)))
+            .fold((0.0, 0.0), |s, p| {
+                (s.0 + p.0 / n as f64, s.1 + p.1 / n as f64)
+            });
+        assert!(
+            (mean.0 - 0.5).abs() < 0.02 && (mean.1 - 0.5).abs() < 0.02,
+            "{mean:?}"
+        );
     }
 }

@@ -1,4 +1,4 @@
-//! `[camera]` and `[render]`: how the scene is seen and sampled.
+//! `[camera]` and `[output]`: how the scene is seen and where its image goes.
 
 use super::*;
 
@@ -117,36 +117,5 @@ impl Builder<'_> {
         }
         let folder = self.path.parent().unwrap_or(Path::new(""));
         Ok(folder.join(written))
-    }
-
-    pub(super) fn render(&self, r: &RenderSpec) -> Result<(SceneSettings, Vec3), LoadError> {
-        let mut s = SceneSettings::default();
-        if let Some(res) = &r.resolution {
-            let [w, h] = res.get_ref().0;
-            if !(1..=MAX_SIDE as i64).contains(&w) || !(1..=MAX_SIDE as i64).contains(&h) {
-                return Err(self.err(
-                    res.span(),
-                    "render.resolution",
-                    format!("each side must be between 1 and {MAX_SIDE}, got {w}x{h}"),
-                ));
-            }
-            // The pixel count and aspect ratio, as the renderer will check them.
-            check_resolution(w as u32, h as u32)
-                .map_err(|e| self.err(res.span(), "render.resolution", e.to_string()))?;
-            (s.width, s.height) = (w as u32, h as u32);
-        }
-        if let Some(v) = &r.spp {
-            s.spp = self.count(v, "render.spp", MAX_SPP)?;
-        }
-        if let Some(v) = &r.max_depth {
-            s.max_depth = self.count(v, "render.max_depth", MAX_DEPTH)?;
-        }
-        let background = r
-            .background
-            .as_ref()
-            .map(|v| self.colour(v, "render.background"))
-            .transpose()?
-            .unwrap_or(Vec3::ZERO);
-        Ok((s, background))
     }
 }

@@ -29,6 +29,7 @@ mod light;
 mod material;
 mod objects;
 pub mod overrides;
+mod render;
 mod spec;
 #[cfg(test)]
 mod tests;
@@ -51,6 +52,8 @@ pub struct SceneSettings {
     pub spp: u32,
     /// Most rays in one chain (camera ray included).
     pub max_depth: u32,
+    /// Adaptive sampling (`render.target_error` and its companions) instead of `spp`.
+    pub adaptive: Option<quadray::Adaptive>,
 }
 
 impl SceneSettings {
@@ -60,6 +63,7 @@ impl SceneSettings {
             width: self.width,
             height: self.height,
             spp: self.spp,
+            adaptive: self.adaptive,
             whitted: quadray::Whitted {
                 max_depth: self.max_depth,
                 ..quadray::Whitted::default()
@@ -76,6 +80,7 @@ impl Default for SceneSettings {
             height: 480,
             spp: 1,
             max_depth: 8,
+            adaptive: None,
         }
     }
 }

@@ -111,6 +111,10 @@ pub(super) struct OrbitSpec {
 pub(super) struct RenderSpec {
     pub(super) resolution: Option<Spanned<Exact<i64, 2>>>,
     pub(super) spp: Option<Spanned<i64>>,
+    pub(super) target_error: Option<Spanned<f64>>,
+    pub(super) min_spp: Option<Spanned<i64>>,
+    pub(super) max_spp: Option<Spanned<i64>>,
+    pub(super) time_limit: Option<Spanned<f64>>,
     pub(super) max_depth: Option<Spanned<i64>>,
     pub(super) background: Option<Spanned<V3>>,
 }

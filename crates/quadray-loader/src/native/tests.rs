@@ -80,7 +80,8 @@ direction = [0, 0, -1]
             width: 320,
             height: 200,
             spp: 4,
-            max_depth: 8
+            max_depth: 8,
+            adaptive: None,
         }
     );
     assert_eq!(g.planes[0].normal, DVec3::Z);
@@ -367,4 +368,58 @@ fn output_is_resolved_beside_the_scene_and_must_be_an_image() {
     let e = error("[output]\nfile = \"a.jpg\"\n");
     assert!(e.contains("t.toml:10:") && e.contains("output.file"), "{e}");
     assert!(error("[output]\nfile = \"a.png\"\nformat = 1\n").contains("format"));
+}
+
+#[test]
+fn render_tables_choose_adaptive_sampling() {
+    let s = parse("[render]\ntarget_error = 0.02\nmax_spp = 256\ntime_limit = 2.5\n").unwrap();
+    let a = s.settings.adaptive.expect("adaptive");
+    assert_eq!(a.target_error, 0.02);
+    assert_eq!((a.min_spp, a.max_spp), (16, 256));
+    assert_eq!(a.time_limit, Some(std::time::Duration::from_millis(2500)));
+    assert_eq!(s.settings.render_settings().adaptive, Some(a));
+    // A time limit alone refines every pixel until it runs out; a small maximum lowers the
+    // first round's default count with it.
+    let s = parse("[render]\ntime_limit = 1\nmax_spp = 8\n").unwrap();
+    let a = s.settings.adaptive.unwrap();
+    assert_eq!((a.target_error, a.min_spp, a.max_spp), (0.0, 8, 8));
+    assert_eq!(
+        parse("[render]\nspp = 4\n").unwrap().settings.adaptive,
+        None
+    );
+
+    for (extra, key, says) in [
+        (
+            "spp = 4\ntarget_error = 0.01",
+            "render.spp",
+            "excludes adaptive",
+        ),
+        ("max_spp = 64", "render.max_spp", "adaptive sampling only"),
+        ("target_error = -0.1", "render.target_error", "positive"),
+        ("target_error = nan", "render.target_error", "finite"),
+        (
+            "target_error = 0.1\nmax_spp = 0",
+            "render.max_spp",
+            "between 1 and",
+        ),
+        (
+            "target_error = 0.1\nmin_spp = 1",
+            "render.min_spp",
+            "power of two",
+        ),
+        (
+            "target_error = 0.1\nmin_spp = 24",
+            "render.min_spp",
+            "power of two",
+        ),
+        (
+            "target_error = 0.1\nmin_spp = 64\nmax_spp = 32",
+            "render.min_spp",
+            "power of two",
+        ),
+        ("time_limit = 0", "render.time_limit", "positive"),
+    ] {
+        let e = error(&format!("[render]\n{extra}\n"));
+        assert!(e.contains(key) && e.contains(says), "{extra}: {e}");
+    }
 }

@@ -1,0 +1,150 @@
+//! The command line's adaptive sampling options (`--target-error`, `--time-limit`, `--min-spp`,
+//! `--max-spp`) and how they combine with `--spp` and a scene's `[render]` table.
+
+use crate::StatusError;
+use clap::Args;
+use quadray::Adaptive;
+use quadray::render::MAX_SPP;
+use std::time::Duration;
+
+/// Adaptive sampling on the command line; each option overrides the scene's value.
+#[derive(Args, Debug, Default)]
+pub struct SamplingArgs {
+    /// Sample adaptively until every pixel's estimated relative error is at most E: the standard
+    /// error of its mean sRGB-encoded value over that value, below 0.1 over 0.1 (docs/sampling.md).
+    /// Replaces the scene's fixed spp.
+    #[arg(long, value_name = "E", value_parser = parse_positive, conflicts_with = "spp")]
+    pub target_error: Option<f64>,
+    /// Stop adaptive sampling after this many seconds and keep the image reached (alone: refine
+    /// every pixel until then or --max-spp).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_positive, conflicts_with = "spp")]
+    pub time_limit: Option<f64>,
+    /// Samples every pixel takes in the first adaptive round: a power of two, at least 8
+    /// (default 16).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=MAX_SPP as i64), conflicts_with = "spp")]
+    pub min_spp: Option<u32>,
+    /// The most samples an adaptive render puts in a pixel (default 1024).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64), conflicts_with = "spp")]
+    pub max_spp: Option<u32>,
+}
+
+/// A finite number above zero.
+fn parse_positive(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a number, got \"{s}\""))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite number above 0, got {s}"))
+    }
+}
+
+impl SamplingArgs {
+    /// The adaptive sampling to render with, given the scene's (`None`: a fixed spp). `--spp`
+    /// (`fixed_spp`) turns adaptive sampling off; `--target-error` or `--time-limit` turns it
+    /// on; `--min-spp` and `--max-spp` tune whichever is on, and are refused when none is.
+    pub fn resolve(
+        &self,
+        fixed_spp: Option<u32>,
+        scene: Option<Adaptive>,
+    ) -> Result<Option<Adaptive>, StatusError> {
+        if fixed_spp.is_some() {
+            return Ok(None);
+        }
+        let asked = self.target_error.is_some() || self.time_limit.is_some();
+        let Some(mut a) = scene.or(asked.then_some(Adaptive {
+            target_error: 0.0,
+            ..Adaptive::default()
+        })) else {
+            if self.min_spp.is_some() || self.max_spp.is_some() {
+                return Err(StatusError::usage(
+                    "--min-spp and --max-spp tune adaptive sampling: add --target-error E or \
+                     --time-limit SECONDS (or give the scene a render.target_error)",
+                ));
+            }
+            return Ok(None);
+        };
+        if let Some(e) = self.target_error {
+            a.target_error = e;
+        }
+        if let Some(t) = self.time_limit {
+            a.time_limit = Some(Duration::from_secs_f64(t));
+        }
+        if let Some(n) = self.max_spp {
+            a.max_spp = n;
+            if self.min_spp.is_none() {
+                a.min_spp = a.min_spp.min(n);
+            }
+        }
+        if let Some(n) = self.min_spp {
+            a.min_spp = n;
+        }
+        a.validate()
+            .map_err(|e| StatusError::usage(format!("adaptive sampling: {e}")))?;
+        Ok(Some(a))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn options_combine_with_the_scene() {
+        let none = SamplingArgs::default();
+        assert_eq!(none.resolve(None, None).unwrap(), None);
+        let scene = Adaptive {
+            target_error: 0.03,
+            ..Adaptive::default()
+        };
+        assert_eq!(none.resolve(None, Some(scene)).unwrap(), Some(scene));
+        assert_eq!(none.resolve(Some(4), Some(scene)).unwrap(), None);
+        let target = SamplingArgs {
+            target_error: Some(0.01),
+            max_spp: Some(64),
+            ..SamplingArgs::default()
+        };
+        let a = target.resolve(None, None).unwrap().unwrap();
+        assert_eq!((a.target_error, a.min_spp, a.max_spp), (0.01, 16, 64));
+        let a = target.resolve(None, Some(scene)).unwrap().unwrap();
+        assert_eq!(a.target_error, 0.01);
+        let timed = SamplingArgs {
+            time_limit: Some(1.5),
+            ..SamplingArgs::default()
+        };
+        let a = timed.resolve(None, None).unwrap().unwrap();
+        assert_eq!(a.target_error, 0.0);
+        assert_eq!(a.time_limit, Some(Duration::from_millis(1500)));
+        let small = SamplingArgs {
+            target_error: Some(0.1),
+            max_spp: Some(8),
+            ..SamplingArgs::default()
+        };
+        assert_eq!(small.resolve(None, None).unwrap().unwrap().min_spp, 8);
+    }
+
+    #[test]
+    fn tuning_without_adaptive_sampling_or_crossed_counts_are_usage_errors() {
+        let tune = SamplingArgs {
+            max_spp: Some(64),
+            ..SamplingArgs::default()
+        };
+        let e = tune.resolve(None, None).unwrap_err();
+        assert_eq!(e.status, 2);
+        assert!(e.message.contains("--target-error"), "{}", e.message);
+        let crossed = SamplingArgs {
+            target_error: Some(0.1),
+            min_spp: Some(64),
+            max_spp: Some(32),
+            ..SamplingArgs::default()
+        };
+        let e = crossed.resolve(None, None).unwrap_err();
+        assert!(e.message.contains("minimum samples"), "{}", e.message);
+        for bad in ["-1", "0", "nan", "inf", "x"] {
+            assert!(parse_positive(bad).is_err(), "{bad}");
+        }
+        assert_eq!(parse_positive("0.005"), Ok(0.005));
+    }
+}

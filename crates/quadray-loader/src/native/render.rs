@@ -1,0 +1,96 @@
+//! `[render]`: the image's size, how it is sampled (a fixed count, or adaptively to a target
+//! error) and how deep its rays go.
+
+use super::*;
+use quadray::Adaptive;
+use std::time::Duration;
+
+impl Builder<'_> {
+    pub(super) fn render(&self, r: &RenderSpec) -> Result<(SceneSettings, Vec3), LoadError> {
+        let mut s = SceneSettings::default();
+        if let Some(res) = &r.resolution {
+            let [w, h] = res.get_ref().0;
+            if !(1..=MAX_SIDE as i64).contains(&w) || !(1..=MAX_SIDE as i64).contains(&h) {
+                return Err(self.err(
+                    res.span(),
+                    "render.resolution",
+                    format!("each side must be between 1 and {MAX_SIDE}, got {w}x{h}"),
+                ));
+            }
+            // The pixel count and aspect ratio, as the renderer will check them.
+            check_resolution(w as u32, h as u32)
+                .map_err(|e| self.err(res.span(), "render.resolution", e.to_string()))?;
+            (s.width, s.height) = (w as u32, h as u32);
+        }
+        if let Some(v) = &r.spp {
+            s.spp = self.count(v, "render.spp", MAX_SPP)?;
+        }
+        s.adaptive = self.adaptive(r)?;
+        if let Some(v) = &r.max_depth {
+            s.max_depth = self.count(v, "render.max_depth", MAX_DEPTH)?;
+        }
+        let background = r
+            .background
+            .as_ref()
+            .map(|v| self.colour(v, "render.background"))
+            .transpose()?
+            .unwrap_or(Vec3::ZERO);
+        Ok((s, background))
+    }
+
+    /// Adaptive sampling, on when `target_error` or `time_limit` is given; `min_spp` and
+    /// `max_spp` tune it and mean nothing without it, and `spp` (a fixed count) excludes it.
+    fn adaptive(&self, r: &RenderSpec) -> Result<Option<Adaptive>, LoadError> {
+        if r.target_error.is_none() && r.time_limit.is_none() {
+            for (v, key) in [
+                (&r.min_spp, "render.min_spp"),
+                (&r.max_spp, "render.max_spp"),
+            ] {
+                if let Some(v) = v {
+                    return Err(self.err(
+                        v.span(),
+                        key,
+                        "applies to adaptive sampling only: give render.target_error or \
+                         render.time_limit as well",
+                    ));
+                }
+            }
+            return Ok(None);
+        }
+        if let Some(spp) = &r.spp {
+            return Err(self.err(
+                spp.span(),
+                "render.spp",
+                "a fixed sample count excludes adaptive sampling (render.target_error or \
+                 render.time_limit): give render.max_spp to bound the adaptive count",
+            ));
+        }
+        let mut a = Adaptive {
+            target_error: 0.0,
+            ..Adaptive::default()
+        };
+        if let Some(v) = &r.target_error {
+            a.target_error = self.positive(v, "render.target_error")?;
+        }
+        if let Some(v) = &r.max_spp {
+            a.max_spp = self.count(v, "render.max_spp", MAX_SPP)?;
+        }
+        if let Some(v) = &r.min_spp {
+            a.min_spp = self.count(v, "render.min_spp", MAX_SPP)?;
+        } else {
+            a.min_spp = a.min_spp.min(a.max_spp);
+        }
+        if let Some(v) = &r.time_limit {
+            a.time_limit = Some(Duration::from_secs_f64(
+                self.positive(v, "render.time_limit")?,
+            ));
+        }
+        // Only the two counts can disagree here (the others were checked above).
+        a.validate().map_err(|e| match (&r.min_spp, &r.max_spp) {
+            (Some(v), _) => self.err(v.span(), "render.min_spp", e.to_string()),
+            (None, Some(v)) => self.err(v.span(), "render.max_spp", e.to_string()),
+            (None, None) => self.err(0..0, "render", e.to_string()),
+        })?;
+        Ok(Some(a))
+    }
+}
