@@ -165,6 +165,10 @@ pub struct Comparison {
     pub rmse_linear: f64,
     /// Largest linear per-channel difference (unclamped).
     pub max_linear: f32,
+    /// Root mean square of the per-channel differences of the 8-bit sRGB images, in [0, 1]
+    /// (code difference / 255): the error a viewer of the PNG sees, and the one measure that
+    /// treats an 8-bit image (another renderer's PNG) like a float one.
+    pub rmse_display: f64,
     /// Largest display per-channel difference, in 8-bit steps.
     pub max_display: f32,
     /// Pixels with some channel's display difference over the threshold.
@@ -220,9 +224,16 @@ pub fn compare(
             over += 1;
         }
     }
+    let (ref_bytes, test_bytes) = (reference.to_srgb8(), test.to_srgb8());
+    let display_sq: f64 = ref_bytes
+        .iter()
+        .zip(&test_bytes)
+        .map(|(&a, &b)| (a as f64 - b as f64).powi(2))
+        .sum();
+    let rmse_display = (display_sq / ref_bytes.len() as f64).sqrt() / 255.0;
     let flip_map = nv_flip::flip(
-        nv_flip::FlipImageRgb8::with_data(w, h, &reference.to_srgb8()),
-        nv_flip::FlipImageRgb8::with_data(w, h, &test.to_srgb8()),
+        nv_flip::FlipImageRgb8::with_data(w, h, &ref_bytes),
+        nv_flip::FlipImageRgb8::with_data(w, h, &test_bytes),
         nv_flip::DEFAULT_PIXELS_PER_DEGREE,
     );
     let pool = nv_flip::FlipPool::from_image(&flip_map);
@@ -231,6 +242,7 @@ pub fn compare(
         height: h,
         rmse_linear: (sum_sq / (3 * n) as f64).sqrt(),
         max_linear,
+        rmse_display,
         max_display,
         over,
         over_share: over as f64 / n as f64,

@@ -1,7 +1,10 @@
 //! `quadray bench images`: render time against image error. A scene (by default
-//! `scenes/defense.toml`) is rendered at several sample counts and compared with a high-sample
-//! reference by [`crate::compare`] (RMSE in linear space, FLIP on the clamped 8-bit display
-//! images); the report is a markdown table and a log–log SVG plot.
+//! `scenes/defense.toml`) is rendered at several uniform sample counts and adaptive error targets
+//! and compared with a high-sample reference by [`crate::compare`] (RMSE in linear space and of
+//! the 8-bit display image, FLIP on the display images); with `--povray`, the same scene's POV-Ray
+//! file is rendered at several anti-aliasing settings and compared with POV-Ray's own converged
+//! image, each renderer against its own reference since their shading differs slightly. The
+//! report is a markdown table and a log–log SVG plot of CPU time against display RMSE.
 //!
 //! The reference is rendered with another sample set ([`REFERENCE_SEED`]): the renderer's
 //! per-pixel patterns are deterministic, so with the same seed its samples could share structure
@@ -14,11 +17,14 @@ use crate::compare::{Comparison, LinearImage, Thresholds, compare};
 use crate::output::{write_bytes_atomically, write_rgb8_png};
 use anyhow::{Context, Result, bail, ensure};
 use clap::Args;
-use quadray::{Film, NoProgress, RayCounts, RenderSettings, Scene, render};
-use quadray_bench::plot::{LogLogSpec, log_log_svg};
-use std::fmt::Write as _;
+use quadray::{
+    Adaptive, Film, NoProgress, RayCounts, RenderSettings, SamplingStats, Scene, render,
+};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+mod povray;
+mod report;
 
 /// Sample set of the test renders: the renderer's default.
 pub const TEST_SEED: u32 = 0;
@@ -48,6 +54,34 @@ pub struct ImagesArgs {
         default_value = "1,4,16,64"
     )]
     pub spp: Vec<u32>,
+    /// Adaptive error targets of the test renders, comma-separated (none: `--adaptive ""`).
+    #[arg(
+        long,
+        value_name = "E,E,...",
+        value_delimiter = ',',
+        default_value = "0.04,0.02,0.01,0.005"
+    )]
+    pub adaptive: Vec<f64>,
+    /// Largest samples per pixel of the adaptive renders.
+    #[arg(long, value_name = "N", default_value_t = quadray::adaptive::DEFAULT_MAX_SPP)]
+    pub max_spp: u32,
+    /// The scene as a POV-Ray 3.7 file, to race POV-Ray on it (e.g. from scenes/pov/toml2pov.py).
+    #[arg(long, value_name = "FILE.pov")]
+    pub povray: Option<PathBuf>,
+    /// POV-Ray anti-aliasing settings to time, separated by `;`.
+    #[arg(
+        long,
+        value_name = "OPTIONS;...",
+        value_delimiter = ';',
+        default_value = "-A;+A0.3 +AM1 +R3;+A0.1 +AM1 +R3;+A0.3 +AM2 +R3;+A0.1 +AM2 +R3;+A0.05 +AM2 +R4"
+    )]
+    pub pov_aa: Vec<String>,
+    /// POV-Ray's converged image: supersampling every pixel (threshold 0) on a jittered grid.
+    #[arg(long, value_name = "OPTIONS", default_value = "+A0.0 +AM1 +R8 +J")]
+    pub pov_reference: String,
+    /// File name stem of the outputs (STEM.md, STEM.svg, STEM-reference.png).
+    #[arg(long, value_name = "STEM", default_value = "image-error")]
+    pub name: String,
     /// Samples per pixel of the reference (more than any test render).
     #[arg(long, value_name = "N", default_value_t = 1024)]
     pub reference_spp: u32,
@@ -65,26 +99,73 @@ pub struct ImagesArgs {
     pub quiet: bool,
 }
 
-/// One sample count's measurements.
+/// How a test image was made.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Method {
+    /// quadray, this many samples in every pixel.
+    Uniform(u32),
+    /// quadray, adaptive sampling to this target error.
+    Adaptive(f64),
+    /// POV-Ray with these anti-aliasing options.
+    PovRay(String),
+}
+
+impl Method {
+    /// A short label for tables and plots.
+    pub fn label(&self) -> String {
+        match self {
+            Method::Uniform(spp) => format!("{spp} spp"),
+            Method::Adaptive(e) => format!("target {e}"),
+            Method::PovRay(o) => o.clone(),
+        }
+    }
+}
+
+/// One test image's measurements.
 #[derive(Clone, Debug)]
-pub struct SppRow {
-    /// Samples per pixel.
-    pub spp: u32,
+pub struct Row {
+    /// How it was made.
+    pub method: Method,
     /// Wall-clock render times of every run, seconds, in run order.
     pub wall: Vec<f64>,
-    /// Process CPU times of every run, seconds (empty where the platform does not tell).
+    /// CPU times of every run, seconds (quadray: the process during the render; POV-Ray: its
+    /// trace phase); empty where the platform does not tell.
     pub cpu: Vec<f64>,
-    /// Rays traced by one render.
-    pub rays: RayCounts,
-    /// The render against the reference.
+    /// Rays traced by one render (quadray only).
+    pub rays: Option<RayCounts>,
+    /// Samples per pixel taken (quadray only).
+    pub sampling: Option<SamplingStats>,
+    /// The image against its renderer's reference.
     pub error: Comparison,
 }
 
-impl SppRow {
+impl Row {
     /// Median wall-clock render time, seconds.
     pub fn wall_median(&self) -> f64 {
         median(&self.wall)
     }
+
+    /// Median CPU time, seconds (the wall time where CPU time is unknown).
+    pub fn cpu_median(&self) -> f64 {
+        if self.cpu.is_empty() {
+            self.wall_median()
+        } else {
+            median(&self.cpu)
+        }
+    }
+}
+
+/// POV-Ray's part of a report.
+#[derive(Clone, Debug)]
+pub struct PovReport {
+    /// The .pov file.
+    pub file: PathBuf,
+    /// Options of its converged image.
+    pub reference_options: String,
+    /// CPU seconds of the converged image's trace.
+    pub reference_cpu: f64,
+    /// One row per anti-aliasing setting.
+    pub rows: Vec<Row>,
 }
 
 /// The whole image report.
@@ -106,14 +187,13 @@ pub struct ImageReport {
     pub threads: usize,
     /// Timed runs per test render.
     pub runs: usize,
-    /// One row per test sample count, increasing.
-    pub rows: Vec<SppRow>,
+    /// One row per uniform sample count, increasing, then one per adaptive target.
+    pub rows: Vec<Row>,
+    /// POV-Ray's renders, when asked for.
+    pub povray: Option<PovReport>,
     /// The reference image.
     pub reference: LinearImage,
 }
-
-/// A plotted series: legend name, colour, (time, error) points.
-type Series = (&'static str, plotters::style::RGBAColor, Vec<(f64, f64)>);
 
 fn median(v: &[f64]) -> f64 {
     let mut s = v.to_vec();
@@ -125,11 +205,11 @@ fn median(v: &[f64]) -> f64 {
     }
 }
 
-/// One timed render: the film, its rays, wall and CPU seconds.
+/// One timed render: the film, its rays and sampling, wall and CPU seconds.
 fn timed_render(
     scene: &Scene,
     settings: &RenderSettings,
-) -> Result<(Film, RayCounts, f64, Option<f64>)> {
+) -> Result<(Film, RayCounts, SamplingStats, f64, Option<f64>)> {
     let cpu_start = cpu_time::ProcessTime::try_now().ok();
     let start = Instant::now();
     let rendered = render(scene, settings, &NoProgress)?;
@@ -137,7 +217,7 @@ fn timed_render(
     let cpu = cpu_start
         .and_then(|t| t.try_elapsed().ok())
         .map(|d| d.as_secs_f64());
-    Ok((rendered.film, rendered.counts, wall, cpu))
+    Ok((rendered.film, rendered.counts, rendered.sampling, wall, cpu))
 }
 
 /// Checks the arguments before any work is done.
@@ -148,6 +228,20 @@ fn validate(a: &ImagesArgs) -> Result<()> {
         a.spp.windows(2).all(|w| w[0] < w[1]),
         "--spp must be increasing, got {:?}",
         a.spp
+    );
+    for &target in &a.adaptive {
+        ensure!(
+            target.is_finite() && target > 0.0,
+            "--adaptive targets must be numbers above 0, got {target}"
+        );
+    }
+    if let Some(pov) = &a.povray {
+        ensure!(pov.is_file(), "POV-Ray scene {} not found", pov.display());
+    }
+    ensure!(
+        !a.name.is_empty() && !a.name.contains(['/', '\\']),
+        "--name must be a plain file name stem, got \"{}\"",
+        a.name
     );
     let most = *a.spp.last().unwrap_or(&0);
     ensure!(
@@ -164,7 +258,90 @@ fn validate(a: &ImagesArgs) -> Result<()> {
         }
         .validate()?;
     }
+    if !a.adaptive.is_empty() {
+        adaptive(a, a.adaptive[0]).validate()?;
+    }
     Ok(())
+}
+
+/// The adaptive settings of a test render with `target`.
+fn adaptive(a: &ImagesArgs, target: f64) -> Adaptive {
+    Adaptive {
+        target_error: target,
+        max_spp: a.max_spp,
+        min_spp: quadray::adaptive::DEFAULT_MIN_SPP.min(a.max_spp),
+        time_limit: None,
+    }
+}
+
+/// Renders one test image `runs` times and compares the last with the reference.
+fn test_row(
+    scene: &Scene,
+    settings: &RenderSettings,
+    method: Method,
+    runs: usize,
+    reference: &LinearImage,
+) -> Result<Row> {
+    let (mut wall, mut cpu) = (Vec::new(), Vec::new());
+    let mut last = None;
+    for _ in 0..runs {
+        let (film, rays, sampling, w, c) = timed_render(scene, settings)?;
+        wall.push(w);
+        cpu.extend(c);
+        last = Some((film, rays, sampling));
+    }
+    let Some((film, rays, sampling)) = last else {
+        bail!("no run of {}", method.label());
+    };
+    let error = compare(
+        reference,
+        &LinearImage::from_film(&film),
+        &Thresholds::default(),
+    )?;
+    Ok(Row {
+        method,
+        wall,
+        cpu,
+        rays: Some(rays),
+        sampling: Some(sampling),
+        error,
+    })
+}
+
+/// POV-Ray's converged image, then each anti-aliasing setting `runs` times against it.
+fn measure_povray(a: &ImagesArgs, pov: &Path, progress: &mut dyn FnMut(&str)) -> Result<PovReport> {
+    let scratch = a
+        .out
+        .join(format!(".{}-povray-{}.png", a.name, std::process::id()));
+    progress(&format!("POV-Ray reference: {}", a.pov_reference));
+    let reference = povray::render(pov, a.res, &a.pov_reference, &scratch)?;
+    let mut rows = Vec::new();
+    for options in &a.pov_aa {
+        progress(&format!("POV-Ray {options}, {} runs", a.runs));
+        let (mut wall, mut cpu, mut last) = (Vec::new(), Vec::new(), None);
+        for _ in 0..a.runs {
+            let start = Instant::now();
+            let run = povray::render(pov, a.res, options, &scratch)?;
+            wall.push(start.elapsed().as_secs_f64());
+            cpu.push(run.trace_cpu);
+            last = Some(run.image);
+        }
+        let image = last.context("no POV-Ray run")?;
+        rows.push(Row {
+            method: Method::PovRay(options.clone()),
+            wall,
+            cpu,
+            rays: None,
+            sampling: None,
+            error: compare(&reference.image, &image, &Thresholds::default())?,
+        });
+    }
+    Ok(PovReport {
+        file: pov.to_path_buf(),
+        reference_options: a.pov_reference.clone(),
+        reference_cpu: reference.trace_cpu,
+        rows,
+    })
 }
 
 /// Renders the reference(s) and every test sample count, and compares them.
@@ -178,10 +355,9 @@ pub fn measure(a: &ImagesArgs, progress: &mut dyn FnMut(&str)) -> Result<ImageRe
     let settings = |spp: u32, seed: u32| RenderSettings { spp, seed, ..base };
 
     progress(&format!("reference: {} spp", a.reference_spp));
-    let (reference, reference_rays, reference_wall, _) =
+    let (reference, reference_rays, _, reference_wall, _) =
         timed_render(&scene, &settings(a.reference_spp, REFERENCE_SEED))?;
     let reference = LinearImage::from_film(&reference);
-    let thresholds = Thresholds::default();
     let reference_check = if a.no_reference_check {
         None
     } else {
@@ -189,36 +365,43 @@ pub fn measure(a: &ImagesArgs, progress: &mut dyn FnMut(&str)) -> Result<ImageRe
             "second reference: {} spp, independent samples",
             a.reference_spp
         ));
-        let (check, _, _, _) = timed_render(&scene, &settings(a.reference_spp, CHECK_SEED))?;
+        let (check, ..) = timed_render(&scene, &settings(a.reference_spp, CHECK_SEED))?;
         Some(compare(
             &reference,
             &LinearImage::from_film(&check),
-            &thresholds,
+            &Thresholds::default(),
         )?)
     };
     let mut rows = Vec::new();
     for &spp in &a.spp {
         progress(&format!("{spp} spp, {} runs", a.runs));
-        let (mut wall, mut cpu) = (Vec::new(), Vec::new());
-        let mut last = None;
-        for _ in 0..a.runs {
-            let (film, rays, w, c) = timed_render(&scene, &settings(spp, TEST_SEED))?;
-            wall.push(w);
-            cpu.extend(c);
-            last = Some((film, rays));
-        }
-        let Some((film, rays)) = last else {
-            bail!("no run of {spp} spp");
-        };
-        let error = compare(&reference, &LinearImage::from_film(&film), &thresholds)?;
-        rows.push(SppRow {
-            spp,
-            wall,
-            cpu,
-            rays,
-            error,
-        });
+        let s = settings(spp, TEST_SEED);
+        rows.push(test_row(
+            &scene,
+            &s,
+            Method::Uniform(spp),
+            a.runs,
+            &reference,
+        )?);
     }
+    for &target in &a.adaptive {
+        progress(&format!("adaptive, target {target}, {} runs", a.runs));
+        let s = RenderSettings {
+            adaptive: Some(adaptive(a, target)),
+            ..settings(1, TEST_SEED)
+        };
+        rows.push(test_row(
+            &scene,
+            &s,
+            Method::Adaptive(target),
+            a.runs,
+            &reference,
+        )?);
+    }
+    let povray = match &a.povray {
+        Some(pov) => Some(measure_povray(a, pov, progress)?),
+        None => None,
+    };
     Ok(ImageReport {
         scene: a.scene.clone(),
         resolution: a.res,
@@ -229,178 +412,9 @@ pub fn measure(a: &ImagesArgs, progress: &mut dyn FnMut(&str)) -> Result<ImageRe
         threads: rayon::current_num_threads(),
         runs: a.runs,
         rows,
+        povray,
         reference,
     })
-}
-
-impl ImageReport {
-    /// The reference's own RMSE against the truth, estimated as the RMSE between two independent
-    /// references over √2.
-    pub fn reference_rmse(&self) -> Option<f64> {
-        self.reference_check
-            .as_ref()
-            .map(|c| c.rmse_linear / std::f64::consts::SQRT_2)
-    }
-
-    /// The report as markdown: what was run, then one row per sample count.
-    pub fn markdown(&self) -> String {
-        let mut s = String::new();
-        let (w, h) = self.resolution;
-        let _ = writeln!(
-            s,
-            "Scene `{}` at {w}x{h}; reference {} spp (sample set {REFERENCE_SEED}, rendered in {:.2} s, {} rays); test renders: sample set {TEST_SEED}, wall-clock time median of {} runs on {} threads, BVH build excluded.\n",
-            self.scene.display(),
-            self.reference_spp,
-            self.reference_wall,
-            self.reference_rays.total(),
-            self.runs,
-            self.threads
-        );
-        s.push_str("| spp | render time, median (s) | fastest run (s) | CPU time, median (s) | rays | RMSE (linear) | FLIP mean | FLIP max |\n");
-        s.push_str("|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-        for r in &self.rows {
-            let cpu = if r.cpu.is_empty() {
-                "unknown".to_string()
-            } else {
-                format!("{:.3}", median(&r.cpu))
-            };
-            let fastest = r.wall.iter().copied().fold(f64::INFINITY, f64::min);
-            let _ = writeln!(
-                s,
-                "| {} | {:.3} | {:.3} | {cpu} | {} | {:.2e} | {:.4} | {:.3} |",
-                r.spp,
-                r.wall_median(),
-                fastest,
-                r.rays.total(),
-                r.error.rmse_linear,
-                r.error.flip_mean,
-                r.error.flip_max
-            );
-        }
-        if let (Some(rmse), Some(c)) = (self.reference_rmse(), &self.reference_check) {
-            let _ = writeln!(
-                s,
-                "\nThe reference's own error, from a second {}-spp reference with independent samples (set {CHECK_SEED}): RMSE {:.2e} between the two, so about {rmse:.2e} against the converged image (FLIP mean between them {:.4}). Test errors well above this are the test renders' own.",
-                self.reference_spp, c.rmse_linear, c.flip_mean
-            );
-        }
-        s
-    }
-
-    /// The log–log plot of render time against RMSE and mean FLIP, one mark per sample count.
-    pub fn svg(&self) -> Result<String> {
-        let times: Vec<f64> = self.rows.iter().map(SppRow::wall_median).collect();
-        let mut errors: Vec<f64> = self
-            .rows
-            .iter()
-            .flat_map(|r| [r.error.rmse_linear, r.error.flip_mean as f64])
-            .collect();
-        errors.extend(self.reference_rmse());
-        let positive = |v: &[f64]| v.iter().all(|&x| x > 0.0 && x.is_finite());
-        if !positive(&times) || !positive(&errors) {
-            bail!(
-                "cannot plot on log axes: a render time or error is zero (times {times:?}, errors {errors:?})"
-            );
-        }
-        let lo = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
-        let (w, h) = self.resolution;
-        let spec = LogLogSpec {
-            width: 900,
-            height: 600,
-            title: format!(
-                "{}: render time against image error, {w}x{h} (log–log)",
-                self.scene
-                    .file_name()
-                    .map_or("scene".into(), |n| n.to_string_lossy())
-            ),
-            x_label: "render time, s (median of runs, wall clock)".into(),
-            y_label: format!("error against the {}-spp reference", self.reference_spp),
-            x_range: (lo(&times) * 0.6, hi(&times) * 1.8),
-            y_range: (lo(&errors) * 0.5, hi(&errors) * 2.0),
-            legend_width: 260,
-        };
-        let svg = log_log_svg(&spec, |c| {
-            use plotters::prelude::*;
-            let series: [Series; 2] = [
-                (
-                    "RMSE, linear",
-                    RGBColor(31, 119, 180).to_rgba(),
-                    self.rows
-                        .iter()
-                        .map(|r| (r.wall_median(), r.error.rmse_linear))
-                        .collect(),
-                ),
-                (
-                    "FLIP mean (8-bit display)",
-                    RGBColor(214, 39, 40).to_rgba(),
-                    self.rows
-                        .iter()
-                        .map(|r| (r.wall_median(), r.error.flip_mean as f64))
-                        .collect(),
-                ),
-            ];
-            let (px1, py1) = c.upper_right;
-            for (i, (name, colour, points)) in series.iter().enumerate() {
-                c.chart
-                    .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))?;
-                c.chart
-                    .draw_series(points.iter().map(|&p| Circle::new(p, 5, colour.filled())))?;
-                for (r, &(t, e)) in self.rows.iter().zip(points) {
-                    let (px, py) = c.pixel(t, e);
-                    c.text(px + 8, py - 8, "start", 11, &format!("{} spp", r.spp));
-                }
-                c.legend_dot(py1 + 20 + 40 * i as i32, *colour, name, None)?;
-            }
-            // Independent samples: error ∝ (samples)^−1/2 ∝ time^−1/2, drawn from the first RMSE.
-            let first = &self.rows[0];
-            let (t1, e1) = (first.wall_median(), first.error.rmse_linear);
-            let t_end = spec.x_range.1;
-            let slope_colour = RGBColor(31, 119, 180).mix(0.5);
-            c.chart.draw_series(DashedLineSeries::new(
-                [(t1, e1), (t_end, e1 * (t_end / t1).powf(-0.5))],
-                3,
-                3,
-                slope_colour.stroke_width(1),
-            ))?;
-            c.legend_line(
-                py1 + 20 + 40 * series.len() as i32,
-                slope_colour.stroke_width(1),
-                "time^−1/2 from 1 spp",
-                Some("(independent samples' rate)"),
-            )?;
-            if let Some(rmse) = self.reference_rmse() {
-                let (x0, x1) = spec.x_range;
-                let grey = RGBColor(120, 120, 120);
-                c.chart.draw_series(DashedLineSeries::new(
-                    [(x0, rmse), (x1, rmse)],
-                    6,
-                    4,
-                    grey.stroke_width(1),
-                ))?;
-                c.legend_line(
-                    py1 + 20 + 40 * (series.len() as i32 + 1),
-                    grey.stroke_width(1),
-                    "reference's own RMSE",
-                    Some(&format!("(estimated: {rmse:.1e})")),
-                )?;
-            }
-            c.text(
-                px1 + 16,
-                py1 + 20 + 40 * (series.len() as i32 + 3),
-                "start",
-                11,
-                &format!(
-                    "reference: {} spp, {:.1} s",
-                    self.reference_spp, self.reference_wall
-                ),
-            );
-            Ok(())
-        })
-        .map_err(|e| anyhow::anyhow!("{e}"))
-        .context("drawing the plot")?;
-        Ok(svg)
-    }
 }
 
 /// Runs `quadray bench images`: measures, prints the table, writes the files.
@@ -427,28 +441,26 @@ pub fn run(a: &ImagesArgs) -> Result<()> {
     if !quiet {
         println!("{table}");
     }
-    write_outputs(&report, &a.out, &table)?;
+    write_outputs(&report, &a.out, &a.name, &table)?;
     if !quiet {
         eprintln!(
-            "wrote {}, {} and {}",
-            a.out.join("image-error.md").display(),
-            a.out.join("image-error.svg").display(),
-            a.out.join("image-error-reference.png").display()
+            "wrote {}.md, {0}.svg and {0}-reference.png",
+            a.out.join(&a.name).display(),
         );
     }
     Ok(())
 }
 
-fn write_outputs(report: &ImageReport, out: &Path, table: &str) -> Result<()> {
+fn write_outputs(report: &ImageReport, out: &Path, name: &str, table: &str) -> Result<()> {
     let svg = report.svg()?;
-    write_bytes_atomically(&out.join("image-error.md"), table.as_bytes())?;
-    write_bytes_atomically(&out.join("image-error.svg"), svg.as_bytes())?;
+    write_bytes_atomically(&out.join(format!("{name}.md")), table.as_bytes())?;
+    write_bytes_atomically(&out.join(format!("{name}.svg")), svg.as_bytes())?;
     let r = &report.reference;
     write_rgb8_png(
         r.width,
         r.height,
         &r.to_srgb8(),
-        &out.join("image-error-reference.png"),
+        &out.join(format!("{name}-reference.png")),
     )?;
     Ok(())
 }
@@ -485,12 +497,17 @@ mod tests {
         ])
         .unwrap();
         let md = std::fs::read_to_string(dir.path().join("image-error.md")).unwrap();
-        let rows: Vec<Vec<String>> = md
-            .lines()
-            .filter(|l| l.starts_with("| ") && l.as_bytes()[2].is_ascii_digit())
-            .map(|l| l.split('|').map(|c| c.trim().to_string()).collect())
+        let table = |prefix: &str| -> Vec<Vec<String>> {
+            md.lines()
+                .filter(|l| l.starts_with(prefix))
+                .map(|l| l.split('|').map(|c| c.trim().to_string()).collect())
+                .collect()
+        };
+        let rows: Vec<Vec<String>> = table("| ")
+            .into_iter()
+            .filter(|r| r[1].ends_with(" spp"))
             .collect();
-        let spp: Vec<&str> = rows.iter().map(|r| r[1].as_str()).collect();
+        let spp: Vec<&str> = rows.iter().map(|r| r[2].as_str()).collect();
         assert_eq!(spp, ["1", "4", "16", "64"], "{md}");
         let rmse: Vec<f64> = rows.iter().map(|r| r[6].parse().unwrap()).collect();
         for w in rmse.windows(2) {
@@ -499,14 +516,19 @@ mod tests {
                 "RMSE must fall with samples: {rmse:?}\n{md}"
             );
         }
-        let flip: Vec<f64> = rows.iter().map(|r| r[7].parse().unwrap()).collect();
+        let flip: Vec<f64> = rows.iter().map(|r| r[8].parse().unwrap()).collect();
         assert!(
             flip[3] < flip[0],
             "FLIP must fall from 1 to 64 spp: {flip:?}"
         );
         assert!(md.contains("reference's own error"), "{md}");
+        // The adaptive rows: more samples and less error as the target tightens.
+        let adaptive = table("| target ");
+        assert_eq!(adaptive.len(), 4, "{md}");
+        let display_rmse: Vec<f64> = adaptive.iter().map(|r| r[7].parse().unwrap()).collect();
+        assert!(display_rmse[3] < display_rmse[0], "{display_rmse:?}");
         let svg = std::fs::read_to_string(dir.path().join("image-error.svg")).unwrap();
-        assert!(svg.starts_with("<svg") && svg.contains("64 spp") && svg.contains("FLIP mean"));
+        assert!(svg.starts_with("<svg") && svg.contains("64 spp") && svg.contains("adaptive"));
         let png = image::open(dir.path().join("image-error-reference.png")).unwrap();
         assert_eq!((png.width(), png.height()), (64, 36));
         // Nothing but the three outputs (no temporary files left behind).

@@ -1,0 +1,125 @@
+//! Adaptive sampling through the binary: the stats line, the sample-count and variance passes
+//! read back by OpenImageIO, thread-count determinism, an impossible target, and bad values.
+
+use std::process::Command;
+
+mod common;
+use common::{quadray, scene, tmp};
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The defense scene at 96x54: flat floor and sky stop after the first round, edges and
+/// reflections refine; 1 and 2 threads write the same bytes; the passes hold the counts.
+#[test]
+fn adaptive_renders_report_their_samples_and_are_deterministic() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |threads: &str, out: &str| {
+        let out = tmp(&dir, out);
+        let o = quadray(&[
+            "render",
+            &scene("defense.toml"),
+            "--res",
+            "96x54",
+            "--target-error",
+            "0.02",
+            "--max-spp",
+            "256",
+            "--aov",
+            "sample-count,variance",
+            "-t",
+            threads,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (out, stderr(&o))
+    };
+    let (one, line) = render("1", "one.exr");
+    let (two, _) = render("2", "two.exr");
+    assert_eq!(std::fs::read(&one).unwrap(), std::fs::read(&two).unwrap());
+    assert!(
+        line.contains("96x54, adaptive,")
+            && line.contains("spp mean (16..")
+            && line.contains("error target 0.02"),
+        "{line}"
+    );
+    let Ok(o) = Command::new("oiiotool")
+        .args(["--info", "-v", one.to_str().unwrap()])
+        .output()
+    else {
+        println!(
+            "skipped the channel check: oiiotool is not available (apt-get install openimageio-tools)"
+        );
+        return;
+    };
+    let info = String::from_utf8_lossy(&o.stdout);
+    for name in [
+        "ViewLayer.Debug Sample Count.X",
+        "ViewLayer.Variance.R",
+        "ViewLayer.Variance.G",
+        "ViewLayer.Variance.B",
+    ] {
+        assert!(info.contains(name), "{name} missing from {info}");
+    }
+    // The counts: every pixel took 16 samples at least, some refined, none beyond the maximum.
+    let stats = Command::new("oiiotool")
+        .args(["--stats", one.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stats = String::from_utf8_lossy(&stats.stdout);
+    assert!(
+        stats.contains("Stats Min:") && stats.contains("Stats Max:"),
+        "{stats}"
+    );
+}
+
+/// An impossible target runs every pixel to `--max-spp` and says so; bad values are usage errors.
+#[test]
+fn impossible_targets_stop_at_the_maximum_and_bad_values_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = tmp(&dir, "x.png");
+    let o = quadray(&[
+        "render",
+        &scene("defense.toml"),
+        "--res",
+        "48x27",
+        "--target-error",
+        "1e-9",
+        "--max-spp",
+        "32",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let line = stderr(&o);
+    assert!(
+        line.contains("stopped at max spp 32 above the target"),
+        "{line}"
+    );
+
+    for (args, says) in [
+        (vec!["--target-error=-0.1"], "above 0"),
+        (vec!["--target-error", "nan"], "above 0"),
+        (vec!["--target-error", "0"], "above 0"),
+        (vec!["--target-error", "0.01", "--max-spp", "0"], "max-spp"),
+        (
+            vec!["--target-error", "0.01", "--min-spp", "24"],
+            "power of two",
+        ),
+        (vec!["--max-spp", "64"], "--target-error"),
+        (
+            vec!["--target-error", "0.01", "--spp", "4"],
+            "cannot be used with",
+        ),
+        (vec!["--time-limit", "0"], "above 0"),
+    ] {
+        let scene_path = scene("defense.toml");
+        let mut full = vec!["render", &scene_path, "-o", out.to_str().unwrap()];
+        full.extend(args.iter().copied());
+        let o = quadray(&full);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{args:?}: {}", stderr(&o));
+    }
+}
