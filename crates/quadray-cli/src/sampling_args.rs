@@ -73,10 +73,7 @@ impl SamplingArgs {
             a.time_limit = Some(Duration::from_secs_f64(t));
         }
         if let Some(n) = self.max_spp {
-            a.max_spp = n;
-            if self.min_spp.is_none() {
-                a.min_spp = a.min_spp.min(n);
-            }
+            a = a.with_max_spp(n);
         }
         if let Some(n) = self.min_spp {
             a.min_spp = n;

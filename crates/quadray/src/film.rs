@@ -151,12 +151,13 @@ impl PixelEstimate {
         }
         let size = Self::batch_size(self.count);
         let full = (self.count / size).min(ERROR_BATCHES) as usize;
-        let means: Vec<f64> = self.batch_sums[..full]
+        let batch_mean = |sum: &f32| *sum as f64 / size as f64;
+        let batches = &self.batch_sums[..full];
+        let mean = batches.iter().map(batch_mean).sum::<f64>() / full as f64;
+        let spread = batches
             .iter()
-            .map(|&sum| sum as f64 / size as f64)
-            .collect();
-        let mean = means.iter().sum::<f64>() / full as f64;
-        let spread = means.iter().map(|b| (b - mean).powi(2)).sum::<f64>();
+            .map(|sum| (batch_mean(sum) - mean).powi(2))
+            .sum::<f64>();
         let standard_error = (spread / ((full - 1) * full) as f64).sqrt();
         standard_error / mean.max(ERROR_FLOOR)
     }

@@ -268,10 +268,9 @@ fn validate(a: &ImagesArgs) -> Result<()> {
 fn adaptive(a: &ImagesArgs, target: f64) -> Adaptive {
     Adaptive {
         target_error: target,
-        max_spp: a.max_spp,
-        min_spp: quadray::adaptive::DEFAULT_MIN_SPP.min(a.max_spp),
-        time_limit: None,
+        ..Adaptive::default()
     }
+    .with_max_spp(a.max_spp)
 }
 
 /// Renders one test image `runs` times and compares the last with the reference.

@@ -73,12 +73,10 @@ impl Builder<'_> {
             a.target_error = self.positive(v, "render.target_error")?;
         }
         if let Some(v) = &r.max_spp {
-            a.max_spp = self.count(v, "render.max_spp", MAX_SPP)?;
+            a = a.with_max_spp(self.count(v, "render.max_spp", MAX_SPP)?);
         }
         if let Some(v) = &r.min_spp {
             a.min_spp = self.count(v, "render.min_spp", MAX_SPP)?;
-        } else {
-            a.min_spp = a.min_spp.min(a.max_spp);
         }
         if let Some(v) = &r.time_limit {
             a.time_limit = Some(Duration::from_secs_f64(

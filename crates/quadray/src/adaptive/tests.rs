@@ -1,0 +1,268 @@
+//! Tests of adaptive sampling: the estimator, where samples go, determinism and the limits.
+
+use super::*;
+use crate::aov::AovSelection;
+use crate::render::{NoProgress, PixelWindow, RenderSettings, render_with_aovs};
+use crate::*;
+use glam::{DVec3, Vec3};
+
+/// A white unit disc (a sphere without lights shows its ambient colour, flat) on a black
+/// background, seen from above by an orthographic camera 4 units tall: flat regions and one
+/// circular edge whose position is known.
+fn disc() -> Scene {
+    Scene::new(SceneDescription {
+        camera: Camera {
+            from: DVec3::new(0.0, 0.0, 10.0),
+            to: DVec3::ZERO,
+            up: DVec3::Y,
+            projection: Projection::Orthographic { height: 4.0 },
+        },
+        background: Vec3::ZERO,
+        materials: vec![Material {
+            texture: Texture::Constant(Vec3::ONE),
+            ambient: 1.0,
+            ..Material::default()
+        }],
+        lights: vec![],
+        geometry: Geometry {
+            spheres: vec![Sphere {
+                center: DVec3::ZERO,
+                radius: 1.0,
+                material: 0,
+            }],
+            ..Geometry::default()
+        },
+    })
+    .unwrap()
+}
+
+fn settings(adaptive: Adaptive) -> RenderSettings {
+    RenderSettings {
+        width: 48,
+        height: 48,
+        adaptive: Some(adaptive),
+        ..RenderSettings::default()
+    }
+}
+
+fn counts_pass() -> AovSelection {
+    AovSelection {
+        sample_count: true,
+        variance: true,
+        ..AovSelection::NONE
+    }
+}
+
+/// The mean of a pixel's progressive samples is an unbiased estimate of its coverage: over
+/// many pixels (independent scrambles) of a pixel that is 1 left of x = t and 0 right of it,
+/// the estimates average to t, and the variance estimate to about t(1 - t) at one sample
+/// per stratum's worth of samples.
+#[test]
+fn the_estimator_is_unbiased_on_constant_and_two_value_pixels() {
+    let trials = 4000u32;
+    for (t, n) in [(0.3, 2u32), (0.62, 8), (0.5, 13)] {
+        let mut mean_of_means = 0.0;
+        for p in 0..trials {
+            let pattern = pixel_pattern(p, 11, 3);
+            let mut e = PixelEstimate::default();
+            for i in 0..n {
+                let (x, _) = progressive_2d(i, pattern);
+                e.add(Vec3::splat(if x < t { 1.0 } else { 0.0 }));
+            }
+            mean_of_means += e.mean().x as f64 / trials as f64;
+        }
+        // The standard deviation of one pixel's mean is at most 1/(2√n); of the average over
+        // the trials, that over √trials: 5 of those is a loose but falsifiable bound.
+        let bound = 5.0 * 0.5 / (n as f64).sqrt() / (trials as f64).sqrt();
+        assert!(
+            (mean_of_means - t).abs() < bound,
+            "t {t}, n {n}: {mean_of_means}"
+        );
+    }
+    // A constant pixel: every estimate is the constant, with zero variance and error.
+    let mut e = PixelEstimate::default();
+    for i in 0..16 {
+        let _ = progressive_2d(i, 99);
+        e.add(Vec3::new(0.25, 0.5, 0.75));
+    }
+    assert_eq!(e.mean(), Vec3::new(0.25, 0.5, 0.75));
+    assert_eq!(e.relative_error(), 0.0);
+}
+
+#[test]
+fn edges_get_more_samples_than_flat_regions() {
+    let adaptive = Adaptive {
+        target_error: 0.05,
+        min_spp: 8,
+        max_spp: 4096,
+        time_limit: None,
+    };
+    let (rendered, aovs) =
+        render_with_aovs(&disc(), &settings(adaptive), counts_pass(), &NoProgress).unwrap();
+    let aovs = aovs.unwrap();
+    // Pixel centres in world units: 4/48 per pixel, the image centre at (24, 24).
+    let radius_at = |x: u32, y: u32| {
+        let (u, v) = (
+            (x as f64 + 0.5 - 24.0) / 12.0,
+            (y as f64 + 0.5 - 24.0) / 12.0,
+        );
+        (u * u + v * v).sqrt()
+    };
+    let half_diagonal = 0.5 * 2f64.sqrt() / 12.0;
+    let (mut edge, mut flat) = (Vec::new(), Vec::new());
+    for y in 0..48 {
+        for x in 0..48 {
+            let r = radius_at(x, y);
+            let count = aovs.get(x, y).sample_count;
+            if (r - 1.0).abs() < half_diagonal * 0.5 {
+                edge.push(count);
+            } else if (r - 1.0).abs() > 2.0 * half_diagonal {
+                flat.push(count);
+            }
+        }
+    }
+    // Flat pixels stop after the first round; pixels the edge cuts refine.
+    assert!(flat.iter().all(|&c| c == 8), "{flat:?}");
+    let edge_mean = edge.iter().sum::<u32>() as f64 / edge.len() as f64;
+    assert!(
+        edge_mean > 32.0,
+        "{edge_mean} on {} edge pixels",
+        edge.len()
+    );
+    let sampling = rendered.sampling;
+    assert_eq!(sampling.min_spp, 8);
+    assert!(sampling.max_spp >= 64, "{sampling:?}");
+    let error = sampling.error.unwrap();
+    assert_eq!(error.stop, Stop::Converged);
+    assert!(error.worst <= 0.05);
+    // The disc's area: π of the 16 square units in view.
+    let covered = rendered
+        .film
+        .pixels()
+        .iter()
+        .map(|p| p.x as f64)
+        .sum::<f64>();
+    let area = covered * 16.0 / (48.0 * 48.0);
+    assert!((area - std::f64::consts::PI).abs() < 0.01, "{area}");
+}
+
+#[test]
+fn adaptive_renders_do_not_depend_on_threads_or_windows() {
+    let adaptive = Adaptive {
+        target_error: 0.02,
+        min_spp: 8,
+        max_spp: 128,
+        time_limit: None,
+    };
+    let s = settings(adaptive);
+    let run = |threads: usize, settings: RenderSettings| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| render_with_aovs(&disc(), &settings, counts_pass(), &NoProgress))
+            .unwrap()
+    };
+    let (one, one_aovs) = run(1, s);
+    let (three, three_aovs) = run(3, s);
+    assert_eq!(one.film, three.film);
+    assert_eq!(one_aovs, three_aovs);
+    assert_eq!(one.counts, three.counts);
+    let window = PixelWindow {
+        x0: 5,
+        y0: 17,
+        x1: 30,
+        y1: 40,
+    };
+    let (cropped, _) = run(
+        2,
+        RenderSettings {
+            crop: Some(window),
+            ..s
+        },
+    );
+    for y in window.y0..window.y1 {
+        for x in window.x0..window.x1 {
+            assert_eq!(cropped.film.get(x - 5, y - 17), one.film.get(x, y));
+        }
+    }
+}
+
+#[test]
+fn an_impossible_target_stops_at_the_maximum() {
+    let adaptive = Adaptive {
+        target_error: 1e-9,
+        min_spp: 8,
+        max_spp: 64,
+        time_limit: None,
+    };
+    let (rendered, _) = render_with_aovs(
+        &disc(),
+        &settings(adaptive),
+        AovSelection::NONE,
+        &NoProgress,
+    )
+    .unwrap();
+    let error = rendered.sampling.error.unwrap();
+    assert_eq!(error.stop, Stop::MaxSpp);
+    assert_eq!(rendered.sampling.max_spp, 64);
+    assert!(error.met < 1.0 && error.met > 0.5, "{error:?}");
+    // 8, 16, 32, 64.
+    assert_eq!(error.rounds, 4);
+}
+
+#[test]
+fn a_time_limit_keeps_the_first_round() {
+    let adaptive = Adaptive {
+        target_error: 0.0,
+        min_spp: 8,
+        max_spp: MAX_SPP,
+        time_limit: Some(Duration::from_nanos(1)),
+    };
+    let (rendered, _) = render_with_aovs(
+        &disc(),
+        &settings(adaptive),
+        AovSelection::NONE,
+        &NoProgress,
+    )
+    .unwrap();
+    assert_eq!(rendered.sampling.min_spp, 8);
+    assert_eq!(rendered.sampling.error.unwrap().stop, Stop::TimeLimit);
+}
+
+#[test]
+fn bad_settings_are_refused() {
+    let bad = |a: Adaptive| {
+        assert!(matches!(
+            settings(a).validate(),
+            Err(RenderError::Adaptive(_))
+        ))
+    };
+    let ok = Adaptive::default();
+    bad(Adaptive {
+        target_error: -0.1,
+        ..ok
+    });
+    bad(Adaptive {
+        target_error: f64::NAN,
+        ..ok
+    });
+    bad(Adaptive { max_spp: 0, ..ok });
+    bad(Adaptive {
+        max_spp: MAX_SPP + 1,
+        ..ok
+    });
+    bad(Adaptive { min_spp: 1, ..ok });
+    bad(Adaptive { min_spp: 4, ..ok });
+    bad(Adaptive { min_spp: 24, ..ok });
+    bad(Adaptive {
+        min_spp: 64,
+        max_spp: 32,
+        ..ok
+    });
+    bad(Adaptive {
+        time_limit: Some(Duration::ZERO),
+        ..ok
+    });
+    assert_eq!(settings(ok).validate(), Ok(()));
+}
