@@ -20,7 +20,7 @@ pub struct SamplingArgs {
     #[arg(long, value_name = "SECONDS", value_parser = parse_positive, conflicts_with = "spp")]
     pub time_limit: Option<f64>,
     /// Samples every pixel takes in the first adaptive round: a power of two, at least 8
-    /// (default 16).
+    /// (default 8).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=MAX_SPP as i64), conflicts_with = "spp")]
     pub min_spp: Option<u32>,
     /// The most samples an adaptive render puts in a pixel (default 1024).
@@ -104,7 +104,10 @@ mod tests {
             ..SamplingArgs::default()
         };
         let a = target.resolve(None, None).unwrap().unwrap();
-        assert_eq!((a.target_error, a.min_spp, a.max_spp), (0.01, 16, 64));
+        assert_eq!(
+            (a.target_error, a.min_spp, a.max_spp),
+            (0.01, quadray::adaptive::DEFAULT_MIN_SPP, 64)
+        );
         let a = target.resolve(None, Some(scene)).unwrap().unwrap();
         assert_eq!(a.target_error, 0.01);
         let timed = SamplingArgs {
@@ -114,12 +117,17 @@ mod tests {
         let a = timed.resolve(None, None).unwrap().unwrap();
         assert_eq!(a.target_error, 0.0);
         assert_eq!(a.time_limit, Some(Duration::from_millis(1500)));
+        // A maximum below the scene's first round lowers the first round.
         let small = SamplingArgs {
-            target_error: Some(0.1),
-            max_spp: Some(8),
+            max_spp: Some(16),
             ..SamplingArgs::default()
         };
-        assert_eq!(small.resolve(None, None).unwrap().unwrap().min_spp, 8);
+        let scene_32 = Adaptive {
+            min_spp: 32,
+            ..scene
+        };
+        let a = small.resolve(None, Some(scene_32)).unwrap().unwrap();
+        assert_eq!((a.min_spp, a.max_spp), (16, 16));
     }
 
     #[test]

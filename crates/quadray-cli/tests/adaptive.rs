@@ -41,7 +41,7 @@ fn adaptive_renders_report_their_samples_and_are_deterministic() {
     assert_eq!(std::fs::read(&one).unwrap(), std::fs::read(&two).unwrap());
     assert!(
         line.contains("96x54, adaptive,")
-            && line.contains("spp mean (16..")
+            && line.contains("spp mean (8..")
             && line.contains("error target 0.02"),
         "{line}"
     );

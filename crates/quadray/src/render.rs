@@ -293,6 +293,11 @@ impl<'a> SampleContext<'a> {
         })
     }
 
+    /// The same context over another window of the same image.
+    pub fn with_window(&self, window: PixelWindow) -> SampleContext<'a> {
+        SampleContext { window, ..*self }
+    }
+
     /// The radiance of the camera ray through `(dx, dy)` inside pixel `(x, y)` of the full image;
     /// with `aov`, also the pixel's surface passes from the ray's first hit.
     pub fn trace(

@@ -65,6 +65,10 @@ pub struct ImagesArgs {
     /// Largest samples per pixel of the adaptive renders.
     #[arg(long, value_name = "N", default_value_t = quadray::adaptive::DEFAULT_MAX_SPP)]
     pub max_spp: u32,
+    /// First-round samples per pixel of the adaptive renders (a power of two, at least 8;
+    /// default: the renderer's, lowered to `--max-spp`).
+    #[arg(long, value_name = "N")]
+    pub min_spp: Option<u32>,
     /// The scene as a POV-Ray 3.7 file, to race POV-Ray on it (e.g. from scenes/pov/toml2pov.py).
     #[arg(long, value_name = "FILE.pov")]
     pub povray: Option<PathBuf>,
@@ -266,11 +270,15 @@ fn validate(a: &ImagesArgs) -> Result<()> {
 
 /// The adaptive settings of a test render with `target`.
 fn adaptive(a: &ImagesArgs, target: f64) -> Adaptive {
-    Adaptive {
+    let settings = Adaptive {
         target_error: target,
         ..Adaptive::default()
     }
-    .with_max_spp(a.max_spp)
+    .with_max_spp(a.max_spp);
+    match a.min_spp {
+        Some(min_spp) => settings.with_min_spp(min_spp),
+        None => settings,
+    }
 }
 
 /// Renders one test image `runs` times and compares the last with the reference.

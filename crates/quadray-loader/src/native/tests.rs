@@ -375,11 +375,13 @@ fn render_tables_choose_adaptive_sampling() {
     let s = parse("[render]\ntarget_error = 0.02\nmax_spp = 256\ntime_limit = 2.5\n").unwrap();
     let a = s.settings.adaptive.expect("adaptive");
     assert_eq!(a.target_error, 0.02);
-    assert_eq!((a.min_spp, a.max_spp), (16, 256));
+    assert_eq!(
+        (a.min_spp, a.max_spp),
+        (quadray::adaptive::DEFAULT_MIN_SPP, 256)
+    );
     assert_eq!(a.time_limit, Some(std::time::Duration::from_millis(2500)));
     assert_eq!(s.settings.render_settings().adaptive, Some(a));
-    // A time limit alone refines every pixel until it runs out; a small maximum lowers the
-    // first round's default count with it.
+    // A time limit alone refines every pixel until it runs out.
     let s = parse("[render]\ntime_limit = 1\nmax_spp = 8\n").unwrap();
     let a = s.settings.adaptive.unwrap();
     assert_eq!((a.target_error, a.min_spp, a.max_spp), (0.0, 8, 8));

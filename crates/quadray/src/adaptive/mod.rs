@@ -3,21 +3,23 @@
 //!
 //! - **Error**: a pixel's relative standard error of its mean display value
 //!   ([`PixelEstimate::relative_error`]: sRGB-encoded, with a floor for near-black pixels).
-//! - **Rounds**: round 0 takes [`Adaptive::min_spp`] samples in every pixel; each later round
-//!   doubles the count of every pixel still above [`Adaptive::target_error`], up to
-//!   [`Adaptive::max_spp`]. A pixel's samples are the prefix of its own progressive sequence
+//! - **Rounds**: round 0 takes [`Adaptive::min_spp`] samples in every pixel. Round k brings the
+//!   pixels it samples to `min_spp`·2^k samples (at most [`Adaptive::max_spp`]): every pixel still
+//!   above [`Adaptive::target_error`] and, in the first [`NEIGHBOUR_ROUNDS`] rounds, its eight
+//!   neighbours. A pixel's samples are the prefix of its own progressive sequence
 //!   ([`crate::sampler::progressive_2d`]), so samples added later keep the stratification of the
 //!   earlier ones, and a power-of-two count is a (0, k, 2)-net in the pixel.
-//! - **Determinism**: whether a pixel gets more samples depends only on its own samples, which
-//!   depend only on its position and the seed; the image is bit-identical for any thread count, and
-//!   a crop window or a tile equals the same pixels of the whole render. A time limit
-//!   ([`Adaptive::time_limit`]) trades that for a bound: it stops between rows, and which rows got
-//!   their last round then depends on timing.
+//! - **Determinism**: a pixel's samples depend only on its position and the seed, and whether it
+//!   gets more depends only on its own and its neighbours' samples of earlier rounds; the image is
+//!   bit-identical for any thread count. A crop window or a tile is sampled with a border one pixel
+//!   wide per round (clipped to the image), so its pixels equal those of the whole render. A time
+//!   limit ([`Adaptive::time_limit`]) trades that for a bound: it stops between rows, and which
+//!   rows got their last round then depends on timing.
 
 use crate::aov::Aovs;
 use crate::film::{ERROR_BATCHES, Film, PixelEstimate};
 use crate::integrator::RayCounts;
-use crate::render::{MAX_SPP, Progress, RenderError, Rendered, SampleContext};
+use crate::render::{MAX_SPP, PixelWindow, Progress, RenderError, Rendered, SampleContext};
 use crate::sampler::{pixel_pattern, progressive_2d};
 use rayon::prelude::*;
 pub use stats::{ErrorStats, RoundSummary, SamplingStats, Stop};
@@ -42,9 +44,14 @@ pub struct Adaptive {
 }
 
 /// Samples every pixel takes in the first round unless told otherwise.
-pub const DEFAULT_MIN_SPP: u32 = 16;
+pub const DEFAULT_MIN_SPP: u32 = 8;
 /// The most samples a pixel takes unless told otherwise.
 pub const DEFAULT_MAX_SPP: u32 = 1024;
+/// The first refinement rounds in which the neighbours of a pixel above the target are sampled
+/// too, whatever their own error: they reach 8× the first round's samples. Measured on the defense
+/// scene (480x270): without neighbours, a first round of 8 left an error floor near 2e-3 linear
+/// RMSE; following neighbours in every round cost 1.2–1.4× the CPU time of this at equal RMSE.
+pub const NEIGHBOUR_ROUNDS: u32 = 3;
 
 impl Default for Adaptive {
     fn default() -> Self {
@@ -114,19 +121,65 @@ impl Adaptive {
         }
     }
 
+    /// These settings with `min_spp` samples in the first round.
+    pub fn with_min_spp(self, min_spp: u32) -> Adaptive {
+        Adaptive { min_spp, ..self }
+    }
+
     /// Whether a pixel with `count` samples and relative error `error` needs another round.
     fn wants_more(&self, count: u32, error: f64) -> bool {
         // The error is never NaN (infinite when unknown), so `>` is the negation of `<=`.
         count < self.max_spp && error > self.target_error
     }
 
-    /// The sample count a pixel with `count` samples reaches in its next round.
-    fn next_count(&self, count: u32) -> u32 {
-        if count == 0 {
-            self.min_spp
-        } else {
-            count.saturating_mul(2).min(self.max_spp)
-        }
+    /// How many rounds can follow the first: round k brings its pixels to
+    /// [`Adaptive::round_count`]`(k)`, which reaches `max_spp` at this one.
+    fn refinement_rounds(&self) -> u32 {
+        self.max_spp
+            .div_ceil(self.min_spp)
+            .next_power_of_two()
+            .trailing_zeros()
+    }
+
+    /// The sample count of a pixel sampled in `round`: `min_spp` doubled `round` times, at most
+    /// `max_spp`.
+    fn round_count(&self, round: u32) -> u32 {
+        self.min_spp
+            .checked_shl(round)
+            .filter(|&count| count >> round == self.min_spp)
+            .unwrap_or(u32::MAX)
+            .min(self.max_spp)
+    }
+
+    /// Marks in `refine` the pixels that `round` (at least 1) samples: those whose own error is
+    /// above the target and, in the first [`NEIGHBOUR_ROUNDS`] rounds, their neighbours, since a
+    /// feature that crosses into a pixel can be missed by all of its first samples.
+    fn select(
+        &self,
+        round: u32,
+        estimates: &[PixelEstimate],
+        errors: &[f64],
+        width: usize,
+        refine: &mut [bool],
+    ) {
+        let height = estimates.len() / width;
+        let count = self.round_count(round);
+        let follows_neighbours = round <= NEIGHBOUR_ROUNDS.min(self.refinement_rounds());
+        let above = |i: usize| self.wants_more(estimates[i].count(), errors[i]);
+        refine
+            .par_chunks_mut(width)
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, wanted) in row.iter_mut().enumerate() {
+                    let i = y * width + x;
+                    *wanted = above(i)
+                        || (follows_neighbours && estimates[i].count() < count && {
+                            let (y0, y1) = (y.saturating_sub(1), (y + 1).min(height - 1));
+                            let (x0, x1) = (x.saturating_sub(1), (x + 1).min(width - 1));
+                            (y0..=y1).any(|ny| (x0..=x1).any(|nx| above(ny * width + nx)))
+                        });
+                }
+            });
     }
 }
 
@@ -137,12 +190,25 @@ pub(crate) fn render_adaptive(
     progress: &dyn Progress,
 ) -> Result<(Rendered, Option<Aovs>), RenderError> {
     let started = Instant::now();
-    let (settings, window) = (context.settings, context.window);
+    let settings = context.settings;
+    let inner = context.window;
+    // A pixel's decisions depend on its neighbours', which depend on theirs one round earlier:
+    // sampling a border as wide as the rounds around the window makes its pixels those of the
+    // whole render.
+    let window = bordered(
+        inner,
+        adaptive.refinement_rounds(),
+        settings.width,
+        settings.height,
+    );
+    let context = &context.with_window(window);
     let ww = window.width() as usize;
     let pixels = ww * window.height() as usize;
     let mut estimates = vec![PixelEstimate::default(); pixels];
     // Each pixel's relative error after the last round, computed once per round.
     let mut errors = vec![f64::INFINITY; pixels];
+    // Which pixels the next round samples.
+    let mut refine = vec![true; pixels];
     let mut aov_samples = context.aov_buffer();
     let totals = Mutex::new(RayCounts::default());
     let timed_out = AtomicBool::new(false);
@@ -161,24 +227,29 @@ pub(crate) fn render_adaptive(
         });
         estimates
             .par_chunks_mut(ww)
-            .zip(errors.par_chunks(ww))
+            .zip(refine.par_chunks(ww))
             .zip(aov_rows)
             .enumerate()
-            .for_each(|(row_index, ((row, row_errors), mut aov_row))| {
+            .for_each(|(row_index, ((row, row_refine), mut aov_row))| {
+                let y = window.y0 + row_index as u32;
+                let row_done = || {
+                    if (inner.y0..inner.y1).contains(&y) {
+                        progress.row_done();
+                    }
+                };
                 if round > 0 && out_of_time() {
                     timed_out.store(true, Ordering::Relaxed);
-                    progress.row_done();
+                    row_done();
                     return;
                 }
-                let y = window.y0 + row_index as u32;
                 let mut counts = RayCounts::default();
                 for (column, estimate) in row.iter_mut().enumerate() {
-                    if !adaptive.wants_more(estimate.count(), row_errors[column]) {
+                    if !row_refine[column] {
                         continue;
                     }
                     let x = window.x0 + column as u32;
                     let pattern = pixel_pattern(x, y, settings.seed);
-                    for index in estimate.count()..adaptive.next_count(estimate.count()) {
+                    for index in estimate.count()..adaptive.round_count(round) {
                         let first_hit = match aov_row.as_deref_mut() {
                             Some(aovs) if index == 0 => Some(&mut aovs[column]),
                             _ => None,
@@ -188,37 +259,39 @@ pub(crate) fn render_adaptive(
                     }
                 }
                 *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
-                progress.row_done();
+                row_done();
             });
         errors
             .par_iter_mut()
             .zip(&estimates)
             .for_each(|(error, estimate)| *error = estimate.relative_error());
-        let active = estimates
-            .iter()
-            .zip(&errors)
-            .filter(|(estimate, error)| adaptive.wants_more(estimate.count(), **error))
-            .count();
+        adaptive.select(round + 1, &estimates, &errors, ww, &mut refine);
+        let inner_errors = crop(&errors, window, inner);
         let summary = RoundSummary {
             round,
-            active: active as u64,
-            pixels: pixels as u64,
-            worst_error: stats::worst_error(&errors),
+            active: crop(&refine, window, inner).iter().filter(|&&r| r).count() as u64,
+            pixels: inner_errors.len() as u64,
+            worst_error: stats::worst_error(&inner_errors),
             target_error: adaptive.target_error,
         };
         progress.round_done(&summary);
         round += 1;
-        if summary.active == 0 || timed_out.load(Ordering::Relaxed) || out_of_time() {
+        if !refine.contains(&true) || timed_out.load(Ordering::Relaxed) || out_of_time() {
             break;
         }
     }
 
+    let (estimates, errors) = (
+        crop(&estimates, window, inner),
+        crop(&errors, window, inner),
+    );
     let film = Film::from_pixels(
-        window.width(),
-        window.height(),
+        inner.width(),
+        inner.height(),
         estimates.iter().map(PixelEstimate::mean).collect(),
     )
     .expect("one estimate per pixel");
+    let mut aov_samples = crop(&aov_samples, window, inner);
     for (aov, estimate) in aov_samples.iter_mut().zip(&estimates) {
         aov.fill_sampling(
             context.selection,
@@ -232,12 +305,37 @@ pub(crate) fn render_adaptive(
     Ok((
         Rendered {
             film,
-            window,
+            window: inner,
             counts,
             sampling,
         },
-        context.finish_aovs(aov_samples),
+        context.with_window(inner).finish_aovs(aov_samples),
     ))
+}
+
+/// `window` grown by `border` pixels on every side, within a `width` × `height` image.
+fn bordered(window: PixelWindow, border: u32, width: u32, height: u32) -> PixelWindow {
+    PixelWindow {
+        x0: window.x0.saturating_sub(border),
+        y0: window.y0.saturating_sub(border),
+        x1: window.x1.saturating_add(border).min(width),
+        y1: window.y1.saturating_add(border).min(height),
+    }
+}
+
+/// The values of the pixels of `inner` out of row-major values over `outer`, which contains it.
+fn crop<T: Clone>(values: &[T], outer: PixelWindow, inner: PixelWindow) -> Vec<T> {
+    if values.is_empty() || outer == inner {
+        return values.to_vec();
+    }
+    let ow = outer.width() as usize;
+    let (dx, w) = ((inner.x0 - outer.x0) as usize, inner.width() as usize);
+    (inner.y0..inner.y1)
+        .flat_map(|y| {
+            let start = (y - outer.y0) as usize * ow + dx;
+            values[start..start + w].iter().cloned()
+        })
+        .collect()
 }
 
 mod stats;

@@ -108,7 +108,8 @@ fn edges_get_more_samples_than_flat_regions() {
         );
         (u * u + v * v).sqrt()
     };
-    let half_diagonal = 0.5 * 2f64.sqrt() / 12.0;
+    let pixel_diagonal = 2f64.sqrt() / 12.0;
+    let half_diagonal = 0.5 * pixel_diagonal;
     let (mut edge, mut flat) = (Vec::new(), Vec::new());
     for y in 0..48 {
         for x in 0..48 {
@@ -116,12 +117,13 @@ fn edges_get_more_samples_than_flat_regions() {
             let count = aovs.get(x, y).sample_count;
             if (r - 1.0).abs() < half_diagonal * 0.5 {
                 edge.push(count);
-            } else if (r - 1.0).abs() > 2.0 * half_diagonal {
+            } else if (r - 1.0).abs() > half_diagonal + 2.0 * pixel_diagonal {
+                // Beyond the pixels the edge cuts and their neighbours.
                 flat.push(count);
             }
         }
     }
-    // Flat pixels stop after the first round; pixels the edge cuts refine.
+    // Flat pixels away from the edge stop after the first round; pixels the edge cuts refine.
     assert!(flat.iter().all(|&c| c == 8), "{flat:?}");
     let edge_mean = edge.iter().sum::<u32>() as f64 / edge.len() as f64;
     assert!(
@@ -188,6 +190,113 @@ fn adaptive_renders_do_not_depend_on_threads_or_windows() {
     }
 }
 
+/// Round k samples the pixels above the target and, in the first rounds, their neighbours, and
+/// brings them all to min_spp·2^k samples.
+#[test]
+fn a_round_samples_pixels_above_the_target_and_their_neighbours() {
+    let adaptive = Adaptive {
+        target_error: 0.1,
+        min_spp: 8,
+        max_spp: 1024,
+        time_limit: None,
+    };
+    assert_eq!(adaptive.refinement_rounds(), 7);
+    assert_eq!(adaptive.round_count(0), 8);
+    assert_eq!(adaptive.round_count(3), 64);
+    assert_eq!(adaptive.round_count(7), 1024);
+    assert_eq!(adaptive.round_count(40), 1024);
+    assert_eq!(adaptive.with_max_spp(100).refinement_rounds(), 4);
+    assert_eq!(adaptive.with_max_spp(100).round_count(4), 100);
+    // A 5x4 image of pixels with 8 samples, one of them (2, 1) above the target.
+    let (width, height) = (5, 4);
+    let mut sampled = PixelEstimate::default();
+    for _ in 0..8 {
+        sampled.add(Vec3::splat(0.5));
+    }
+    let estimates = vec![sampled; width * height];
+    let mut errors = vec![0.0; width * height];
+    errors[width + 2] = 0.5;
+    let mut refine = vec![false; width * height];
+    let selected = |refine: &[bool]| {
+        (0..height)
+            .map(|y| {
+                (0..width)
+                    .map(|x| if refine[y * width + x] { 'x' } else { '.' })
+                    .collect::<String>()
+            })
+            .collect::<Vec<_>>()
+    };
+    adaptive.select(1, &estimates, &errors, width, &mut refine);
+    assert_eq!(selected(&refine), [".xxx.", ".xxx.", ".xxx.", "....."]);
+    // After the neighbour rounds, only the pixel itself.
+    adaptive.select(
+        NEIGHBOUR_ROUNDS + 1,
+        &estimates,
+        &errors,
+        width,
+        &mut refine,
+    );
+    assert_eq!(selected(&refine), [".....", "..x..", ".....", "....."]);
+    // A pixel at the maximum is not sampled again, nor are its neighbours for its sake.
+    let at_max = Adaptive {
+        max_spp: 8,
+        ..adaptive
+    };
+    at_max.select(1, &estimates, &errors, width, &mut refine);
+    assert!(!refine.contains(&true));
+}
+
+/// Tiles of an image rendered apart equal the whole render, though a pixel's samples depend on
+/// its neighbours': each tile is sampled with a border.
+#[test]
+fn adaptive_tiles_equal_the_whole_render() {
+    let adaptive = Adaptive {
+        target_error: 0.01,
+        min_spp: 8,
+        max_spp: 256,
+        time_limit: None,
+    };
+    let s = settings(adaptive);
+    let (whole, whole_aovs) = render_with_aovs(&disc(), &s, counts_pass(), &NoProgress).unwrap();
+    let whole_aovs = whole_aovs.unwrap();
+    // Four tiles meeting at (16, 16), next to pixel (15, 15), which the disc's edge cuts (its
+    // centre lies on the edge): (16, 16) is flat inside the disc and refines only as (15, 15)'s
+    // neighbour, which a tile without a border cannot see. A flat pixel's value does not depend on
+    // its count, so the sample counts are compared too.
+    for (x0, x1, y0, y1) in [
+        (0, 16, 0, 16),
+        (16, 48, 0, 16),
+        (0, 16, 16, 48),
+        (16, 48, 16, 48),
+    ] {
+        let window = PixelWindow { x0, y0, x1, y1 };
+        let (tile, tile_aovs) = render_with_aovs(
+            &disc(),
+            &RenderSettings {
+                crop: Some(window),
+                ..s
+            },
+            counts_pass(),
+            &NoProgress,
+        )
+        .unwrap();
+        let tile_aovs = tile_aovs.unwrap();
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let (tx, ty) = (x - x0, y - y0);
+                assert_eq!(tile.film.get(tx, ty), whole.film.get(x, y), "({x}, {y})");
+                assert_eq!(
+                    tile_aovs.get(tx, ty).sample_count,
+                    whole_aovs.get(x, y).sample_count,
+                    "({x}, {y})"
+                );
+            }
+        }
+    }
+    assert!(whole_aovs.get(16, 16).sample_count > 8);
+    assert_eq!(whole_aovs.get(20, 20).sample_count, 8);
+}
+
 #[test]
 fn an_impossible_target_stops_at_the_maximum() {
     let adaptive = Adaptive {
@@ -207,7 +316,7 @@ fn an_impossible_target_stops_at_the_maximum() {
     assert_eq!(error.stop, Stop::MaxSpp);
     assert_eq!(rendered.sampling.max_spp, 64);
     assert!(error.met < 1.0 && error.met > 0.5, "{error:?}");
-    // 8, 16, 32, 64.
+    // 8, 16, 32, 64: round k brings its pixels to 8·2^k, so no pixel needs a fifth.
     assert_eq!(error.rounds, 4);
 }
 
