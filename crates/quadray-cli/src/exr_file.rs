@@ -24,11 +24,11 @@ pub const NORMAL: [&str; 3] = [
     "ViewLayer.Normal.Y",
     "ViewLayer.Normal.Z",
 ];
-/// Channel names of the albedo pass.
+/// Channel names of the albedo pass (Blender's "Diffuse Color" pass).
 pub const ALBEDO: [&str; 3] = [
-    "ViewLayer.Albedo.R",
-    "ViewLayer.Albedo.G",
-    "ViewLayer.Albedo.B",
+    "ViewLayer.DiffCol.R",
+    "ViewLayer.DiffCol.G",
+    "ViewLayer.DiffCol.B",
 ];
 /// Channel name of the object-index pass.
 pub const INDEX_OB: &str = "ViewLayer.IndexOB.X";
@@ -60,8 +60,87 @@ fn write_image(path: &Path, write: impl FnOnce(&Path) -> exr::error::UnitResult)
         .with_context(|| format!("writing {}", path.display()))
 }
 
-/// Where an EXR's pixels lie in the full image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Name of the attribute holding the camera's position in world space (a v3f).
+pub const CAMERA_POSITION: &str = "cameraPosition";
+
+/// The camera of a render, as an EXR stores it: OpenEXR's standard `worldToCamera` and
+/// `worldToNDC` matrices, the `fieldOfViewHorizontal` and `fieldOfViewVertical` attributes the
+/// exr crate defines, and quadray's `cameraPosition`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExrCamera {
+    /// `worldToCamera`, in the file's order: Imath's row-vector matrix, row by row.
+    pub world_to_camera: [f32; 16],
+    /// `worldToNDC`, in the file's order.
+    pub world_to_ndc: [f32; 16],
+    /// The eye (the image plane's centre for an orthographic camera), world space.
+    pub position: [f32; 3],
+    /// Horizontal and vertical field of view in degrees; `None` for an orthographic camera.
+    pub fov_deg: Option<[f32; 2]>,
+}
+
+impl ExrCamera {
+    /// The camera of a `width` × `height` render seen through `camera`.
+    pub fn of(camera: &quadray::Camera, width: u32, height: u32) -> Result<ExrCamera> {
+        let frame = camera
+            .prepare(width as f64 / height as f64)
+            .context("the camera")?;
+        // Imath multiplies row vectors (p · M): its matrix is the transpose of glam's
+        // column-vector one, so its rows, stored in order, are glam's columns.
+        let imath = |m: glam::DMat4| m.to_cols_array().map(|x| x as f32);
+        Ok(ExrCamera {
+            world_to_camera: imath(frame.world_to_camera()),
+            world_to_ndc: imath(frame.world_to_ndc()),
+            position: camera.from.as_vec3().to_array(),
+            fov_deg: match camera.projection {
+                quadray::Projection::Perspective { vfov_deg } => {
+                    let aspect = width as f64 / height as f64;
+                    let half_width = (vfov_deg.to_radians() * 0.5).tan() * aspect;
+                    let hfov_deg = 2.0 * half_width.atan().to_degrees();
+                    Some([hfov_deg as f32, vfov_deg as f32])
+                }
+                quadray::Projection::Orthographic { .. } => None,
+            },
+        })
+    }
+
+    /// Puts the camera into a part's attributes.
+    fn write(&self, attributes: &mut LayerAttributes) {
+        attributes.world_to_camera = Some(self.world_to_camera);
+        attributes.world_to_normalized_device = Some(self.world_to_ndc);
+        if let Some([horizontal, vertical]) = self.fov_deg {
+            attributes.horizontal_field_of_view = Some(horizontal);
+            attributes.vertical_field_of_view = Some(vertical);
+        }
+        // The only custom attribute of a part: the writer stores custom attributes in hash-map
+        // order, which changes from run to run, so two of them would change the file's bytes.
+        let [x, y, z] = self.position;
+        attributes.other.insert(
+            Text::new_or_panic(CAMERA_POSITION),
+            AttributeValue::FloatVec3((x, y, z)),
+        );
+    }
+
+    /// The camera a part's attributes hold, if they hold both matrices and the position.
+    fn read(attributes: &LayerAttributes) -> Option<ExrCamera> {
+        let position = match attributes.other.get(&Text::new_or_panic(CAMERA_POSITION)) {
+            Some(AttributeValue::FloatVec3((x, y, z))) => [*x, *y, *z],
+            _ => return None,
+        };
+        let fov_deg = attributes
+            .horizontal_field_of_view
+            .zip(attributes.vertical_field_of_view)
+            .map(|(h, v)| [h, v]);
+        Some(ExrCamera {
+            world_to_camera: attributes.world_to_camera?,
+            world_to_ndc: attributes.world_to_normalized_device?,
+            position,
+            fov_deg,
+        })
+    }
+}
+
+/// Where an EXR's pixels lie in the full image, and the camera that saw them.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExrFrame {
     /// Full image width (the display window).
     pub width: u32,
@@ -69,15 +148,29 @@ pub struct ExrFrame {
     pub height: u32,
     /// The rendered pixels (the data window).
     pub window: PixelWindow,
+    /// The camera, written as attributes when known.
+    pub camera: Option<ExrCamera>,
 }
 
 impl ExrFrame {
-    /// The frame of a render with `settings`: its full size and its window.
-    pub fn of(settings: &quadray::RenderSettings) -> ExrFrame {
-        ExrFrame {
+    /// The frame of a render with `settings` through `camera`: its full size, its window and the
+    /// camera's matrices.
+    pub fn of(settings: &quadray::RenderSettings, camera: &quadray::Camera) -> Result<ExrFrame> {
+        Ok(ExrFrame {
             width: settings.width,
             height: settings.height,
             window: settings.window(),
+            camera: Some(ExrCamera::of(camera, settings.width, settings.height)?),
+        })
+    }
+
+    /// The whole of a `width` × `height` image, without a camera.
+    pub fn full(width: u32, height: u32) -> ExrFrame {
+        ExrFrame {
+            width,
+            height,
+            window: PixelWindow::full(width, height),
+            camera: None,
         }
     }
 }
@@ -120,7 +213,7 @@ pub fn write_exr(
 pub fn write_exr_parts(
     parts: &[ExrPart<'_>],
     half: bool,
-    (width, height): (u32, u32),
+    (width, height, camera): (u32, u32, Option<ExrCamera>),
     attributes: &[(&str, String)],
     path: &Path,
 ) -> Result<()> {
@@ -131,6 +224,7 @@ pub fn write_exr_parts(
         width,
         height,
         window: part.window,
+        camera,
     };
     let name = |part: &ExrPart| format!("rows {}-{}", part.window.y0, part.window.y1);
     let mut layers = SmallVec::new();
@@ -231,11 +325,19 @@ fn layer(
             }
         }
     }
-    let attributes = LayerAttributes {
+    // pLinear 0 on every channel, as Blender and OpenEXR's own writer store them: pLinear marks
+    // perceptually linear values for lossy compression, which linear light is not.
+    for channel in &mut channels {
+        channel.quantize_linearly = false;
+    }
+    let mut attributes = LayerAttributes {
         layer_name: name.map(Text::new_or_panic),
         layer_position: Vec2(frame.window.x0 as i32, frame.window.y0 as i32),
         ..LayerAttributes::default()
     };
+    if let Some(camera) = &frame.camera {
+        camera.write(&mut attributes);
+    }
     // Increasing line order makes the writer put compressed blocks in file order whatever order
     // its threads finish them in: the same image gives the same bytes on every run.
     let encoding = Encoding {
@@ -260,6 +362,8 @@ pub struct ReadExr {
     pub attributes: HashMap<String, String>,
     /// Every part: its place in the frame and its channels, sorted by name.
     pub parts: Vec<(PixelWindow, Vec<(String, FlatSamples)>)>,
+    /// The camera the first part's attributes hold, if any.
+    pub camera: Option<ExrCamera>,
 }
 
 /// Reads every part of the EXR at `path` (all channels, full resolution).
@@ -311,10 +415,15 @@ pub fn read_exr(path: &Path) -> Result<ReadExr> {
             .collect();
         parts.push((window, channels));
     }
+    let camera = image
+        .layer_data
+        .first()
+        .and_then(|layer| ExrCamera::read(&layer.attributes));
     Ok(ReadExr {
         size,
         attributes,
         parts,
+        camera,
     })
 }
 
@@ -383,4 +492,55 @@ pub fn film_and_aovs(
         .collect();
     let aovs = Aovs::new(width, height, selection, samples).context("channel sizes differ")?;
     Ok((film, Some(aovs), half))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every channel is written with pLinear 0, and the camera attributes read back as written,
+    /// from a single-part file and from a multi-part piece.
+    #[test]
+    fn channels_are_not_perceptually_linear_and_the_camera_reads_back() {
+        let dir = tempfile::tempdir().unwrap();
+        let camera = quadray::Camera {
+            from: glam::DVec3::new(1.0, -4.0, 2.0),
+            to: glam::DVec3::ZERO,
+            up: glam::DVec3::Z,
+            projection: quadray::Projection::Perspective { vfov_deg: 35.0 },
+        };
+        let exr_camera = ExrCamera::of(&camera, 4, 2).unwrap();
+        let film = Film::new(4, 2);
+        let selection = AovSelection {
+            depth: true,
+            albedo: true,
+            ..AovSelection::NONE
+        };
+        let aovs = Aovs::new(4, 2, selection, vec![AovSample::MISS; 8]).unwrap();
+        let frame = ExrFrame {
+            camera: Some(exr_camera),
+            ..ExrFrame::full(4, 2)
+        };
+        let single = dir.path().join("single.exr");
+        write_exr(&film, Some(&aovs), false, &frame, &single).unwrap();
+        let part = ExrPart {
+            film: &film,
+            aovs: Some(&aovs),
+            window: PixelWindow::full(4, 2),
+        };
+        let piece = dir.path().join("piece.exr");
+        write_exr_parts(&[part], true, (4, 2, Some(exr_camera)), &[], &piece).unwrap();
+        for path in [&single, &piece] {
+            let image = exr::prelude::read_all_flat_layers_from_file(path).unwrap();
+            let channels = &image.layer_data[0].channel_data.list;
+            assert_eq!(channels.len(), 8);
+            assert!(channels.iter().all(|c| !c.quantize_linearly));
+            assert_eq!(read_exr(path).unwrap().camera, Some(exr_camera));
+        }
+        // The horizontal field of view of a 2:1 image: 2·atan(2·tan(17.5°)).
+        let [h, v] = exr_camera.fov_deg.unwrap();
+        let expected = 2.0 * (2.0 * 17.5f64.to_radians().tan()).atan().to_degrees();
+        assert!((h as f64 - expected).abs() < 1e-4 && v == 35.0, "{h} {v}");
+        assert_eq!(exr_camera.position, [1.0, -4.0, 2.0]);
+    }
 }

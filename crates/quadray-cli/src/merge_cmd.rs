@@ -1,7 +1,7 @@
 //! `quadray merge`: assembles the pieces of a frame rendered by `render --tile I/N` into the
 //! image one process would have written, after checking that they belong together.
 
-use crate::exr_file::{ExrFrame, film_and_aovs, read_exr, write_exr};
+use crate::exr_file::{ExrCamera, ExrFrame, film_and_aovs, read_exr, write_exr};
 use crate::output::{Format, check_writable, write_film};
 use crate::render_cmd::{PIECE_INDEX, PIECE_SCENE, PIECE_SETTINGS};
 use crate::tiles::{Piece, parse_piece, piece_bands};
@@ -38,6 +38,8 @@ struct ReadPiece {
     settings: String,
     size: (u32, u32),
     parts: Vec<(PixelWindow, Vec<(String, FlatSamples)>)>,
+    /// The camera the piece was rendered through (every piece of a frame has the same).
+    camera: Option<ExrCamera>,
 }
 
 impl ReadPiece {
@@ -110,9 +112,8 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     match format {
         Format::Exr => {
             let frame = ExrFrame {
-                width,
-                height,
-                window: PixelWindow::full(width, height),
+                camera: pieces[0].camera,
+                ..ExrFrame::full(width, height)
             };
             write_exr(&film, aovs.as_ref(), half, &frame, output)?;
         }
@@ -153,6 +154,7 @@ fn read_piece(path: &Path) -> Result<ReadPiece> {
         settings: attribute(PIECE_SETTINGS)?,
         size: read.size,
         parts: read.parts,
+        camera: read.camera,
     })
 }
 

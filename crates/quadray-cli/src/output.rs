@@ -51,11 +51,7 @@ pub fn write_film(film: &Film, path: &Path) -> Result<()> {
     match Format::from_path(path)? {
         Format::Png => write_atomically(path, |tmp| write_png(film, tmp)),
         Format::Exr => {
-            let frame = crate::exr_file::ExrFrame {
-                width: film.width(),
-                height: film.height(),
-                window: quadray::PixelWindow::full(film.width(), film.height()),
-            };
+            let frame = crate::exr_file::ExrFrame::full(film.width(), film.height());
             crate::exr_file::write_exr(film, None, false, &frame, path)
         }
     }

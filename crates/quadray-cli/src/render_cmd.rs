@@ -1,7 +1,7 @@
 //! `quadray render`: load, validate, render in parallel, write, report.
 
 use crate::args::RenderArgs;
-use crate::exr_file::{ExrFrame, ExrPart, write_exr, write_exr_parts};
+use crate::exr_file::{ExrCamera, ExrFrame, ExrPart, write_exr, write_exr_parts};
 use crate::output::{Format, check_writable, write_film};
 use crate::passes::{Pass, selection_of, write_png_pass};
 use crate::progress::RowBar;
@@ -263,8 +263,9 @@ fn write_output(
             ),
             (PIECE_INDEX, piece.to_string()),
         ];
-        let size = (settings.width, settings.height);
-        return write_exr_parts(&exr_parts, args.half, size, &attributes, output);
+        let camera = ExrCamera::of(scene.camera(), settings.width, settings.height)?;
+        let frame = (settings.width, settings.height, Some(camera));
+        return write_exr_parts(&exr_parts, args.half, frame, &attributes, output);
     }
     let (rendered, aovs) = &parts[0];
     match job.format {
@@ -272,7 +273,7 @@ fn write_output(
             &rendered.film,
             aovs.as_ref(),
             args.half,
-            &ExrFrame::of(settings),
+            &ExrFrame::of(settings, scene.camera())?,
             output,
         ),
         Format::Png if args.pass != Pass::Combined => {

@@ -88,15 +88,15 @@ fn exr_passes_read_back_in_an_independent_reader() {
         "ViewLayer.Normal.X",
         "ViewLayer.Normal.Y",
         "ViewLayer.Normal.Z",
-        "ViewLayer.Albedo.R",
-        "ViewLayer.Albedo.G",
-        "ViewLayer.Albedo.B",
+        "ViewLayer.DiffCol.R",
+        "ViewLayer.DiffCol.G",
+        "ViewLayer.DiffCol.B",
         "ViewLayer.IndexOB.X",
     ] {
         assert!(info.contains(name), "{name} missing from {info}");
     }
-    // oiiotool lists channels alphabetically, as the file stores them: Albedo RGB, Combined RGBA,
-    // Depth, IndexOB, Normal XYZ.
+    // oiiotool lists channels alphabetically, as the file stores them: Combined RGBA, Depth,
+    // DiffCol RGB, IndexOB, Normal XYZ.
     let dump = oiiotool(&["--dumpdata", out.to_str().unwrap()]).unwrap();
     let pixel = |x: u32, y: u32| -> Vec<f64> {
         let tag = format!("Pixel ({x}, {y}):");
@@ -118,7 +118,7 @@ fn exr_passes_read_back_in_an_independent_reader() {
     assert!(
         close(
             &c,
-            &[0.2, 0.4, 0.6, 0.2, 0.4, 0.6, 1.0, 9.0, 1.0, 0.0, 0.0, 1.0]
+            &[0.2, 0.4, 0.6, 1.0, 9.0, 0.2, 0.4, 0.6, 1.0, 0.0, 0.0, 1.0]
         ),
         "{c:?}"
     );
@@ -127,7 +127,7 @@ fn exr_passes_read_back_in_an_independent_reader() {
     assert!(
         close(
             &k,
-            &[0.7, 0.7, 0.7, 0.7, 0.7, 0.7, 1.0, 12.0, 2.0, 0.0, 0.0, 1.0]
+            &[0.7, 0.7, 0.7, 1.0, 12.0, 0.7, 0.7, 0.7, 2.0, 0.0, 0.0, 1.0]
         ),
         "{k:?}"
     );
@@ -150,6 +150,86 @@ fn exr_passes_read_back_in_an_independent_reader() {
         info.contains("ViewLayer.Combined.R (half)") && info.contains("ViewLayer.Depth.Z (float)"),
         "{info}"
     );
+}
+
+/// The numbers of an attribute line of `oiiotool --info -v`, e.g. `worldToNDC: 0.25, 0, …`.
+fn attribute_numbers(info: &str, name: &str) -> Option<Vec<f64>> {
+    let line = info
+        .lines()
+        .find(|l| l.trim_start().starts_with(&format!("{name}:")))?;
+    let values = line.split_once(':')?.1;
+    Some(
+        values
+            .split(',')
+            .map(|v| v.trim().parse().expect("a number"))
+            .collect(),
+    )
+}
+
+/// The EXR carries the camera as OpenEXR's standard matrices, checked by OpenImageIO against the
+/// camera's own geometry: for the pass scene's orthographic camera (at z = 10 looking down, +y up
+/// in the image, 4 units tall) camera space is (x, y, 10 − z), and NDC is
+/// (0.5 + x/4, 0.5 − y/4); for the defense scene's perspective camera the point it looks at
+/// lands at the image centre, and the fields of view are the scene's and the one its aspect gives.
+#[test]
+fn exr_files_carry_the_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    let orthographic = pass_scene(&dir);
+    let out = tmp(&dir, "camera.exr");
+    let o = quadray(&["render", &orthographic, "-o", out.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let Some(info) = oiiotool(&["--info", "-v", out.to_str().unwrap()]) else {
+        return;
+    };
+    let close = |a: &[f64], b: &[f64]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6)
+    };
+    // Imath's row-vector matrices, row by row: the translation is the last row.
+    let to_camera = attribute_numbers(&info, "worldToCamera").expect("worldToCamera");
+    let expected = [
+        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 10.0, 1.0,
+    ];
+    assert!(close(&to_camera, &expected), "{to_camera:?}");
+    let to_ndc = attribute_numbers(&info, "worldToNDC").expect("worldToNDC");
+    let expected = [
+        0.25, 0.0, 0.0, 0.0, 0.0, -0.25, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.5, 0.5, 10.0, 1.0,
+    ];
+    assert!(close(&to_ndc, &expected), "{to_ndc:?}");
+    let position = attribute_numbers(&info, "cameraPosition").expect("cameraPosition");
+    assert!(close(&position, &[0.0, 0.0, 10.0]), "{position:?}");
+    assert!(
+        !info.contains("fieldOfView"),
+        "an orthographic camera has no field of view"
+    );
+
+    let perspective = tmp(&dir, "defense.exr");
+    let o = quadray(&[
+        "render",
+        &scene("defense.toml"),
+        "--res",
+        "32x18",
+        "-o",
+        perspective.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let info = oiiotool(&["--info", "-v", perspective.to_str().unwrap()]).unwrap();
+    let m = attribute_numbers(&info, "worldToNDC").expect("worldToNDC");
+    // The scene's `to`, as a row vector times the matrix, then divided by w.
+    let p = [0.0, 0.0, 0.9, 1.0];
+    let column = |c: usize| (0..4).map(|r| p[r] * m[r * 4 + c]).sum::<f64>();
+    let w = column(3);
+    assert!(w > 0.0, "in front of the camera");
+    // oiiotool prints six significant digits.
+    let (x, y) = (column(0) / w, column(1) / w);
+    assert!(
+        (x - 0.5).abs() < 1e-4 && (y - 0.5).abs() < 1e-4,
+        "{x} {y} {m:?}"
+    );
+    let fov = |name| attribute_numbers(&info, name).expect(name)[0];
+    assert_eq!(fov("fieldOfViewVertical"), 42.0);
+    // 2·atan(tan(21°)·32/18), to oiiotool's six digits.
+    assert!((fov("fieldOfViewHorizontal") - 68.6212).abs() < 1e-4);
 }
 
 #[test]

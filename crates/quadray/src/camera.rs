@@ -1,7 +1,7 @@
 //! Cameras: perspective look-at, the seed's orbit camera, and orthographic.
 
 use crate::math::{MAX_COORDINATE, Ray};
-use glam::DVec3;
+use glam::{DMat4, DVec3, DVec4};
 
 /// How the camera projects the scene onto the image.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -178,6 +178,46 @@ impl CameraFrame {
         let sy = d.dot(self.up) / (depth * self.up.length_squared());
         Some(glam::DVec2::new((sx + 1.0) * 0.5, (1.0 - sy) * 0.5))
     }
+
+    /// The world-to-camera matrix of OpenEXR's `worldToCamera` attribute (and RenderMan's camera
+    /// space): the eye at the origin, +x right and +y up in the image, +z the viewing direction
+    /// (a left-handed frame). Column vectors: `camera = M * world`.
+    pub fn world_to_camera(&self) -> DMat4 {
+        let (right, up) = (self.right.normalize(), self.up.normalize());
+        DMat4::from_cols(
+            right.extend(0.0),
+            up.extend(0.0),
+            self.forward.extend(0.0),
+            self.origin.extend(1.0),
+        )
+        .inverse()
+    }
+
+    /// The world-to-NDC matrix of OpenEXR's `worldToNDC` attribute: after the division by w, x and
+    /// y are the image position of [`CameraFrame::project`] ((0, 0) the top-left corner of the
+    /// full image, (1, 1) the bottom-right); z is 1/depth for a perspective camera and depth for an
+    /// orthographic one. Column vectors: `ndc = M * world`.
+    pub fn world_to_ndc(&self) -> DMat4 {
+        // Camera x and y over the half extents (at unit depth for perspective) give [-1, 1].
+        let (sx, sy) = (0.5 / self.right.length(), -0.5 / self.up.length());
+        let projection = if self.orthographic {
+            DMat4::from_cols(
+                DVec4::new(sx, 0.0, 0.0, 0.0),
+                DVec4::new(0.0, sy, 0.0, 0.0),
+                DVec4::new(0.0, 0.0, 1.0, 0.0),
+                DVec4::new(0.5, 0.5, 0.0, 1.0),
+            )
+        } else {
+            // (x, y, z) → (sx·x + z/2, sy·y + z/2, 1, z): divided by w = z, the image position.
+            DMat4::from_cols(
+                DVec4::new(sx, 0.0, 0.0, 0.0),
+                DVec4::new(0.0, sy, 0.0, 0.0),
+                DVec4::new(0.5, 0.5, 0.0, 1.0),
+                DVec4::new(0.0, 0.0, 1.0, 0.0),
+            )
+        };
+        projection * self.world_to_camera()
+    }
 }
 
 #[cfg(test)]
@@ -215,6 +255,38 @@ mod tests {
         }
         let frame = perspective.prepare(1.0).unwrap();
         assert_eq!(frame.project(perspective.from * 2.0 - perspective.to), None);
+    }
+
+    /// The matrices agree with `ray`: a point on the ray through (u, v) lands at (u, v) in NDC,
+    /// and at camera-space depth equal to its distance along the viewing axis, in front (+z).
+    #[test]
+    fn exr_matrices_follow_the_rays() {
+        let perspective = Camera::orbit(DVec3::new(1.0, 2.0, 3.0), 30.0, 20.0, 7.0, 50.0);
+        let orthographic = Camera {
+            projection: Projection::Orthographic { height: 3.0 },
+            ..perspective
+        };
+        for camera in [perspective, orthographic] {
+            let frame = camera.prepare(16.0 / 9.0).unwrap();
+            let (to_camera, to_ndc) = (frame.world_to_camera(), frame.world_to_ndc());
+            for (u, v) in [(0.5, 0.5), (0.1, 0.8), (1.0, 0.0)] {
+                let ray = frame.ray(u, v);
+                let point = ray.origin + ray.dir * 4.0;
+                let ndc = to_ndc * point.extend(1.0);
+                let (x, y) = (ndc.x / ndc.w, ndc.y / ndc.w);
+                assert!((x - u).abs() < 1e-12 && (y - v).abs() < 1e-12, "{x} {y}");
+                let c = to_camera.transform_point3(point);
+                let forward = (camera.to - camera.from).normalize();
+                assert!((c.z - (point - camera.from).dot(forward)).abs() < 1e-12);
+                // Right of centre is +x, above it +y.
+                assert_eq!(c.x > 1e-9, u > 0.5 + 1e-9);
+                assert_eq!(c.y > 1e-9, v < 0.5 - 1e-9);
+            }
+            assert!(
+                (to_camera.transform_point3(camera.from)).length() < 1e-12,
+                "the eye is the origin"
+            );
+        }
     }
 
     #[test]
