@@ -170,6 +170,7 @@ impl Showcase {
                 specular_model: SpecularModel::Blinn,
                 reflectivity: 0.0,
                 reflection_tint: 0.0,
+                specular_tint: 0.0,
             }
         } else {
             Material {

@@ -9,9 +9,10 @@
 //! | `baseColorFactor` (linear RGB), `baseColorTexture` (sRGB) | base colour: `Texture::Image` scaled by the factor, or `Texture::Constant`; `COLOR_0` multiplies it |
 //! | sampler `wrapS`/`wrapT`, `magFilter`; `texCoord`; KHR_texture_transform | the image's wrap modes, nearest or bilinear filtering, the coordinate set; the transform is applied to the mesh's coordinates at load |
 //! | roughness r | Blinn–Phong exponent n = 2/α² − 2 with α = r² (the exponent whose lobe matches a Beckmann/GGX lobe of that width), clamped to [1, 10⁴] |
-//! | metallic m, roughness r | `reflectivity` = m·(1 − r)²: polished metal is a mirror, rough metal diffuse; `reflection_tint` = m: metals reflect in their base colour |
-//! | metallic m | highlight strength `specular` = min(1, F₀·(n + 8)/8), the normalised Blinn–Phong peak, with F₀ = 0.04·(1 − m) + m·max(base colour) |
-//! | — | `ambient` 0.1 and `diffuse` 0.9, quadray's defaults |
+//! | metallic m, roughness r | `reflectivity` = m·(1 − r)²: polished metal is a mirror; `reflection_tint` = m: metals reflect in their base colour |
+//! | metallic m | highlight strength `specular` = min(1, F₀·(n + 8)/8), the normalised Blinn–Phong peak, with F₀ = 0.04·(1 − m) + m; `specular_tint` = m: a metal's highlight is its base colour (F₀ of a metal is its base colour) |
+//! | metallic m | `diffuse` = 0.9·(1 − m): a metal has no diffuse term; a rough metal is its broad, tinted highlight |
+//! | — | `ambient` 0.1, quadray's default |
 //! | `alphaMode` MASK, `alphaCutoff`, base colour alpha | an [`AlphaMask`] cut-out on the mesh (tested inside intersection) |
 //! | `alphaMode` BLEND | rendered opaque, with a note |
 //! | KHR_materials_unlit | `ambient` 1, everything else 0: the base colour as is |
@@ -111,7 +112,7 @@ impl<'a> Materials<'a> {
         if let Some(u) = self.converted.get(&None) {
             return u.clone();
         }
-        let material = pbr_to_whitted(Texture::Constant(Vec3::ONE), Vec3::ONE, 1.0, 1.0);
+        let material = pbr_to_whitted(Texture::Constant(Vec3::ONE), 1.0, 1.0);
         let used = MaterialUse {
             id: self.list.len() as u32,
             mask: None,
@@ -259,7 +260,7 @@ impl<'a> Materials<'a> {
                 ..Material::default()
             }
         } else {
-            pbr_to_whitted(texture, base, metallic, roughness)
+            pbr_to_whitted(texture, metallic, roughness)
         };
         let id = self.list.len() as u32;
         let name = m
@@ -278,20 +279,25 @@ impl<'a> Materials<'a> {
     }
 }
 
-/// The Whitted material for PBR parameters (see the module's table).
-pub fn pbr_to_whitted(texture: Texture, base: Vec3, metallic: f32, roughness: f32) -> Material {
+/// The Whitted material for PBR parameters (see the module's table). Every term stays at or
+/// below 1: the diffuse albedo, the mirror's weight and the highlight's peak.
+pub fn pbr_to_whitted(texture: Texture, metallic: f32, roughness: f32) -> Material {
     let alpha = roughness * roughness;
     let shininess = if alpha > 0.0 {
         (2.0 / (alpha * alpha) - 2.0).clamp(1.0, 1e4)
     } else {
         1e4
     };
-    let f0 = 0.04 * (1.0 - metallic) + metallic * base.max_element();
+    // Fresnel reflectance at normal incidence: 4% for a dielectric, the base colour for a metal
+    // (which `specular_tint` multiplies in, so its scalar part is 1).
+    let f0 = 0.04 * (1.0 - metallic) + metallic;
     Material {
         texture,
+        diffuse: Material::default().diffuse * (1.0 - metallic),
         specular: (f0 * (shininess + 8.0) / 8.0).min(1.0),
         shininess,
         specular_model: SpecularModel::Blinn,
+        specular_tint: metallic,
         reflectivity: metallic * (1.0 - roughness) * (1.0 - roughness),
         reflection_tint: metallic,
         ..Material::default()
@@ -304,19 +310,61 @@ mod tests {
 
     #[test]
     fn pbr_mapping_endpoints() {
-        let gold = Vec3::new(1.0, 0.8, 0.3);
-        let mirror = pbr_to_whitted(Texture::Constant(gold), gold, 1.0, 0.0);
+        let gold = Texture::Constant(Vec3::new(1.0, 0.8, 0.3));
+        let mirror = pbr_to_whitted(gold.clone(), 1.0, 0.0);
         assert_eq!((mirror.reflectivity, mirror.reflection_tint), (1.0, 1.0));
         assert_eq!((mirror.shininess, mirror.specular), (1e4, 1.0));
-        let rough_metal = pbr_to_whitted(Texture::Constant(gold), gold, 1.0, 1.0);
+        // A rough metal: no mirror, no diffuse, a broad highlight in its own colour.
+        let rough_metal = pbr_to_whitted(gold.clone(), 1.0, 1.0);
         assert_eq!(rough_metal.reflectivity, 0.0);
         assert_eq!(rough_metal.shininess, 1.0);
-        let plastic = pbr_to_whitted(Texture::Constant(gold), gold, 0.0, 0.5);
+        assert_eq!(rough_metal.diffuse, 0.0);
+        assert_eq!(
+            (rough_metal.specular, rough_metal.specular_tint),
+            (1.0, 1.0)
+        );
+        let plastic = pbr_to_whitted(gold, 0.0, 0.5);
         assert_eq!(plastic.reflectivity, 0.0);
+        assert_eq!((plastic.diffuse, plastic.specular_tint), (0.9, 0.0));
         // r = 0.5: α = 0.25, n = 2/0.0625 − 2 = 30, specular = 0.04·38/8.
         assert!((plastic.shininess - 30.0).abs() < 1e-4);
         assert!((plastic.specular - 0.19).abs() < 1e-6);
         assert_eq!(plastic.specular_model, SpecularModel::Blinn);
+    }
+
+    /// Along the MetalRoughSpheres grid's axes the mapping moves one way: more roughness fades
+    /// the mirror and widens the highlight; more metalness strengthens the mirror, tints
+    /// highlights and reflections and takes the diffuse term away; no term exceeds 1.
+    #[test]
+    fn pbr_mapping_is_monotone_and_bounded() {
+        let steps: Vec<f32> = (0..=6).map(|i| i as f32 / 6.0).collect();
+        let material = |m, r| pbr_to_whitted(Texture::Constant(Vec3::ONE), m, r);
+        for &m in &steps {
+            for pair in steps.windows(2) {
+                let (smooth, rough) = (material(m, pair[0]), material(m, pair[1]));
+                assert!(rough.reflectivity <= smooth.reflectivity);
+                assert!(rough.shininess < smooth.shininess || rough.shininess == 1.0);
+                assert!(rough.specular <= smooth.specular);
+            }
+        }
+        for &r in &steps {
+            for pair in steps.windows(2) {
+                let (dielectric, metal) = (material(pair[0], r), material(pair[1], r));
+                assert!(metal.reflectivity >= dielectric.reflectivity);
+                assert!(metal.diffuse < dielectric.diffuse);
+                assert!(metal.specular_tint > dielectric.specular_tint);
+                assert!(metal.reflection_tint > dielectric.reflection_tint);
+                assert!(metal.specular >= dielectric.specular);
+            }
+        }
+        for &m in &steps {
+            for &r in &steps {
+                let x = material(m, r);
+                for term in [x.diffuse, x.specular, x.reflectivity] {
+                    assert!((0.0..=1.0).contains(&term), "m {m}, r {r}: {x:?}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -101,6 +101,7 @@ pub fn whitted_material(
         specular_model: SpecularModel::Phong,
         reflectivity,
         reflection_tint: 0.0,
+        specular_tint: 0.0,
     })
 }
 

@@ -141,6 +141,9 @@ pub struct WhittedDef {
     /// How far reflections take the base colour, in [0, 1].
     #[serde(default)]
     pub reflection_tint: f32,
+    /// How far highlights take the base colour, in [0, 1] (0 when absent: files from before it).
+    #[serde(default)]
+    pub specular_tint: f32,
     /// A procedural texture; the glTF base colour (and its texture) when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<TextureDef>,
@@ -346,6 +349,7 @@ pub fn whitted_def(m: &Material) -> WhittedDef {
         },
         reflectivity: m.reflectivity,
         reflection_tint: m.reflection_tint,
+        specular_tint: m.specular_tint,
         texture,
     }
 }
@@ -368,6 +372,7 @@ pub fn whitted_material(def: &WhittedDef, base_texture: Texture) -> Result<Mater
     for (name, v) in [
         ("reflectivity", def.reflectivity),
         ("reflectionTint", def.reflection_tint),
+        ("specularTint", def.specular_tint),
     ] {
         if !(0.0..=1.0).contains(&v) {
             return Err(format!("`{name}` must be in [0, 1], got {v}"));
@@ -412,6 +417,7 @@ pub fn whitted_material(def: &WhittedDef, base_texture: Texture) -> Result<Mater
         specular_model,
         reflectivity: def.reflectivity,
         reflection_tint: def.reflection_tint,
+        specular_tint: def.specular_tint,
     })
 }
 
@@ -497,6 +503,7 @@ mod tests {
             specular_model: SpecularModel::Blinn,
             reflectivity: 0.6,
             reflection_tint: 0.5,
+            specular_tint: 0.25,
         };
         let def = whitted_def(&m);
         let json = serde_json::to_string(&def).unwrap();

@@ -149,7 +149,7 @@ impl Whitted {
                     SpecularModel::Blinn => (inc.to_light + view).normalize().dot(ns),
                 };
                 if alignment > 0.0 {
-                    response += Vec3::splat(m.specular * m.specular_lobe(alignment as f32));
+                    response += m.highlight_color(base) * m.specular_lobe(alignment as f32);
                 }
             }
             color += inc.irradiance * response;

@@ -18,10 +18,11 @@ pub enum SpecularModel {
 
 /// A surface's response to light, Whitted style.
 ///
-/// Radiance leaving a point is `(1 − reflectivity)·(ambient + diffuse)·base + specular·highlight
-/// + reflectivity·tint·(radiance from the mirror direction)`: a perfect mirror (reflectivity 1)
-/// shows no diffuse colour but keeps its highlights, like a coated surface. `tint` is white for
-/// `reflection_tint` 0 and the base colour for 1 (a metal, whose reflections take its colour).
+/// Radiance leaving a point is `(1 − reflectivity)·(ambient + diffuse)·base +
+/// specular·s_tint·highlight + reflectivity·r_tint·(radiance from the mirror direction)`: a
+/// perfect mirror (reflectivity 1) shows no diffuse colour but keeps its highlights, like a coated
+/// surface. Each tint is white at 0 and the base colour at 1 (`specular_tint`, `reflection_tint`):
+/// a metal's highlights and reflections take its colour.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Base colour (albedo) source.
@@ -41,6 +42,9 @@ pub struct Material {
     /// How far mirror reflections take the base colour, in [0, 1]: 0 white (a coating), 1 the base
     /// colour (a metal; glTF's metallic factor).
     pub reflection_tint: f32,
+    /// How far highlights take the base colour, in [0, 1]: 0 the light's colour (plastic, paint),
+    /// 1 the base colour times the light's (a metal).
+    pub specular_tint: f32,
 }
 
 impl Material {
@@ -76,6 +80,13 @@ impl Material {
         }
     }
 
+    /// The colour multiplying a highlight's lobe (before the light's colour), given the base
+    /// colour at the hit.
+    #[inline]
+    pub fn highlight_color(&self, base: Vec3) -> Vec3 {
+        Vec3::ONE.lerp(base, self.specular_tint) * self.specular
+    }
+
     /// The colour multiplying mirror reflections, given the base colour at the hit.
     #[inline]
     pub fn reflection_color(&self, base: Vec3) -> Vec3 {
@@ -94,6 +105,7 @@ impl Default for Material {
             specular_model: SpecularModel::Phong,
             reflectivity: 0.0,
             reflection_tint: 0.0,
+            specular_tint: 0.0,
         }
     }
 }
@@ -141,8 +153,15 @@ mod tests {
         assert_eq!(m.reflection_color(base), Vec3::new(0.25, 0.25, 0.5));
         let coating = Material {
             reflection_tint: 0.0,
-            ..m
+            ..m.clone()
         };
         assert_eq!(coating.reflection_color(base), Vec3::splat(0.5));
+        let metal = Material {
+            specular: 0.5,
+            specular_tint: 1.0,
+            ..m
+        };
+        assert_eq!(metal.highlight_color(base), Vec3::new(0.25, 0.25, 0.5));
+        assert_eq!(coating.highlight_color(base), Vec3::ZERO);
     }
 }

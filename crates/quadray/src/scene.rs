@@ -324,11 +324,13 @@ fn validate_material(m: &Material) -> Result<(), String> {
             ));
         }
     }
-    if !(0.0..=1.0).contains(&m.reflection_tint) {
-        return Err(format!(
-            "reflection tint must be in [0, 1], got {}",
-            m.reflection_tint
-        ));
+    for (name, tint) in [
+        ("reflection tint", m.reflection_tint),
+        ("specular tint", m.specular_tint),
+    ] {
+        if !(0.0..=1.0).contains(&tint) {
+            return Err(format!("{name} must be in [0, 1], got {tint}"));
+        }
     }
     if !(0.0..=1.0).contains(&m.reflectivity) {
         return Err(format!(

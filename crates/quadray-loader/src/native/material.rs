@@ -131,20 +131,20 @@ impl Builder<'_> {
             )?,
             specular_model,
             reflectivity,
-            reflection_tint: match &m.reflection_tint {
-                None => 0.0,
-                Some(v) => {
-                    let t = self.number(v, &format!("{key}.reflection_tint"))?;
-                    if !(0.0..=1.0).contains(&t) {
-                        return Err(self.err(
-                            v.span(),
-                            format!("{key}.reflection_tint"),
-                            format!("must be in [0, 1], got {t}"),
-                        ));
-                    }
-                    t as f32
-                }
-            },
+            reflection_tint: self.tint(&m.reflection_tint, &format!("{key}.reflection_tint"))?,
+            specular_tint: self.tint(&m.specular_tint, &format!("{key}.specular_tint"))?,
         })
+    }
+
+    /// A tint in [0, 1], 0 when absent.
+    fn tint(&self, value: &Option<Spanned<f64>>, key: &str) -> Result<f32, LoadError> {
+        let Some(v) = value else {
+            return Ok(0.0);
+        };
+        let t = self.number(v, key)?;
+        if !(0.0..=1.0).contains(&t) {
+            return Err(self.err(v.span(), key, format!("must be in [0, 1], got {t}")));
+        }
+        Ok(t as f32)
     }
 }

@@ -142,6 +142,7 @@ pub(super) struct MaterialSpec {
     pub(super) specular_model: Option<Spanned<String>>,
     pub(super) reflectivity: Option<Spanned<f64>>,
     pub(super) reflection_tint: Option<Spanned<f64>>,
+    pub(super) specular_tint: Option<Spanned<f64>>,
 }
 
 #[derive(Clone, Deserialize)]
