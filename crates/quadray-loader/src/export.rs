@@ -414,6 +414,28 @@ intensity = 0.8
         (a - b).length() <= 1e-12 * (1.0 + a.length())
     }
 
+    /// A single-sided mesh is written with a `doubleSided: false` copy of its material, and
+    /// read back single-sided; the material stays two-sided for the scene's other shapes.
+    #[test]
+    fn single_sided_meshes_round_trip() {
+        let mut scene = crate::native::parse_scene(SCENE, Path::new("s.toml")).unwrap();
+        let mesh = &mut scene.description.geometry.meshes[0];
+        *mesh = mesh.clone().with_single_sided();
+        let out = temp("single-sided.gltf");
+        export_gltf(&scene, &out).unwrap();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        let sides: Vec<bool> = json["materials"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| m["doubleSided"].as_bool().unwrap())
+            .collect();
+        assert_eq!(sides.iter().filter(|&&two| !two).count(), 1, "{sides:?}");
+        let back = crate::gltf::import_gltf(&out, &ImportOptions::default()).unwrap();
+        assert!(back.geometry.meshes[0].single_sided());
+    }
+
     #[test]
     fn native_scene_round_trips_through_gltf_and_glb() {
         let scene = crate::native::parse_scene(SCENE, Path::new("s.toml")).unwrap();
@@ -470,6 +492,7 @@ intensity = 0.8
                 b.meshes[0].normals().unwrap(),
             );
             assert!(na.iter().zip(nb).all(|(x, y)| (*x - *y).length() < 1e-6));
+            assert!(!b.meshes[0].single_sided(), "doubleSided: true");
             assert_eq!(back.lights.len(), 2);
             for (la, lb) in scene.description.lights.iter().zip(&back.lights) {
                 match (la, lb) {

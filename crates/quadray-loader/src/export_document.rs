@@ -40,8 +40,9 @@ pub(crate) struct Document {
     pub(crate) shapes: Vec<ShapeDef>,
     /// glTF image index by the address of the shared quadray image.
     pub(crate) image_ids: HashMap<usize, usize>,
-    /// glTF material index of (quadray material, cutoff bits, factor bits) for alpha-masked meshes.
-    pub(crate) masked: HashMap<(u32, u32, u32), usize>,
+    /// glTF material index of each variant of a quadray material that a mesh's cut-out or single
+    /// side needs.
+    pub(crate) masked: HashMap<MaterialVariant, usize>,
 }
 
 /// One mesh's vertex data, borrowed.
@@ -226,32 +227,46 @@ impl Document {
         let ext = MaterialExtension {
             whitted: quadrics_ext::whitted_def(m),
         };
+        // quadray's surfaces are seen from both sides; glTF's default is one.
         Ok(json!({
             "name": name,
             "pbrMetallicRoughness": pbr,
+            "doubleSided": true,
             "extensions": {quadrics_ext::EXTENSION: ext},
         }))
     }
 
     /// The glTF material for `mesh` drawn with quadray material `id`: that material, or a copy
-    /// with the mesh's alpha cut-out.
+    /// with the mesh's alpha cut-out and single side.
     pub(crate) fn mesh_material(&mut self, mesh: &Mesh, id: u32) -> usize {
-        let Some(mask) = mesh.alpha_mask() else {
+        let mask = mesh.alpha_mask();
+        if mask.is_none() && !mesh.single_sided() {
             return id as usize;
-        };
-        let key = (id, mask.cutoff.to_bits(), mask.factor.to_bits());
+        }
+        let key = (
+            id,
+            mask.map(|m| (m.cutoff.to_bits(), m.factor.to_bits())),
+            mesh.single_sided(),
+        );
         if let Some(&m) = self.masked.get(&key) {
             return m;
         }
         let mut copy = self.materials[id as usize].clone();
-        copy["alphaMode"] = json!("MASK");
-        copy["alphaCutoff"] = json!(mask.cutoff);
-        copy["pbrMetallicRoughness"]["baseColorFactor"][3] = json!(mask.factor);
+        copy["doubleSided"] = json!(!mesh.single_sided());
+        if let Some(mask) = mask {
+            copy["alphaMode"] = json!("MASK");
+            copy["alphaCutoff"] = json!(mask.cutoff);
+            copy["pbrMetallicRoughness"]["baseColorFactor"][3] = json!(mask.factor);
+        }
         self.materials.push(copy);
         self.masked.insert(key, self.materials.len() - 1);
         self.materials.len() - 1
     }
 }
+
+/// A quadray material as a mesh draws it: (material, the cut-out's cutoff and factor bits,
+/// single-sided).
+pub(crate) type MaterialVariant = (u32, Option<(u32, u32)>, bool);
 
 /// Sets a node's matrix (column-major) from an affine map, leaving the identity unwritten as the
 /// spec asks.

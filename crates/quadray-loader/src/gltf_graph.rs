@@ -473,10 +473,13 @@ impl<'a> GraphBuild<'a> {
                 continue;
             }
             let material = if self.skip_materials {
+                // Geometry only: the scene's material, seen from both sides like every native
+                // surface.
                 MaterialUse {
                     id: 0,
                     mask: None,
                     uv_transform: None,
+                    single_sided: false,
                 }
             } else {
                 self.materials

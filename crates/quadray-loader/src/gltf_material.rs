@@ -69,6 +69,8 @@ pub struct MaterialUse {
     pub mask: Option<AlphaMask>,
     /// A texture coordinate transform to bake into the mesh.
     pub uv_transform: Option<UvTransform>,
+    /// Whether meshes drawn with it are seen from the front only (`doubleSided: false`).
+    pub single_sided: bool,
 }
 
 /// Converts glTF materials on first use, and their images once each.
@@ -117,6 +119,8 @@ impl<'a> Materials<'a> {
             id: self.list.len() as u32,
             mask: None,
             uv_transform: None,
+            // The default material is single-sided, as every material that does not say.
+            single_sided: true,
         };
         self.list.push(("default".into(), material));
         self.converted.insert(None, used.clone());
@@ -275,6 +279,7 @@ impl<'a> Materials<'a> {
             id,
             mask,
             uv_transform,
+            single_sided: !m.double_sided(),
         })
     }
 }

@@ -148,6 +148,31 @@ impl Geometry {
         g
     }
 
+    /// Whether camera and reflection rays pass through `prim`, reached by `ray` through `path`:
+    /// the back of a single-sided mesh's triangle. The winding is judged in the triangle's own
+    /// space, so a mirroring instance keeps the same faces in front, as glTF asks (a node with a
+    /// negative determinant draws its clockwise faces, which are the mesh's counter-clockwise
+    /// ones seen through the mirror).
+    pub fn passes_through(&self, prim: PrimRef, path: &InstancePath, ray: &Ray) -> bool {
+        let LocalPrim::Triangle { mesh, tri } = prim.local else {
+            return false;
+        };
+        let level = if path.is_empty() {
+            self.level(0)
+        } else {
+            self.level(path.level(self))
+        };
+        let mesh = &level.meshes[mesh as usize];
+        if !mesh.single_sided() {
+            return false;
+        }
+        let mut local = *ray;
+        for inst in path.instances(self) {
+            local = inst.ray_to_object(&local);
+        }
+        mesh.faces_away(tri, local.dir)
+    }
+
     /// Surface geometry of `prim` of `level`, in that level's space.
     #[inline(always)]
     fn level_surface(

@@ -92,6 +92,7 @@ pub struct Mesh {
     texcoords: [Option<Vec<Vec2>>; 2],
     colors: Option<Vec<Vec4>>,
     alpha_mask: Option<AlphaMask>,
+    single_sided: bool,
 }
 
 impl Mesh {
@@ -139,6 +140,7 @@ impl Mesh {
             texcoords: [None, None],
             colors: None,
             alpha_mask: None,
+            single_sided: false,
         })
     }
 
@@ -181,6 +183,27 @@ impl Mesh {
         }
         self.alpha_mask = Some(mask);
         Ok(self)
+    }
+
+    /// Makes the mesh single-sided (glTF's `doubleSided: false`): camera and reflection rays pass
+    /// through the back of its triangles, the side from which their vertices turn clockwise;
+    /// shadow rays still stop there, as glTF viewers draw shadows.
+    pub fn with_single_sided(mut self) -> Mesh {
+        self.single_sided = true;
+        self
+    }
+
+    /// Whether camera and reflection rays see only the front of the triangles.
+    pub fn single_sided(&self) -> bool {
+        self.single_sided
+    }
+
+    /// Whether `dir` meets triangle `tri` from the back: along its winding normal, the side from
+    /// which its vertices turn clockwise (glTF's and OpenGL's convention: counter-clockwise is the
+    /// front). A ray in the triangle's plane meets it from the front.
+    pub fn faces_away(&self, tri: u32, dir: DVec3) -> bool {
+        let [v0, v1, v2] = self.vertices(tri);
+        (v1 - v0).cross(v2 - v0).dot(dir) > 0.0
     }
 
     fn check_attribute(&self, what: &'static str, count: usize) -> Result<(), MeshError> {

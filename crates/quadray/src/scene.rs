@@ -6,7 +6,8 @@ use crate::geometry::Geometry;
 use crate::instance::{InstancePath, PlacementError};
 use crate::light::Light;
 use crate::material::Material;
-use crate::math::Ray;
+use crate::math::{Ray, offset_origin};
+use crate::mesh::Mesh;
 use crate::shape::{PrimRef, SurfaceHit};
 use glam::Vec3;
 
@@ -68,7 +69,13 @@ pub struct Scene {
     lights: Vec<Light>,
     geometry: Geometry,
     accel: Accel,
+    /// Whether any mesh is single-sided: only then do closest hits check for back faces.
+    single_sided: bool,
 }
+
+/// Back faces of single-sided meshes one closest-hit query passes through at most; a ray that
+/// meets more stops at the next one (none of the Khronos samples comes near).
+const MAX_PASSED_FACES: u32 = 64;
 
 fn invalid(what: impl Into<String>, problem: impl Into<String>) -> SceneError {
     SceneError::Invalid {
@@ -132,6 +139,8 @@ impl Scene {
             ));
         }
         let accel = Accel::build_with(&d.geometry, layout, origin_extent);
+        let single_sided = (0..d.geometry.level_count())
+            .any(|l| d.geometry.level(l).meshes.iter().any(Mesh::single_sided));
         Ok(Scene {
             camera: d.camera,
             background: d.background,
@@ -139,6 +148,7 @@ impl Scene {
             lights: d.lights,
             geometry: d.geometry,
             accel,
+            single_sided,
         })
     }
 
@@ -220,25 +230,54 @@ impl Scene {
     }
 
     /// [`Scene::intersect`] for a ray spawned on primitive `from`, whose self-hits are skipped.
+    /// The ray passes through the back faces of single-sided meshes ([`Mesh::with_single_sided`]):
+    /// the hit is the first surface it sees, with `t` along `ray`.
     pub fn intersect_from(&self, ray: &Ray, from: Option<PrimRef>) -> Option<SurfaceHit> {
-        let (t, prim) = self
-            .accel
-            .closest(&self.geometry, ray, f64::INFINITY, from)?;
-        // The world's primitives (placement 0) need no path decoded.
-        let decoded;
-        let path = match prim.placement {
-            0 => &crate::instance::WORLD_PATH,
-            p => {
-                decoded = self.accel.placements().path(&self.geometry, p);
-                &decoded
+        let mut leg = *ray;
+        let mut from = from;
+        let mut passed = 0;
+        loop {
+            let (t, prim) = self
+                .accel
+                .closest(&self.geometry, &leg, f64::INFINITY, from)?;
+            // The world's primitives (placement 0) need no path decoded.
+            let decoded;
+            let path = match prim.placement {
+                0 => &crate::instance::WORLD_PATH,
+                p => {
+                    decoded = self.accel.placements().path(&self.geometry, p);
+                    &decoded
+                }
+            };
+            let geometry = self.geometry.surface(prim, path, &leg, t);
+            if self.single_sided
+                && passed < MAX_PASSED_FACES
+                && self.geometry.passes_through(prim, path, &leg)
+            {
+                // Continue from just beyond the face, skipping it.
+                let origin = offset_origin(
+                    geometry.point,
+                    geometry.geometric_normal,
+                    geometry.error,
+                    leg.dir,
+                );
+                leg = Ray::new(origin, leg.dir);
+                from = Some(prim);
+                passed += 1;
+                continue;
             }
-        };
-        Some(SurfaceHit {
-            t,
-            prim,
-            material: self.geometry.material(prim, path),
-            geometry: self.geometry.surface(prim, path, ray, t),
-        })
+            let t = if passed == 0 {
+                t
+            } else {
+                (geometry.point - ray.origin).dot(ray.dir) / ray.dir.length_squared()
+            };
+            return Some(SurfaceHit {
+                t,
+                prim,
+                material: self.geometry.material(prim, path),
+                geometry,
+            });
+        }
     }
 
     /// Whether anything blocks `ray` in (0, `t_max`): the any-hit query of shadow rays.
@@ -352,5 +391,105 @@ fn validate_material(m: &Material) -> Result<(), String> {
             Err("image colour factor must be finite and non-negative".into())
         }
         _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Prototype;
+    use crate::instance::Instance;
+    use crate::math::Transform;
+    use crate::{Projection, Sphere};
+    use glam::{DAffine3, DVec3};
+
+    /// The unit square at z = 0, counter-clockwise seen from +z: its front faces +z.
+    fn square(single_sided: bool) -> Mesh {
+        let p = vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ];
+        let mesh = Mesh::new(p, vec![[0, 1, 2], [0, 2, 3]], None, 0).unwrap();
+        if single_sided {
+            mesh.with_single_sided()
+        } else {
+            mesh
+        }
+    }
+
+    /// A square at z = 0 (world, or placed by `placement` as an instance) and a sphere of radius
+    /// 0.5 at z = 2, above it.
+    fn scene(single_sided: bool, placement: Option<DAffine3>) -> Scene {
+        let mut geometry = Geometry {
+            spheres: vec![Sphere {
+                center: DVec3::new(0.0, 0.0, 2.0),
+                radius: 0.5,
+                material: 0,
+            }],
+            ..Geometry::default()
+        };
+        match placement {
+            None => geometry.meshes.push(square(single_sided)),
+            Some(m) => {
+                geometry
+                    .prototypes
+                    .push(Prototype::mesh(square(single_sided)));
+                geometry
+                    .instances
+                    .push(Instance::new(0, Transform::new(m).unwrap()));
+            }
+        }
+        Scene::new(SceneDescription {
+            camera: Camera {
+                from: DVec3::new(0.0, 0.0, 10.0),
+                to: DVec3::ZERO,
+                up: DVec3::Y,
+                projection: Projection::Perspective { vfov_deg: 40.0 },
+            },
+            background: Vec3::ZERO,
+            materials: vec![Material::default()],
+            lights: vec![],
+            geometry,
+        })
+        .unwrap()
+    }
+
+    /// A single-sided square hides what lies behind its front and lets rays through its back,
+    /// for closest hits only: it still blocks shadow rays. Through a mirroring instance the same
+    /// faces stay in front, which the mirror turns to face −z.
+    #[test]
+    fn single_sided_meshes_are_seen_from_the_front_only() {
+        let up = Ray::new(DVec3::new(0.1, 0.2, -5.0), DVec3::Z);
+        let down = Ray::new(DVec3::new(0.1, 0.2, 5.0), -DVec3::Z);
+        let hit_t = |s: &Scene, ray: &Ray| s.intersect(ray).map(|h| h.t);
+
+        let two_sided = scene(false, None);
+        assert_eq!(hit_t(&two_sided, &up), Some(5.0));
+        let one_sided = scene(true, None);
+        // From below, the square's back: the ray goes on to the sphere's bottom, where
+        // x² + y² + (z − 2)² = 0.25 with x² + y² = 0.05.
+        let bottom = 2.0 - 0.2f64.sqrt();
+        let t = hit_t(&one_sided, &up).unwrap();
+        assert!((t - (5.0 + bottom)).abs() < 1e-9, "{t}");
+        assert!(one_sided.occluded(&up, 6.0), "the back still casts shadows");
+        // From above, its front: the sphere's top, then nothing behind it.
+        assert!((hit_t(&one_sided, &down).unwrap() - (5.0 - (4.0 - bottom))).abs() < 1e-9);
+        let beside = Ray::new(DVec3::new(0.9, 0.9, 5.0), -DVec3::Z);
+        assert_eq!(hit_t(&one_sided, &beside), Some(5.0));
+
+        // Moved up by 1 as an instance: the same, with the mirror swapping the seen side.
+        let lift = DAffine3::from_translation(DVec3::Z);
+        let placed = scene(true, Some(lift));
+        assert!((hit_t(&placed, &up).unwrap() - (5.0 + bottom)).abs() < 1e-9);
+        assert_eq!(hit_t(&placed, &beside), Some(4.0));
+        let mirrored = scene(
+            true,
+            Some(lift * DAffine3::from_scale(DVec3::new(1.0, 1.0, -1.0))),
+        );
+        // Its front now faces −z: rays from below stop at it, rays from above pass.
+        assert_eq!(hit_t(&mirrored, &up), Some(6.0));
+        assert_eq!(hit_t(&mirrored, &beside), None);
     }
 }
