@@ -262,3 +262,74 @@ fn no_acne_on_any_primitive_kind() {
     assert!(hits > 1000);
     assert_eq!(acne, 0);
 }
+
+/// An emitter is seen at its emission exactly, directly and in a perfect mirror, and lights no
+/// other surface (Whitted tracing follows light only from the scene's lights, of which there are
+/// none here): a white diffuse sphere beside it stays black.
+#[test]
+fn emission_is_seen_directly_and_in_mirrors_and_lights_nothing() {
+    let glow = Vec3::new(2.0, 1.0, 0.5);
+    let black = Texture::Constant(Vec3::ZERO);
+    let materials = vec![
+        Material {
+            texture: black.clone(),
+            emission: Some(Texture::Constant(glow)),
+            ..Material::default()
+        },
+        Material {
+            texture: black,
+            reflectivity: 1.0,
+            ..Material::default()
+        },
+        Material {
+            texture: Texture::Constant(Vec3::ONE),
+            ambient: 0.0,
+            diffuse: 1.0,
+            ..Material::default()
+        },
+    ];
+    let scene = Scene::new(SceneDescription {
+        camera: Camera::orbit(DVec3::ZERO, 0.0, 30.0, 20.0, 40.0),
+        background: Vec3::ZERO,
+        materials,
+        lights: vec![],
+        geometry: Geometry {
+            spheres: vec![
+                Sphere {
+                    center: DVec3::new(0.0, 0.0, 5.0),
+                    radius: 1.0,
+                    material: 0,
+                },
+                Sphere {
+                    center: DVec3::new(5.0, 0.0, 5.0),
+                    radius: 1.0,
+                    material: 2,
+                },
+            ],
+            planes: vec![Plane {
+                point: DVec3::ZERO,
+                normal: DVec3::Z,
+                material: 1,
+            }],
+            ..Geometry::default()
+        },
+    })
+    .unwrap();
+    let whitted = Whitted::default();
+    let mut counts = RayCounts::default();
+    let down = |x: f64, z: f64| Ray::new(DVec3::new(x, 0.0, z), -DVec3::Z);
+    assert_eq!(
+        whitted.camera_ray(&scene, &down(0.0, 10.0), &mut counts),
+        glow
+    );
+    // Down to the mirror at z = 0, back up to the emitter's underside.
+    assert_eq!(
+        whitted.camera_ray(&scene, &down(0.0, 3.0), &mut counts),
+        glow
+    );
+    assert_eq!(counts.reflection, 1);
+    assert_eq!(
+        whitted.camera_ray(&scene, &down(5.0, 10.0), &mut counts),
+        Vec3::ZERO
+    );
+}

@@ -171,6 +171,7 @@ impl Showcase {
                 reflectivity: 0.0,
                 reflection_tint: 0.0,
                 specular_tint: 0.0,
+                emission: None,
             }
         } else {
             Material {

@@ -235,6 +235,9 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
     if !doc.lights.is_empty() {
         used.push("KHR_lights_punctual");
     }
+    if doc.emissive_strength {
+        used.push(crate::gltf_material::EMISSIVE_STRENGTH);
+    }
     let root_ext = RootExtension {
         shapes: std::mem::take(&mut doc.shapes),
         extensions: None,
@@ -343,6 +346,7 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ExportError> {
 mod tests {
     use super::*;
     use crate::import::ImportOptions;
+    use quadray::Texture;
 
     const SCENE: &str = r#"
 version = 1
@@ -434,6 +438,32 @@ intensity = 0.8
         assert_eq!(sides.iter().filter(|&&two| !two).count(), 1, "{sides:?}");
         let back = crate::gltf::import_gltf(&out, &ImportOptions::default()).unwrap();
         assert!(back.geometry.meshes[0].single_sided());
+    }
+
+    /// Emission goes out as glTF's emissiveFactor, scaled by KHR_materials_emissive_strength
+    /// beyond 1, and comes back the same.
+    #[test]
+    fn emission_round_trips() {
+        let mut scene = crate::native::parse_scene(SCENE, Path::new("s.toml")).unwrap();
+        let glow = Texture::Constant(Vec3::new(3.0, 1.5, 0.0));
+        scene.description.materials[0].emission = Some(glow.clone());
+        let out = temp("emission.gltf");
+        export_gltf(&scene, &out).unwrap();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        assert!(
+            json["extensionsUsed"]
+                .as_array()
+                .unwrap()
+                .contains(&serde_json::json!("KHR_materials_emissive_strength"))
+        );
+        let back = crate::gltf::import_gltf(&out, &ImportOptions::default()).unwrap();
+        let emissions: Vec<_> = back
+            .materials
+            .iter()
+            .filter_map(|(_, m)| m.emission.clone())
+            .collect();
+        assert_eq!(emissions, [glow]);
     }
 
     #[test]

@@ -2,6 +2,7 @@
 //! it, with the writers of accessors, meshes, materials and textures.
 
 use crate::export::ExportError;
+use crate::gltf_material::EMISSIVE_STRENGTH;
 use crate::quadrics_ext::{self, MaterialExtension, ShapeDef};
 use crate::tessellate::TriMesh;
 use glam::{DAffine3, DMat3, DVec3, Vec2, Vec3, Vec4};
@@ -43,6 +44,8 @@ pub(crate) struct Document {
     /// glTF material index of each variant of a quadray material that a mesh's cut-out or single
     /// side needs.
     pub(crate) masked: HashMap<MaterialVariant, usize>,
+    /// Whether a material uses KHR_materials_emissive_strength (then listed as used).
+    pub(crate) emissive_strength: bool,
 }
 
 /// One mesh's vertex data, borrowed.
@@ -228,12 +231,47 @@ impl Document {
             whitted: quadrics_ext::whitted_def(m),
         };
         // quadray's surfaces are seen from both sides; glTF's default is one.
-        Ok(json!({
+        let mut material = json!({
             "name": name,
             "pbrMetallicRoughness": pbr,
             "doubleSided": true,
             "extensions": {quadrics_ext::EXTENSION: ext},
-        }))
+        });
+        if let Some(emission) = &m.emission {
+            self.write_emission(&mut material, emission)?;
+        }
+        Ok(material)
+    }
+
+    /// glTF's emissive fields for `emission`: a factor in [0, 1] scaled by
+    /// KHR_materials_emissive_strength when brighter, and the texture of an image emission.
+    fn write_emission(
+        &mut self,
+        material: &mut Value,
+        emission: &Texture,
+    ) -> Result<(), ExportError> {
+        let (factor, image) = match emission {
+            Texture::Constant(c) => (*c, None),
+            Texture::Image(t) => (t.factor, Some(t)),
+            // Procedural emission: a representative colour, as for base colours.
+            Texture::HeightRamp | Texture::Bands { .. } => {
+                (quadray::texture::height_ramp(0.5), None)
+            }
+            Texture::Checker { even, odd, .. } => ((*even + *odd) * 0.5, None),
+        };
+        let peak = factor.max_element();
+        if peak > 1.0 {
+            material["emissiveFactor"] = json!((factor / peak).to_array());
+            material["extensions"][EMISSIVE_STRENGTH] = json!({"emissiveStrength": peak});
+            self.emissive_strength = true;
+        } else {
+            material["emissiveFactor"] = json!(factor.to_array());
+        }
+        if let Some(t) = image {
+            let tex = self.texture(t)?;
+            material["emissiveTexture"] = json!({"index": tex, "texCoord": t.map.set});
+        }
+        Ok(())
     }
 
     /// The glTF material for `mesh` drawn with quadray material `id`: that material, or a copy

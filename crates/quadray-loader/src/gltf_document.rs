@@ -17,6 +17,7 @@ use std::path::{Path, PathBuf};
 /// Extensions quadray can honour when a file requires them.
 pub const SUPPORTED_REQUIRED: &[&str] = &[
     "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
     "KHR_materials_unlit",
     "KHR_texture_transform",
     crate::quadrics_ext::EXTENSION,

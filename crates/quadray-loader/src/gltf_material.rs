@@ -17,7 +17,9 @@
 //! | `alphaMode` BLEND | rendered opaque, with a note |
 //! | KHR_materials_unlit | `ambient` 1, everything else 0: the base colour as is |
 //! | `extensions.QUADRAY_quadrics.whitted` | quadray's parameters exactly, overriding all of the above |
-//! | metallicRoughnessTexture, normal, occlusion and emissive maps, emissive factor | ignored, with a note |
+//! | `emissiveFactor`, `emissiveTexture` (sRGB), KHR_materials_emissive_strength | `emission`: their product, the surface's own light, seen directly and in mirrors (it lights nothing else) |
+//! | KHR_materials_transmission, KHR_materials_ior, KHR_materials_volume | opaque, with a warning naming the extension: no refraction yet |
+//! | metallicRoughnessTexture, normal and occlusion maps | ignored, with a note |
 
 use crate::gltf_document::{GltfFile, read_image};
 use crate::quadrics_ext::{self, MaterialExtension};
@@ -177,43 +179,7 @@ impl<'a> Materials<'a> {
                 ));
                 set = 0;
             }
-            let texture = info.texture();
-            let image = texture.source();
-            let cached = match self.images.get(&image.index()) {
-                Some(c) => c.clone(),
-                None => {
-                    let c = match read_image(self.file, &image) {
-                        Ok(img) => Some(Arc::new(img)),
-                        Err(e) => {
-                            notes.push(format!(
-                                "warning: image {}: texture unavailable ({e}); using the base colour",
-                                image.index()
-                            ));
-                            None
-                        }
-                    };
-                    self.images.insert(image.index(), c.clone());
-                    c
-                }
-            };
-            if let Some(image) = cached {
-                let sampler = texture.sampler();
-                let wrap = |w: gltf::texture::WrappingMode| match w {
-                    gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
-                    gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
-                    gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
-                };
-                let filter = match sampler.mag_filter() {
-                    Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
-                    _ => Filter::Bilinear,
-                };
-                map = Some(ImageMap {
-                    image,
-                    wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
-                    filter,
-                    set: set as u8,
-                });
-            }
+            map = self.image_map(&info.texture(), set, "base colour", notes);
         }
         if pbr.metallic_roughness_texture().is_some() {
             self.ignored.insert("metallicRoughnessTexture");
@@ -224,9 +190,14 @@ impl<'a> Materials<'a> {
         if m.occlusion_texture().is_some() {
             self.ignored.insert("occlusionTexture");
         }
-        if m.emissive_texture().is_some() || m.emissive_factor().iter().any(|&e| e > 0.0) {
-            self.ignored.insert("emission");
+        for (extension, what) in REFRACTION {
+            if m.extension_value(extension).is_some() {
+                notes.push(format!(
+                    "warning: {label}: {extension} ({what}) is not supported: quadray has no refraction yet, so the surface renders opaque"
+                ));
+            }
         }
+        let emission = self.emission(m, &label, uv_transform.as_ref(), notes)?;
         let texture = match &map {
             Some(map) => Texture::Image(ImageTexture {
                 map: map.clone(),
@@ -266,6 +237,10 @@ impl<'a> Materials<'a> {
         } else {
             pbr_to_whitted(texture, metallic, roughness)
         };
+        let material = Material {
+            emission,
+            ..material
+        };
         let id = self.list.len() as u32;
         let name = m
             .name()
@@ -283,6 +258,126 @@ impl<'a> Materials<'a> {
         })
     }
 }
+
+impl Materials<'_> {
+    /// The image and sampler of a texture reference, read once per image; `None`, with a
+    /// warning that says the `fallback` is used, when the image cannot be read.
+    fn image_map(
+        &mut self,
+        texture: &gltf::Texture<'_>,
+        set: usize,
+        fallback: &str,
+        notes: &mut Vec<String>,
+    ) -> Option<ImageMap> {
+        let image = texture.source();
+        let cached = match self.images.get(&image.index()) {
+            Some(c) => c.clone(),
+            None => {
+                let c = match read_image(self.file, &image) {
+                    Ok(img) => Some(Arc::new(img)),
+                    Err(e) => {
+                        notes.push(format!(
+                            "warning: image {}: texture unavailable ({e}); using the {fallback}",
+                            image.index()
+                        ));
+                        None
+                    }
+                };
+                self.images.insert(image.index(), c.clone());
+                c
+            }
+        };
+        let sampler = texture.sampler();
+        let wrap = |w: gltf::texture::WrappingMode| match w {
+            gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+            gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+            gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+        };
+        let filter = match sampler.mag_filter() {
+            Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
+            _ => Filter::Bilinear,
+        };
+        Some(ImageMap {
+            image: cached?,
+            wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
+            filter,
+            set: set as u8,
+        })
+    }
+
+    /// The light material `m` gives off: emissiveFactor × emissiveTexture (sRGB) ×
+    /// KHR_materials_emissive_strength, or `None` when it is black.
+    fn emission(
+        &mut self,
+        m: &gltf::Material<'_>,
+        label: &str,
+        base_transform: Option<&UvTransform>,
+        notes: &mut Vec<String>,
+    ) -> Result<Option<Texture>, String> {
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        if !(strength.is_finite() && strength >= 0.0) {
+            return Err(format!(
+                "{label}: {EMISSIVE_STRENGTH}.emissiveStrength must be a number >= 0, got {strength}"
+            ));
+        }
+        let factor = Vec3::from_array(m.emissive_factor()) * strength;
+        if !(factor.is_finite() && factor.min_element() >= 0.0) {
+            return Err(format!(
+                "{label}: emissiveFactor must be finite and non-negative"
+            ));
+        }
+        if factor == Vec3::ZERO {
+            return Ok(None);
+        }
+        let Some(info) = m.emissive_texture() else {
+            return Ok(Some(Texture::Constant(factor)));
+        };
+        let mut set = info.tex_coord() as usize;
+        let transform = info.texture_transform().map(|t| {
+            if let Some(s) = t.tex_coord() {
+                set = s as usize;
+            }
+            UvTransform::from_khr(
+                set,
+                Vec2::from_array(t.offset()),
+                t.rotation(),
+                Vec2::from_array(t.scale()),
+            )
+        });
+        // A mesh's coordinates carry one transform, the base colour texture's.
+        if transform.as_ref() != base_transform && base_transform.is_none_or(|b| b.set == set) {
+            notes.push(format!(
+                "{label}: the emissive texture's KHR_texture_transform differs from the base colour texture's; it is looked up through the base colour's"
+            ));
+        }
+        if set > 1 {
+            notes.push(format!(
+                "{label}: emissive texture reads TEXCOORD_{set}; quadray keeps sets 0 and 1, so set 0 is used"
+            ));
+            set = 0;
+        }
+        Ok(Some(
+            match self.image_map(&info.texture(), set, "emissive factor", notes) {
+                Some(map) => Texture::Image(ImageTexture { map, factor }),
+                None => Texture::Constant(factor),
+            },
+        ))
+    }
+}
+
+/// The glTF extension that scales emission beyond 1.
+pub const EMISSIVE_STRENGTH: &str = "KHR_materials_emissive_strength";
+
+/// Material extensions that need refraction, which quadray does not trace: each is named in a
+/// warning.
+const REFRACTION: [(&str, &str); 3] = [
+    (
+        "KHR_materials_transmission",
+        "light passing through the surface",
+    ),
+    ("KHR_materials_ior", "the index of refraction"),
+    ("KHR_materials_volume", "absorption inside the volume"),
+];
 
 /// The Whitted material for PBR parameters (see the module's table). Every term stays at or
 /// below 1: the diffuse albedo, the mirror's weight and the highlight's peak.

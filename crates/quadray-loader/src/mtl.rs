@@ -7,7 +7,8 @@
 //! | `Ks`, `Ns` | `specular` = largest channel of `Ks`, `shininess` = `Ns` (Phong); no highlight when `Ns` < 1, an exporter artefact that would otherwise light the whole surface |
 //! | `illum` 3, 5 or 7, or a mirror-like `Ks` (every channel ≥ 0.9 with `Ns` ≥ 500) | `reflectivity` = largest channel of `Ks`, capped at 1 |
 //! | `Ka` | ignored: exporters write it inconsistently (Blender writes 1, which would flatten every surface); `ambient` keeps quadray's default 0.1 |
-//! | `d` < 1, `Tr` > 0, `map_d`, `map_Bump`, `Ke` | ignored, with a note |
+//! | `Ke` | `emission`: the surface's own light, seen directly and in mirrors |
+//! | `d` < 1, `Tr` > 0, `map_d`, `map_Bump` | ignored, with a note |
 //!
 //! `diffuse` keeps quadray's default 0.9.
 
@@ -81,9 +82,12 @@ pub fn whitted_material(
     if m.normal_texture.is_some() || m.unknown_param.contains_key("map_Bump") {
         ignored.push("bump map");
     }
-    if m.emissive.is_some_and(|e| e.iter().any(|&c| c > 0.0)) {
-        ignored.push("emission (Ke)");
-    }
+    // Ke: light the surface gives off (exporters write 0 0 0 for every other material).
+    let emission = m
+        .emissive
+        .map(Vec3::from_array)
+        .filter(|e| e.is_finite() && e.min_element() >= 0.0 && e.max_element() > 0.0)
+        .map(Texture::Constant);
     if !ignored.is_empty() {
         notes.push(format!(
             "material \"{}\": {} not supported, ignored",
@@ -102,6 +106,7 @@ pub fn whitted_material(
         reflectivity,
         reflection_tint: 0.0,
         specular_tint: 0.0,
+        emission,
     })
 }
 

@@ -418,6 +418,8 @@ pub fn whitted_material(def: &WhittedDef, base_texture: Texture) -> Result<Mater
         reflectivity: def.reflectivity,
         reflection_tint: def.reflection_tint,
         specular_tint: def.specular_tint,
+        // glTF's own emissive fields carry emission, for every viewer.
+        emission: None,
     })
 }
 
@@ -504,6 +506,7 @@ mod tests {
             reflectivity: 0.6,
             reflection_tint: 0.5,
             specular_tint: 0.25,
+            emission: None,
         };
         let def = whitted_def(&m);
         let json = serde_json::to_string(&def).unwrap();

@@ -121,6 +121,9 @@ impl Whitted {
         let ns = g.shading_normal * facing;
         let matte = 1.0 - m.reflectivity;
         let mut color = base * (m.ambient * matte);
+        if m.emission.is_some() {
+            color += scene.emitted(hit);
+        }
 
         for light in scene.lights() {
             let Some(inc) = light.incident(g.point) else {

@@ -45,6 +45,10 @@ pub struct Material {
     /// How far highlights take the base colour, in [0, 1]: 0 the light's colour (plastic, paint),
     /// 1 the base colour times the light's (a metal).
     pub specular_tint: f32,
+    /// Radiance the surface gives off itself (linear RGB, added to what it reflects), or `None`.
+    /// It is seen directly and in mirrors, but lights no other surface: Whitted tracing follows
+    /// light only from the scene's lights.
+    pub emission: Option<Texture>,
 }
 
 impl Material {
@@ -106,6 +110,7 @@ impl Default for Material {
             reflectivity: 0.0,
             reflection_tint: 0.0,
             specular_tint: 0.0,
+            emission: None,
         }
     }
 }

@@ -9,6 +9,7 @@ use crate::material::Material;
 use crate::math::{Ray, offset_origin};
 use crate::mesh::Mesh;
 use crate::shape::{PrimRef, SurfaceHit};
+use crate::texture::{Texture, TexturePoint, VertexAttributes};
 use glam::Vec3;
 
 pub use crate::math::MAX_COORDINATE;
@@ -191,6 +192,39 @@ impl Scene {
     /// The base colour (albedo) at a hit: its material's texture times the hit's vertex colour.
     #[inline]
     pub fn albedo(&self, hit: &SurfaceHit) -> Vec3 {
+        let material = &self.materials[hit.material as usize];
+        self.with_attributes(hit, |attributes, point| {
+            material.base_color(point, attributes)
+        })
+    }
+
+    /// The radiance the hit's surface gives off itself (zero for most materials).
+    #[inline]
+    pub fn emitted(&self, hit: &SurfaceHit) -> Vec3 {
+        match &self.materials[hit.material as usize].emission {
+            None => Vec3::ZERO,
+            Some(Texture::Constant(c)) => *c,
+            Some(texture) => self.with_attributes(hit, |attributes, point| {
+                let p = if texture.reads_point() {
+                    point()
+                } else {
+                    TexturePoint {
+                        local: glam::DVec3::ZERO,
+                        height: 0.0,
+                    }
+                };
+                texture.eval(&p, attributes)
+            }),
+        }
+    }
+
+    /// Calls `f` with the hit's vertex attributes and a way to compute its texture point.
+    #[inline]
+    fn with_attributes<T>(
+        &self,
+        hit: &SurfaceHit,
+        f: impl FnOnce(&VertexAttributes, &dyn Fn() -> TexturePoint) -> T,
+    ) -> T {
         // Vertex attributes are defaults off meshes (at once); the texture point is computed only
         // for the procedural textures that read it.
         let point = hit.geometry.point;
@@ -203,10 +237,9 @@ impl Scene {
             }
         };
         let attributes = self.geometry.attributes(hit.prim, path, point);
-        self.materials[hit.material as usize].base_color(
-            || self.geometry.texture_point(hit.prim, path, point),
-            &attributes,
-        )
+        f(&attributes, &|| {
+            self.geometry.texture_point(hit.prim, path, point)
+        })
     }
 
     /// The instances leading from the world to `prim`'s placement.
@@ -377,17 +410,26 @@ fn validate_material(m: &Material) -> Result<(), String> {
             m.reflectivity
         ));
     }
-    match &m.texture {
-        crate::texture::Texture::Constant(c) if !non_negative(*c) => {
+    check_texture(&m.texture)?;
+    match &m.emission {
+        Some(emission) => check_texture(emission).map_err(|e| format!("emission: {e}")),
+        None => Ok(()),
+    }
+}
+
+/// Checks a texture's colours and sizes.
+fn check_texture(texture: &Texture) -> Result<(), String> {
+    match texture {
+        Texture::Constant(c) if !non_negative(*c) => {
             Err("colour must be finite and non-negative".into())
         }
-        crate::texture::Texture::Checker { size, even, odd }
+        Texture::Checker { size, even, odd }
             if !(*size > 0.0 && size.is_finite() && non_negative(*even) && non_negative(*odd)) =>
         {
             Err("checker size must be positive and colours finite and non-negative".into())
         }
-        crate::texture::Texture::Bands { steps: 0 } => Err("bands need at least one step".into()),
-        crate::texture::Texture::Image(t) if !non_negative(t.factor) => {
+        Texture::Bands { steps: 0 } => Err("bands need at least one step".into()),
+        Texture::Image(t) if !non_negative(t.factor) => {
             Err("image colour factor must be finite and non-negative".into())
         }
         _ => Ok(()),

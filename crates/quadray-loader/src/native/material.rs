@@ -133,6 +133,13 @@ impl Builder<'_> {
             reflectivity,
             reflection_tint: self.tint(&m.reflection_tint, &format!("{key}.reflection_tint"))?,
             specular_tint: self.tint(&m.specular_tint, &format!("{key}.specular_tint"))?,
+            emission: match &m.emission {
+                Some(v) => Some(Texture::Constant(
+                    self.colour(v, &format!("{key}.emission"))?,
+                ))
+                .filter(|t| t != &Texture::Constant(Vec3::ZERO)),
+                None => None,
+            },
         })
     }
 

@@ -143,6 +143,7 @@ pub(super) struct MaterialSpec {
     pub(super) reflectivity: Option<Spanned<f64>>,
     pub(super) reflection_tint: Option<Spanned<f64>>,
     pub(super) specular_tint: Option<Spanned<f64>>,
+    pub(super) emission: Option<Spanned<V3>>,
 }
 
 #[derive(Clone, Deserialize)]

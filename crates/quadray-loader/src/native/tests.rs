@@ -425,3 +425,23 @@ fn render_tables_choose_adaptive_sampling() {
         assert!(e.contains(key) && e.contains(says), "{extra}: {e}");
     }
 }
+
+#[test]
+fn materials_take_tints_and_emission() {
+    let s = parse(
+        "[[material]]\nname = \"gold\"\ncolor = [1, 0.8, 0.3]\nspecular = 1\nspecular_tint = 1\n\
+         reflection_tint = 0.5\nemission = [2, 1, 0]\n",
+    )
+    .unwrap();
+    let gold = &s.description.materials[1];
+    assert_eq!((gold.specular_tint, gold.reflection_tint), (1.0, 0.5));
+    assert_eq!(
+        gold.emission,
+        Some(quadray::Texture::Constant(glam::Vec3::new(2.0, 1.0, 0.0)))
+    );
+    assert_eq!(s.description.materials[0].emission, None);
+    let e = error("[[material]]\nname = \"x\"\nspecular_tint = 2\n");
+    assert!(e.contains("specular_tint") && e.contains("[0, 1]"), "{e}");
+    let e = error("[[material]]\nname = \"x\"\nemission = [1, -1, 0]\n");
+    assert!(e.contains("emission") && e.contains("non-negative"), "{e}");
+}
