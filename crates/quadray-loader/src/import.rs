@@ -11,7 +11,7 @@
 
 use crate::error::{LoadError, LoadErrorKind};
 use glam::{DAffine3, DMat3, DVec3};
-use quadray::{Camera, Geometry, Light, Material, Quadric, Sphere, Transform};
+use quadray::{Camera, Geometry, Light, Material, Projection, Quadric, Sphere, Transform};
 use std::path::Path;
 
 /// Which of several named items (a glTF scene, a camera) to use: by index or by name.
@@ -89,6 +89,38 @@ pub struct ImportedCamera {
     pub camera: Camera,
     /// Width / height the file asks for, if any.
     pub aspect: Option<f64>,
+}
+
+impl ImportedCamera {
+    /// The camera for an image of width / height `image_aspect`, fitted as glTF viewers do: the
+    /// view the file describes (its vertical field of view over its aspect ratio) stays whole.
+    /// An image wider than the file's aspect shows more at the sides; a narrower one widens the
+    /// vertical field of view until the file's horizontal extent fits, instead of cropping it.
+    pub fn fitted(&self, image_aspect: f64) -> Camera {
+        let Some(aspect) = self.aspect else {
+            return self.camera;
+        };
+        if image_aspect >= aspect {
+            return self.camera;
+        }
+        let widen = aspect / image_aspect;
+        let projection = match self.camera.projection {
+            Projection::Perspective { vfov_deg } => {
+                // tan(vfov'/2) = tan(vfov/2)·aspect/image_aspect keeps tan(hfov/2).
+                let half: f64 = (vfov_deg.to_radians() * 0.5).tan() * widen;
+                Projection::Perspective {
+                    vfov_deg: (2.0 * half.atan()).to_degrees(),
+                }
+            }
+            Projection::Orthographic { height } => Projection::Orthographic {
+                height: height * widen,
+            },
+        };
+        Camera {
+            projection,
+            ..self.camera
+        }
+    }
 }
 
 /// The camera `sel` picks from `cameras`, or a message listing what there is.
@@ -334,5 +366,41 @@ mod tests {
             placed_sphere(stretch, 1.0, 0).unwrap(),
             PlacedShape::Quadric(_)
         ));
+    }
+
+    /// A camera authored for a 2:1 image keeps its whole view in a narrower image: the points at
+    /// the middle of its left and right edges land on the narrower image's edges; a wider image
+    /// keeps the vertical field of view and shows more at the sides.
+    #[test]
+    fn file_cameras_fit_other_aspect_ratios_without_cropping() {
+        for projection in [
+            Projection::Perspective { vfov_deg: 40.0 },
+            Projection::Orthographic { height: 3.0 },
+        ] {
+            let file = ImportedCamera {
+                name: None,
+                camera: Camera {
+                    from: DVec3::new(1.0, -6.0, 2.0),
+                    to: DVec3::new(0.0, 0.0, 0.5),
+                    up: DVec3::Z,
+                    projection,
+                },
+                aspect: Some(2.0),
+            };
+            let authored = file.camera.prepare(2.0).unwrap();
+            let edge = |u: f64| {
+                let ray = authored.ray(u, 0.5);
+                ray.origin + ray.dir * 5.0
+            };
+            for image_aspect in [1.0, 0.5] {
+                let frame = file.fitted(image_aspect).prepare(image_aspect).unwrap();
+                for u in [0.0, 1.0] {
+                    let p = frame.project(edge(u)).unwrap();
+                    assert!((p.x - u).abs() < 1e-12 && (p.y - 0.5).abs() < 1e-12, "{p}");
+                }
+            }
+            assert_eq!(file.fitted(3.0), file.camera);
+            assert_eq!(file.fitted(2.0), file.camera);
+        }
     }
 }

@@ -73,7 +73,7 @@ pub fn scene_from_import(
                 settings.height = ((settings.width as f64 / aspect).round() as u32)
                     .clamp(1, quadray::render::MAX_SIDE);
             }
-            c.camera
+            c.fitted(settings.width as f64 / settings.height as f64)
         }
         None => {
             notes.push(

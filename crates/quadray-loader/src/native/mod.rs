@@ -398,7 +398,7 @@ impl Builder<'_> {
                         settings.height =
                             ((settings.width as f64 / aspect).round() as u32).clamp(1, MAX_SIDE);
                     }
-                    c.camera
+                    c.fitted(settings.width as f64 / settings.height as f64)
                 }
                 None => {
                     notes.push("no [camera] and no included camera: using one that frames the scene's bounds".into());
