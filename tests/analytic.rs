@@ -18,6 +18,7 @@ fn scene(camera: Camera, geometry: Geometry) -> Scene {
     Scene::new(SceneDescription {
         camera,
         background: Vec3::ZERO,
+        environment: None,
         materials: vec![white()],
         lights: vec![],
         geometry,
@@ -291,6 +292,7 @@ fn emission_is_seen_directly_and_in_mirrors_and_lights_nothing() {
     let scene = Scene::new(SceneDescription {
         camera: Camera::orbit(DVec3::ZERO, 0.0, 30.0, 20.0, 40.0),
         background: Vec3::ZERO,
+        environment: None,
         materials,
         lights: vec![],
         geometry: Geometry {
@@ -331,5 +333,62 @@ fn emission_is_seen_directly_and_in_mirrors_and_lights_nothing() {
     assert_eq!(
         whitted.camera_ray(&scene, &down(5.0, 10.0), &mut counts),
         Vec3::ZERO
+    );
+}
+
+/// Camera rays that hit nothing see the background; reflection rays that hit nothing see the
+/// environment, when the scene sets one.
+#[test]
+fn reflections_that_miss_see_the_environment() {
+    let mirror = Material {
+        texture: Texture::Constant(Vec3::ZERO),
+        reflectivity: 1.0,
+        ..Material::default()
+    };
+    let scene = |environment| {
+        Scene::new(SceneDescription {
+            camera: Camera::orbit(DVec3::ZERO, 0.0, 30.0, 20.0, 40.0),
+            background: Vec3::splat(0.1),
+            environment,
+            materials: vec![mirror.clone()],
+            lights: vec![],
+            geometry: Geometry {
+                planes: vec![Plane {
+                    point: DVec3::ZERO,
+                    normal: DVec3::Z,
+                    material: 0,
+                }],
+                ..Geometry::default()
+            },
+        })
+        .unwrap()
+    };
+    let whitted = Whitted::default();
+    let mut counts = RayCounts::default();
+    let (down, up) = (
+        Ray::new(DVec3::new(0.0, 0.0, 5.0), DVec3::new(0.3, 0.0, -1.0)),
+        Ray::new(DVec3::new(0.0, 0.0, 5.0), DVec3::Z),
+    );
+    let studio = scene(Some(Vec3::splat(0.5)));
+    assert_eq!(
+        whitted.camera_ray(&studio, &up, &mut counts),
+        Vec3::splat(0.1)
+    );
+    assert_eq!(
+        whitted.camera_ray(&studio, &down, &mut counts),
+        Vec3::splat(0.5)
+    );
+    let plain = scene(None);
+    assert_eq!(plain.environment(), Vec3::splat(0.1));
+    assert_eq!(
+        whitted.camera_ray(&plain, &down, &mut counts),
+        Vec3::splat(0.1)
+    );
+    assert!(
+        Scene::new(SceneDescription {
+            environment: Some(Vec3::new(f32::NAN, 0.0, 0.0)),
+            ..plain.into_description()
+        })
+        .is_err()
     );
 }

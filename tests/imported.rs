@@ -91,6 +91,7 @@ fn image_texture_and_vertex_colours_reach_the_pixels() {
         SceneDescription {
             camera: top_down(2.0),
             background: Vec3::ZERO,
+            environment: None,
             materials: vec![unlit(Texture::Image(ImageTexture {
                 map,
                 factor: Vec3::new(1.0, 0.5, 1.0),
@@ -138,6 +139,7 @@ fn alpha_cut_outs_let_camera_and_shadow_rays_through() {
     let description = |camera: Camera| SceneDescription {
         camera,
         background: Vec3::ZERO,
+        environment: None,
         materials: vec![
             unlit(Texture::Constant(Vec3::new(0.5, 0.0, 0.0))),
             floor.clone(),
@@ -187,6 +189,7 @@ fn spot_light_lights_its_cone_with_the_inverse_square_law() {
         SceneDescription {
             camera: top_down(8.0),
             background: Vec3::ZERO,
+            environment: None,
             materials: vec![Material {
                 texture: Texture::Constant(Vec3::ONE),
                 ambient: 0.0,
@@ -229,6 +232,7 @@ fn metals_reflect_in_their_base_colour() {
     let scene = |tint: f32| SceneDescription {
         camera: top_down(2.0),
         background: Vec3::ONE,
+        environment: None,
         materials: vec![Material {
             texture: Texture::Constant(Vec3::new(1.0, 0.5, 0.25)),
             ambient: 0.0,

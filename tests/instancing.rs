@@ -168,6 +168,7 @@ fn coordinates_beyond_the_limit_are_errors_and_tiny_instances_build() {
         Scene::new(SceneDescription {
             camera: Camera::orbit(glam::DVec3::ZERO, 30.0, 20.0, 6.0, 40.0),
             background: glam::Vec3::ZERO,
+            environment: None,
             materials: vec![Material::default()],
             lights: vec![],
             geometry,

@@ -76,6 +76,7 @@ fn scene_of(geometry: Geometry) -> Scene {
     Scene::new(SceneDescription {
         camera: Camera::orbit(DVec3::ZERO, 30.0, 20.0, 6.0, 40.0),
         background: Vec3::ZERO,
+        environment: None,
         materials: vec![Material::default(), Material::default()],
         lights: vec![],
         geometry,
@@ -176,6 +177,7 @@ fn instance_renders_like_the_baked_mesh() {
     let description = |geometry: Geometry| SceneDescription {
         camera: Camera::orbit(DVec3::ZERO, 30.0, 20.0, 6.0, 40.0),
         background: Vec3::splat(0.05),
+        environment: None,
         materials: vec![
             Material::default(),
             // A constant colour: procedural textures are evaluated in object space, so they move
@@ -312,6 +314,7 @@ fn instance_of_a_missing_prototype_is_an_error() {
     let err = Scene::new(SceneDescription {
         camera: Camera::orbit(DVec3::ZERO, 30.0, 20.0, 6.0, 40.0),
         background: Vec3::ZERO,
+        environment: None,
         materials: vec![Material::default()],
         lights: vec![],
         geometry: Geometry {

@@ -115,6 +115,7 @@ fn row_scene(quadrics: Vec<Quadric>, camera: Camera) -> Scene {
     Scene::new(SceneDescription {
         camera,
         background: glam::Vec3::splat(0.05),
+        environment: None,
         materials,
         lights: vec![Light::Directional {
             direction: DVec3::new(-0.4, 1.0, -0.6).normalize(),

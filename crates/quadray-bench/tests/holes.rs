@@ -90,6 +90,7 @@ fn a_ray_through_the_cone_apex_is_ambiguous() {
             projection: Projection::Perspective { vfov_deg: 30.0 },
         },
         background: Vec3::ZERO,
+        environment: None,
         materials: vec![Material::default()],
         lights: vec![],
         geometry: Geometry {

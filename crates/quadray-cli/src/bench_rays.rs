@@ -100,6 +100,7 @@ pub fn run(a: &RaysArgs) -> Result<()> {
     let description = |geometry: Geometry| SceneDescription {
         camera: Camera::orbit(DVec3::ZERO, 0.0, 0.0, 1.0, 40.0),
         background: glam::Vec3::ZERO,
+        environment: None,
         materials: vec![Material::default()],
         lights: Vec::new(),
         geometry,

@@ -184,6 +184,7 @@ impl Showcase {
         Ok(SceneDescription {
             camera: self.camera(),
             background: BACKGROUND,
+            environment: None,
             materials: vec![material],
             lights: if lighting {
                 studio_lights(self.yaw)

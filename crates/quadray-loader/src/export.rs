@@ -226,6 +226,7 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
     // Not glTF content: quadray's own settings, as application data other tools ignore.
     let hints = quadrics_ext::RenderHints {
         background: Some(d.background.to_array()),
+        environment: d.environment.map(|e| e.to_array()),
         resolution: Some([scene.settings.width, scene.settings.height]),
         spp: Some(scene.settings.spp),
         max_depth: Some(scene.settings.max_depth),

@@ -129,6 +129,11 @@ fn boxed_bounds(g: &Geometry) -> Option<(DVec3, DVec3)> {
     level_box(g.level(0), &boxes)
 }
 
+/// Irradiance of the default key light: a white matte surface facing it shows 0.1 + 0.9·0.8 =
+/// 0.82 (0.92 on the display), short of clipping, as glTF viewers' neutral lighting keeps white
+/// below full white; at 1 such surfaces clipped to flat white.
+pub const KEY_LIGHT_IRRADIANCE: f32 = 0.8;
+
 /// The default key light when a file brings none: a directional light over the camera's left
 /// shoulder, so that the visible sides are lit and shadows fall away to the lower right.
 pub fn default_key_light(camera: &Camera) -> Light {
@@ -138,7 +143,7 @@ pub fn default_key_light(camera: &Camera) -> Light {
     let towards_light = (-forward + up * 1.2 - right * 0.6).normalize();
     Light::Directional {
         direction: -towards_light,
-        irradiance: Vec3::ONE,
+        irradiance: Vec3::splat(KEY_LIGHT_IRRADIANCE),
     }
 }
 

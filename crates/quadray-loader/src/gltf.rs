@@ -151,9 +151,7 @@ pub fn convert(
             "every light's intensity is at most 10 cd or lx: if the file meant unitless values it will render dark (quadray divides glTF intensities by 683·π, see docs)".into(),
         );
     }
-    if let Some(n) = materials.ignored_note() {
-        notes.push(n);
-    }
+    notes.extend(materials.feature_notes());
     out.nodes = usize::try_from(instances).unwrap_or(usize::MAX);
     out.hints = hints;
     out.materials = materials.list;

@@ -83,6 +83,8 @@ pub struct Materials<'a> {
     /// The converted materials with their names, in first-use order.
     pub list: Vec<(String, Material)>,
     ignored: BTreeSet<&'static str>,
+    /// Whether a metallicRoughnessTexture was averaged into its material's factors.
+    averaged_metal_roughness: bool,
 }
 
 impl<'a> Materials<'a> {
@@ -94,6 +96,7 @@ impl<'a> Materials<'a> {
             images: HashMap::new(),
             list: Vec::new(),
             ignored: BTreeSet::new(),
+            averaged_metal_roughness: false,
         }
     }
 
@@ -129,14 +132,22 @@ impl<'a> Materials<'a> {
         used
     }
 
-    /// One note listing the material features the file uses that quadray ignores.
-    pub fn ignored_note(&self) -> Option<String> {
-        (!self.ignored.is_empty()).then(|| {
-            format!(
+    /// Notes on the material features the file uses that quadray approximates or ignores.
+    pub fn feature_notes(&self) -> Vec<String> {
+        let mut notes = Vec::new();
+        if self.averaged_metal_roughness {
+            notes.push(
+                "metallicRoughnessTexture: each texture's mean metalness and roughness stand for it (quadray's materials are uniform)"
+                    .to_string(),
+            );
+        }
+        if !self.ignored.is_empty() {
+            notes.push(format!(
                 "material features ignored: {}",
                 self.ignored.iter().copied().collect::<Vec<_>>().join(", ")
-            )
-        })
+            ));
+        }
+        notes
     }
 
     fn convert(
@@ -156,8 +167,7 @@ impl<'a> Materials<'a> {
             return Err(format!("{label}: baseColorFactor is not finite"));
         }
         let base = base.clamp(Vec3::ZERO, Vec3::ONE);
-        let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
-        let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
+        let (metallic, roughness) = self.metal_roughness(&pbr, notes);
         let mut uv_transform = None;
         let mut map = None;
         if let Some(info) = pbr.base_color_texture() {
@@ -180,9 +190,6 @@ impl<'a> Materials<'a> {
                 set = 0;
             }
             map = self.image_map(&info.texture(), set, "base colour", notes);
-        }
-        if pbr.metallic_roughness_texture().is_some() {
-            self.ignored.insert("metallicRoughnessTexture");
         }
         if m.normal_texture().is_some() {
             self.ignored.insert("normalTexture");
@@ -269,24 +276,7 @@ impl Materials<'_> {
         fallback: &str,
         notes: &mut Vec<String>,
     ) -> Option<ImageMap> {
-        let image = texture.source();
-        let cached = match self.images.get(&image.index()) {
-            Some(c) => c.clone(),
-            None => {
-                let c = match read_image(self.file, &image) {
-                    Ok(img) => Some(Arc::new(img)),
-                    Err(e) => {
-                        notes.push(format!(
-                            "warning: image {}: texture unavailable ({e}); using the {fallback}",
-                            image.index()
-                        ));
-                        None
-                    }
-                };
-                self.images.insert(image.index(), c.clone());
-                c
-            }
-        };
+        let cached = self.image(texture, fallback, notes);
         let sampler = texture.sampler();
         let wrap = |w: gltf::texture::WrappingMode| match w {
             gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
@@ -303,6 +293,56 @@ impl Materials<'_> {
             filter,
             set: set as u8,
         })
+    }
+
+    /// A texture's decoded image, read once per image; `None`, with a warning that says the
+    /// `fallback` is used, when it cannot be read.
+    fn image(
+        &mut self,
+        texture: &gltf::Texture<'_>,
+        fallback: &str,
+        notes: &mut Vec<String>,
+    ) -> Option<Arc<Image>> {
+        let image = texture.source();
+        if let Some(cached) = self.images.get(&image.index()) {
+            return cached.clone();
+        }
+        let read = match read_image(self.file, &image) {
+            Ok(img) => Some(Arc::new(img)),
+            Err(e) => {
+                notes.push(format!(
+                    "warning: image {}: texture unavailable ({e}); using the {fallback}",
+                    image.index()
+                ));
+                None
+            }
+        };
+        self.images.insert(image.index(), read.clone());
+        read
+    }
+
+    /// Metalness and roughness scaled by the metallicRoughnessTexture's means (its blue and green
+    /// channels, linear): quadray's materials are uniform, so the texture's average stands for it.
+    fn metal_roughness(
+        &mut self,
+        pbr: &gltf::material::PbrMetallicRoughness<'_>,
+        notes: &mut Vec<String>,
+    ) -> (f32, f32) {
+        let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
+        let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
+        let Some(info) = pbr.metallic_roughness_texture() else {
+            return (metallic, roughness);
+        };
+        let Some(image) = self.image(&info.texture(), "metallic and roughness factors", notes)
+        else {
+            return (metallic, roughness);
+        };
+        let texels = image.texels();
+        let mean = |channel: usize| {
+            texels.iter().map(|t| t[channel] as f64).sum::<f64>() / (255.0 * texels.len() as f64)
+        };
+        self.averaged_metal_roughness = true;
+        (metallic * mean(2) as f32, roughness * mean(1) as f32)
     }
 
     /// The light material `m` gives off: emissiveFactor × emissiveTexture (sRGB) ×

@@ -184,6 +184,9 @@ pub struct RenderHints {
     /// Linear RGB background.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub background: Option<[f32; 3]>,
+    /// Linear RGB environment: what reflection rays that hit nothing see.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub environment: Option<[f32; 3]>,
     /// Width and height in pixels.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub resolution: Option<[u32; 2]>,

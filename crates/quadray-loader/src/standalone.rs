@@ -13,6 +13,12 @@ use std::path::Path;
 /// Background of scenes without one of their own: a dark grey, so black objects still show.
 pub const DEFAULT_BACKGROUND: Vec3 = Vec3::splat(0.05);
 
+/// What mirrors and metals reflect in a file with no lights of its own: a neutral studio grey,
+/// standing in for the environment light glTF viewers surround a model with (a polished white
+/// metal shows it at 0.5, about 0.74 on the display), so metals look like metal, not like the
+/// dark backdrop.
+pub const STUDIO_ENVIRONMENT: Vec3 = Vec3::splat(0.5);
+
 /// Turns an import of `path` into a complete scene, choosing its camera by `camera` when given.
 pub fn scene_from_import(
     imported: Imported,
@@ -87,14 +93,16 @@ pub fn scene_from_import(
         }
     };
     let mut lights = imported.lights;
+    let hints = &imported.hints;
+    let mut environment = hints.environment.map(Vec3::from_array);
     if lights.is_empty() {
         notes.push(
-            "no lights in the file: using a default key light over the camera's left shoulder"
+            "no lights in the file: using a default key light over the camera's left shoulder, and a grey studio environment for reflections"
                 .into(),
         );
         lights.push(default_key_light(&camera));
+        environment = environment.or(Some(STUDIO_ENVIRONMENT));
     }
-    let hints = &imported.hints;
     settings.spp = hints.spp.unwrap_or(settings.spp);
     settings.max_depth = hints.max_depth.unwrap_or(settings.max_depth);
     let background = hints
@@ -105,6 +113,7 @@ pub fn scene_from_import(
         description: SceneDescription {
             camera,
             background,
+            environment,
             materials,
             lights,
             geometry: imported.geometry,

@@ -90,3 +90,23 @@ fn a_rough_red_metal_stays_red() {
         Vec3::new(0.8, 0.0, 0.0) * m.specular
     );
 }
+
+/// A file with no lights of its own gets the default key light and the grey studio environment
+/// for its reflections; one with lights keeps reflections on the background.
+#[test]
+fn default_lighting_brings_a_studio_environment() {
+    let (gltf, bin) = triangle();
+    let s = load("unlit", &gltf, Some(&bin)).unwrap();
+    assert_eq!(s.description.lights.len(), 1);
+    assert_eq!(
+        s.description.environment,
+        Some(quadray_loader::standalone::STUDIO_ENVIRONMENT)
+    );
+    let (mut gltf, bin) = triangle();
+    gltf["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    gltf["extensions"] = json!({"KHR_lights_punctual": {"lights": [{"type": "directional"}]}});
+    gltf["nodes"] = json!([{"mesh": 0}, {"extensions": {"KHR_lights_punctual": {"light": 0}}}]);
+    gltf["scenes"] = json!([{"nodes": [0, 1]}]);
+    let s = load("lit", &gltf, Some(&bin)).unwrap();
+    assert_eq!(s.description.environment, None);
+}

@@ -239,6 +239,7 @@ mod tests {
                 projection: Projection::Orthographic { height: 4.0 },
             },
             background: Vec3::splat(0.5),
+            environment: None,
             materials: vec![
                 Material {
                     texture: Texture::Constant(Vec3::new(0.2, 0.4, 0.6)),

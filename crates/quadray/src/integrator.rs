@@ -92,6 +92,7 @@ impl Whitted {
     ) -> Vec3 {
         match self.intersect(scene, ray, from) {
             Some(hit) => self.shade(scene, ray, &hit, depth, throughput, counts),
+            None if depth > 1 => scene.environment(),
             None => scene.background(),
         }
     }

@@ -36,6 +36,7 @@
 //! let scene = Scene::new(SceneDescription {
 //!     camera: Camera::orbit(DVec3::ZERO, 30.0, 20.0, 6.0, 40.0),
 //!     background: Vec3::splat(0.1),
+//!     environment: None,
 //!     materials: vec![Material { texture: Texture::HeightRamp, ..Material::default() }],
 //!     lights: vec![Light::Directional { direction: DVec3::new(-1.0, -1.0, -1.0).normalize(), irradiance: Vec3::ONE }],
 //!     geometry: Geometry { quadrics: vec![quadric], ..Geometry::default() },

@@ -19,8 +19,11 @@ pub use crate::math::MAX_COORDINATE;
 pub struct SceneDescription {
     /// The camera.
     pub camera: Camera,
-    /// Radiance of rays that hit nothing (linear RGB).
+    /// Radiance of camera rays that hit nothing (linear RGB).
     pub background: Vec3,
+    /// Radiance of reflection rays that hit nothing, when it differs from the background: the
+    /// surroundings a mirror or a metal shows (a studio's grey, say) behind a darker backdrop.
+    pub environment: Option<Vec3>,
     /// Materials, referred to by index.
     pub materials: Vec<Material>,
     /// Light sources; without any, no shadow rays are traced.
@@ -66,6 +69,7 @@ pub enum SceneError {
 pub struct Scene {
     camera: Camera,
     background: Vec3,
+    environment: Vec3,
     materials: Vec<Material>,
     lights: Vec<Light>,
     geometry: Geometry,
@@ -91,6 +95,11 @@ impl Scene {
         d.camera.prepare(1.0)?;
         if !d.background.is_finite() || d.background.min_element() < 0.0 {
             return Err(invalid("background", "must be finite and non-negative"));
+        }
+        if d.environment
+            .is_some_and(|e| !e.is_finite() || e.min_element() < 0.0)
+        {
+            return Err(invalid("environment", "must be finite and non-negative"));
         }
         for (i, m) in d.materials.iter().enumerate() {
             validate_material(m).map_err(|p| invalid(format!("material {i}"), p))?;
@@ -145,6 +154,7 @@ impl Scene {
         Ok(Scene {
             camera: d.camera,
             background: d.background,
+            environment: d.environment.unwrap_or(d.background),
             materials: d.materials,
             lights: d.lights,
             geometry: d.geometry,
@@ -158,9 +168,15 @@ impl Scene {
         &self.camera
     }
 
-    /// Radiance of rays that hit nothing.
+    /// Radiance of camera rays that hit nothing.
     pub fn background(&self) -> Vec3 {
         self.background
+    }
+
+    /// Radiance of reflection rays that hit nothing (the background unless the scene sets an
+    /// environment).
+    pub fn environment(&self) -> Vec3 {
+        self.environment
     }
 
     /// Materials, by index.
@@ -183,6 +199,7 @@ impl Scene {
         SceneDescription {
             camera: self.camera,
             background: self.background,
+            environment: (self.environment != self.background).then_some(self.environment),
             materials: self.materials,
             lights: self.lights,
             geometry: self.geometry,
@@ -491,6 +508,7 @@ mod tests {
                 projection: Projection::Perspective { vfov_deg: 40.0 },
             },
             background: Vec3::ZERO,
+            environment: None,
             materials: vec![Material::default()],
             lights: vec![],
             geometry,

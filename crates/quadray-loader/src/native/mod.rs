@@ -286,7 +286,7 @@ impl Builder<'_> {
                 ),
             ));
         }
-        let (mut settings, background) = self.render(&file.render)?;
+        let (mut settings, background, environment) = self.render(&file.render)?;
         let output = file
             .output
             .as_ref()
@@ -413,6 +413,7 @@ impl Builder<'_> {
             description: SceneDescription {
                 camera,
                 background,
+                environment,
                 materials,
                 lights,
                 geometry,

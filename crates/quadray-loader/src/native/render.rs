@@ -6,7 +6,11 @@ use quadray::Adaptive;
 use std::time::Duration;
 
 impl Builder<'_> {
-    pub(super) fn render(&self, r: &RenderSpec) -> Result<(SceneSettings, Vec3), LoadError> {
+    /// The settings, the background and the environment (when set) of `[render]`.
+    pub(super) fn render(
+        &self,
+        r: &RenderSpec,
+    ) -> Result<(SceneSettings, Vec3, Option<Vec3>), LoadError> {
         let mut s = SceneSettings::default();
         if let Some(res) = &r.resolution {
             let [w, h] = res.get_ref().0;
@@ -35,7 +39,12 @@ impl Builder<'_> {
             .map(|v| self.colour(v, "render.background"))
             .transpose()?
             .unwrap_or(Vec3::ZERO);
-        Ok((s, background))
+        let environment = r
+            .environment
+            .as_ref()
+            .map(|v| self.colour(v, "render.environment"))
+            .transpose()?;
+        Ok((s, background, environment))
     }
 
     /// Adaptive sampling, on when `target_error` or `time_limit` is given; `min_spp` and

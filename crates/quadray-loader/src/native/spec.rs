@@ -117,6 +117,7 @@ pub(super) struct RenderSpec {
     pub(super) time_limit: Option<Spanned<f64>>,
     pub(super) max_depth: Option<Spanned<i64>>,
     pub(super) background: Option<Spanned<V3>>,
+    pub(super) environment: Option<Spanned<V3>>,
 }
 
 /// `[output]`: where `quadray render SCENE` writes when no `-o` is given.

@@ -445,3 +445,16 @@ fn materials_take_tints_and_emission() {
     let e = error("[[material]]\nname = \"x\"\nemission = [1, -1, 0]\n");
     assert!(e.contains("emission") && e.contains("non-negative"), "{e}");
 }
+
+#[test]
+fn render_sets_an_environment_for_reflections() {
+    let s =
+        parse("[render]\nbackground = [0.1, 0.1, 0.1]\nenvironment = [0.5, 0.4, 0.3]\n").unwrap();
+    assert_eq!(
+        s.description.environment,
+        Some(glam::Vec3::new(0.5, 0.4, 0.3))
+    );
+    assert_eq!(parse("").unwrap().description.environment, None);
+    let e = error("[render]\nenvironment = [0.5, -1, 0]\n");
+    assert!(e.contains("render.environment"), "{e}");
+}

@@ -18,6 +18,7 @@ fn disc() -> Scene {
             projection: Projection::Orthographic { height: 4.0 },
         },
         background: Vec3::ZERO,
+        environment: None,
         materials: vec![Material {
             texture: Texture::Constant(Vec3::ONE),
             ambient: 1.0,
