@@ -120,6 +120,7 @@ fn alpha_cut_outs_let_camera_and_shadow_rays_through() {
     // straight from above. Looking down: the left half shows the square (red/blue), the right half
     // the floor. The floor is in shadow under the left half only.
     let mask = AlphaMask {
+        stochastic: false,
         cutoff: 0.5,
         factor: 1.0,
         map: Some(ImageMap {
@@ -295,4 +296,50 @@ fn committed_gltf_scene_is_the_converted_native_scene() {
     };
     assert!(image(a).is_some());
     assert_eq!(image(a), image(b));
+}
+
+/// Stochastic coverage (glTF BLEND): a white square of alpha 0.3 over a red one. Each ray keeps
+/// the white hit with probability 0.3, so over many samples a pixel converges to the blend
+/// 0.3·white + 0.7·red, and two renders give the same pixels.
+#[test]
+fn blended_coverage_converges_to_the_blend() {
+    let glass = square(1.0, 0)
+        .with_alpha_mask(AlphaMask {
+            cutoff: 0.5,
+            stochastic: true,
+            factor: 0.3,
+            map: None,
+        })
+        .unwrap();
+    let description = || SceneDescription {
+        camera: top_down(2.0),
+        background: Vec3::ZERO,
+        environment: None,
+        materials: vec![
+            unlit(Texture::Constant(Vec3::ONE)),
+            unlit(Texture::Constant(Vec3::new(1.0, 0.0, 0.0))),
+        ],
+        lights: vec![],
+        geometry: Geometry {
+            meshes: vec![glass.clone(), square(0.0, 1)],
+            ..Geometry::default()
+        },
+    };
+    let settings = quadray::RenderSettings {
+        width: 4,
+        height: 4,
+        spp: 256,
+        ..quadray::RenderSettings::default()
+    };
+    let film = render_with_threads(&Scene::new(description()).unwrap(), &settings, 2).film;
+    // Green and blue carry the white layer's share alone: 0.3, within 4 standard deviations of a
+    // 256-sample share (σ = √(0.3·0.7/256) ≈ 0.029), for every pixel.
+    for p in film.pixels() {
+        assert_eq!(p.x, 1.0);
+        assert!((p.y - 0.3).abs() < 0.12 && p.y == p.z, "{p}");
+    }
+    let mean = film.pixels().iter().map(|p| p.y).sum::<f32>() / 16.0;
+    assert!((mean - 0.3).abs() < 0.03, "{mean}");
+    let again = render_with_threads(&Scene::new(description()).unwrap(), &settings, 1).film;
+    assert_eq!(film, again);
 }

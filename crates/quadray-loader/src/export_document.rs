@@ -283,7 +283,7 @@ impl Document {
         }
         let key = (
             id,
-            mask.map(|m| (m.cutoff.to_bits(), m.factor.to_bits())),
+            mask.map(|m| (m.cutoff.to_bits(), m.factor.to_bits(), m.stochastic)),
             mesh.single_sided(),
         );
         if let Some(&m) = self.masked.get(&key) {
@@ -292,8 +292,12 @@ impl Document {
         let mut copy = self.materials[id as usize].clone();
         copy["doubleSided"] = json!(!mesh.single_sided());
         if let Some(mask) = mask {
-            copy["alphaMode"] = json!("MASK");
-            copy["alphaCutoff"] = json!(mask.cutoff);
+            if mask.stochastic {
+                copy["alphaMode"] = json!("BLEND");
+            } else {
+                copy["alphaMode"] = json!("MASK");
+                copy["alphaCutoff"] = json!(mask.cutoff);
+            }
             copy["pbrMetallicRoughness"]["baseColorFactor"][3] = json!(mask.factor);
         }
         self.materials.push(copy);
@@ -302,9 +306,9 @@ impl Document {
     }
 }
 
-/// A quadray material as a mesh draws it: (material, the cut-out's cutoff and factor bits,
-/// single-sided).
-pub(crate) type MaterialVariant = (u32, Option<(u32, u32)>, bool);
+/// A quadray material as a mesh draws it: (material, the coverage's cutoff and factor bits and
+/// whether it is stochastic, single-sided).
+pub(crate) type MaterialVariant = (u32, Option<(u32, u32, bool)>, bool);
 
 /// Sets a node's matrix (column-major) from an affine map, leaving the identity unwritten as the
 /// spec asks.

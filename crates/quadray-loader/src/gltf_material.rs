@@ -14,7 +14,7 @@
 //! | metallic m | `diffuse` = 0.9·(1 − m): a metal has no diffuse term; a rough metal is its broad, tinted highlight |
 //! | — | `ambient` 0.1, quadray's default |
 //! | `alphaMode` MASK, `alphaCutoff`, base colour alpha | an [`AlphaMask`] cut-out on the mesh (tested inside intersection) |
-//! | `alphaMode` BLEND | rendered opaque, with a note |
+//! | `alphaMode` BLEND | a stochastic [`AlphaMask`]: alpha is each ray's chance to keep the hit |
 //! | KHR_materials_unlit | `ambient` 1, everything else 0: the base colour as is |
 //! | `extensions.QUADRAY_quadrics.whitted` | quadray's parameters exactly, overriding all of the above |
 //! | `emissiveFactor`, `emissiveTexture` (sRGB), KHR_materials_emissive_strength | `emission`: their product, the surface's own light, seen directly and in mirrors (it lights nothing else) |
@@ -217,15 +217,17 @@ impl<'a> Materials<'a> {
             gltf::material::AlphaMode::Opaque => None,
             gltf::material::AlphaMode::Mask => Some(AlphaMask {
                 cutoff: m.alpha_cutoff().unwrap_or(0.5).clamp(0.0, 1.0),
+                stochastic: false,
                 factor: alpha,
                 map: map.clone(),
             }),
-            gltf::material::AlphaMode::Blend => {
-                notes.push(format!(
-                    "{label}: alpha mode BLEND is rendered opaque (quadray has cut-outs, not blending)"
-                ));
-                None
-            }
+            // Coverage as a probability per ray: converges to the blend with a pixel's samples.
+            gltf::material::AlphaMode::Blend => Some(AlphaMask {
+                cutoff: 0.5,
+                stochastic: true,
+                factor: alpha,
+                map: map.clone(),
+            }),
         };
         let material = if let Some(ext) = m.extension_value(quadrics_ext::EXTENSION) {
             let ext: MaterialExtension = serde_json::from_value(ext.clone())

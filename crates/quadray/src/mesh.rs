@@ -67,18 +67,45 @@ pub enum MeshError {
     },
 }
 
-/// A cut-out (glTF alpha mode MASK): hits where the coverage alpha is below `cutoff` are not hits.
+/// Partial coverage: a cut-out (glTF alpha mode MASK), where hits whose coverage alpha is below
+/// `cutoff` are not hits, or stochastic coverage (glTF BLEND), where a hit with alpha a is kept
+/// for a share a of rays.
 ///
 /// Alpha at a point = `factor` × the map's alpha × the vertex colour's alpha. The test runs inside
-/// BVH traversal, so cut-outs let camera, shadow and reflection rays through alike.
+/// BVH traversal, so coverage lets camera, shadow and reflection rays through alike.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AlphaMask {
-    /// Alpha below this is transparent (glTF alphaCutoff, default 0.5).
+    /// Alpha below this is transparent (glTF alphaCutoff, default 0.5); unused when stochastic.
     pub cutoff: f32,
+    /// Whether alpha is a probability instead (glTF BLEND): each ray keeps the hit when alpha
+    /// exceeds a value hashed from the ray and the triangle, uniform in [0, 1). Over a pixel's
+    /// samples this converges to the blend of the surface over what lies behind, in any order of
+    /// layers; at one sample a pixel it dithers.
+    pub stochastic: bool,
     /// Constant alpha factor (glTF baseColorFactor's alpha).
     pub factor: f32,
     /// The image whose alpha channel modulates coverage, if any (glTF baseColorTexture).
     pub map: Option<ImageMap>,
+}
+
+/// The hash of a ray, from its f32 origin and a direction vector (the BVH passes its reciprocal),
+/// that stochastic coverage draws from: the same ray meets the same decision in every query of
+/// one kind, different rays independent ones, and the image stays the same for any thread count.
+#[inline]
+pub(crate) fn coverage_key(origin: Vec3, dir: Vec3) -> u32 {
+    [origin.x, origin.y, origin.z, dir.x, dir.y, dir.z]
+        .iter()
+        .fold(0x2545_F491, |h, c| mix(h ^ c.to_bits()))
+}
+
+/// A 32-bit finaliser (the murmur3 mix): every input bit flips each output bit about half the time.
+#[inline]
+fn mix(mut h: u32) -> u32 {
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x85EB_CA6B);
+    h ^= h >> 13;
+    h = h.wrapping_mul(0xC2B2_AE35);
+    h ^ (h >> 16)
 }
 
 /// A triangle mesh in world space (loaders bake the object's transform into the vertices).
@@ -300,9 +327,10 @@ impl Mesh {
         self.attributes_at(tri, [b0 as f32, b1 as f32, b2 as f32])
     }
 
-    /// Coverage alpha at barycentric coordinates `b` of triangle `tri`, for the cut-out test.
+    /// Whether the coverage at barycentric coordinates `b` of triangle `tri` keeps the hit of the
+    /// ray with [`coverage_key`] `key`.
     #[inline]
-    fn covered(&self, mask: &AlphaMask, tri: u32, b: [f32; 3]) -> bool {
+    fn covered(&self, mask: &AlphaMask, tri: u32, b: [f32; 3], key: u32) -> bool {
         let mut alpha = mask.factor;
         if mask.map.is_some() || self.colors.is_some() {
             let a = self.attributes_at(tri, b);
@@ -311,7 +339,13 @@ impl Mesh {
                 alpha *= map.sample(&a).w;
             }
         }
-        alpha >= mask.cutoff
+        if mask.stochastic {
+            // 24 bits of the hash as a uniform value in [0, 1).
+            let u = (mix(key ^ tri.wrapping_mul(0x9E37_79B9)) >> 8) as f32 / (1u32 << 24) as f32;
+            alpha > u
+        } else {
+            alpha >= mask.cutoff
+        }
     }
 
     /// Number of triangles.
@@ -341,7 +375,11 @@ impl Mesh {
         let sheared = ShearedRay::from_f64(ray.origin, ray.dir);
         let [a, b, c] = self.triangle_positions(tri);
         let hit = sheared.intersect(a, b, c, f32::INFINITY)?;
-        if self.alpha_mask.is_some() && !self.covers(tri, hit.barycentrics) {
+        if self.alpha_mask.is_some()
+            && !self.covers(tri, hit.barycentrics, || {
+                coverage_key(ray.origin.as_vec3(), ray.dir.as_vec3())
+            })
+        {
             return None;
         }
         let t = self.refine_t(tri, ray, hit.t as f64);
@@ -361,12 +399,12 @@ impl Mesh {
         [a, b, c].map(|i| self.positions[i as usize].as_ref())
     }
 
-    /// Whether the alpha cut-out keeps the point at barycentrics `b` of triangle `tri` (true
-    /// without a cut-out).
+    /// Whether the mesh's coverage keeps the point at barycentrics `b` of triangle `tri` (true
+    /// without a mask); `key` gives the ray's [`coverage_key`] when stochastic coverage needs it.
     #[inline]
-    pub(crate) fn covers(&self, tri: u32, b: [f32; 3]) -> bool {
+    pub(crate) fn covers(&self, tri: u32, b: [f32; 3], key: impl FnOnce() -> u32) -> bool {
         match &self.alpha_mask {
-            Some(mask) => self.covered(mask, tri, b),
+            Some(mask) => self.covered(mask, tri, b, if mask.stochastic { key() } else { 0 }),
             None => true,
         }
     }
@@ -547,6 +585,7 @@ mod tests {
             .with_colors(colors)
             .unwrap()
             .with_alpha_mask(AlphaMask {
+                stochastic: false,
                 cutoff: 0.5,
                 factor: 1.0,
                 map: None,
@@ -559,6 +598,7 @@ mod tests {
         assert!(!hit(-0.5));
         assert!(hit(0.5));
         let dim = quad().with_alpha_mask(AlphaMask {
+            stochastic: false,
             cutoff: 0.5,
             factor: 0.4,
             map: None,
@@ -569,6 +609,7 @@ mod tests {
         assert!(
             quad()
                 .with_alpha_mask(AlphaMask {
+                    stochastic: false,
                     cutoff: 1.5,
                     factor: 1.0,
                     map: None

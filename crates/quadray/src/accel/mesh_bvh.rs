@@ -95,6 +95,13 @@ impl MeshRay {
             sheared: ShearedRay::new(origin, dir),
         }
     }
+
+    /// The ray's [`coverage_key`](crate::mesh::coverage_key), from its origin and reciprocal
+    /// direction (which identify the ray as well as its direction does, and are at hand).
+    #[inline]
+    fn coverage_key(&self) -> u32 {
+        crate::mesh::coverage_key(self.origin.into(), self.inv_dir.into())
+    }
 }
 
 impl Node4 {
@@ -269,7 +276,7 @@ impl MeshBvh {
                 let drop = skip == Some((m, tri))
                     || (self.masked && {
                         let b = hits.nearest(1 << lane).map(|h| h.barycentrics);
-                        b.is_some_and(|b| !meshes[m as usize].covers(tri, b))
+                        b.is_some_and(|b| !meshes[m as usize].covers(tri, b, || ray.coverage_key()))
                     });
                 if drop {
                     mask &= !(1 << lane);
