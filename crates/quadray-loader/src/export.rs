@@ -425,7 +425,7 @@ intensity = 0.8
     fn single_sided_meshes_round_trip() {
         let mut scene = crate::native::parse_scene(SCENE, Path::new("s.toml")).unwrap();
         let mesh = &mut scene.description.geometry.meshes[0];
-        *mesh = mesh.clone().with_single_sided();
+        *mesh = mesh.clone().with_single_sided(true);
         let out = temp("single-sided.gltf");
         export_gltf(&scene, &out).unwrap();
         let json: serde_json::Value =

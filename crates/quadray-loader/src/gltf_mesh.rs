@@ -221,9 +221,7 @@ pub fn build(
             .with_alpha_mask(mask.clone())
             .map_err(|e| e.to_string())?;
     }
-    if material.single_sided {
-        mesh = mesh.with_single_sided();
-    }
+    mesh = mesh.with_single_sided(material.single_sided);
     Ok(Built {
         mesh: Some(mesh),
         degenerate,

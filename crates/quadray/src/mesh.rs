@@ -212,11 +212,12 @@ impl Mesh {
         Ok(self)
     }
 
-    /// Makes the mesh single-sided (glTF's `doubleSided: false`): camera and reflection rays pass
-    /// through the back of its triangles, the side from which their vertices turn clockwise;
-    /// shadow rays still stop there, as glTF viewers draw shadows.
-    pub fn with_single_sided(mut self) -> Mesh {
-        self.single_sided = true;
+    /// Makes the mesh single-sided (glTF's `doubleSided: false`) or two-sided (the default).
+    /// Camera and reflection rays pass through the back of a single-sided mesh's triangles, the
+    /// side from which their vertices turn clockwise; shadow rays still stop there, as glTF
+    /// viewers draw shadows.
+    pub fn with_single_sided(mut self, single_sided: bool) -> Mesh {
+        self.single_sided = single_sided;
         self
     }
 

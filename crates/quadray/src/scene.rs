@@ -470,12 +470,9 @@ mod tests {
             Vec3::new(1.0, 1.0, 0.0),
             Vec3::new(-1.0, 1.0, 0.0),
         ];
-        let mesh = Mesh::new(p, vec![[0, 1, 2], [0, 2, 3]], None, 0).unwrap();
-        if single_sided {
-            mesh.with_single_sided()
-        } else {
-            mesh
-        }
+        Mesh::new(p, vec![[0, 1, 2], [0, 2, 3]], None, 0)
+            .unwrap()
+            .with_single_sided(single_sided)
     }
 
     /// A square at z = 0 (world, or placed by `placement` as an instance) and a sphere of radius
