@@ -4,7 +4,6 @@
 //! Memory: 12 bytes a triangle (indices) plus 12 a vertex (position), and per vertex 12 more for
 //! normals, 8 per texture coordinate set and 16 for colours, each only when the mesh has them.
 
-use crate::image_texture::ImageMap;
 use crate::material::MaterialId;
 use crate::math::{Ray, gamma};
 use crate::shape::{SurfaceGeometry, normal_or};
@@ -65,47 +64,6 @@ pub enum MeshError {
         /// The factor.
         factor: f32,
     },
-}
-
-/// Partial coverage: a cut-out (glTF alpha mode MASK), where hits whose coverage alpha is below
-/// `cutoff` are not hits, or stochastic coverage (glTF BLEND), where a hit with alpha a is kept
-/// for a share a of rays.
-///
-/// Alpha at a point = `factor` × the map's alpha × the vertex colour's alpha. The test runs inside
-/// BVH traversal, so coverage lets camera, shadow and reflection rays through alike.
-#[derive(Clone, Debug, PartialEq)]
-pub struct AlphaMask {
-    /// Alpha below this is transparent (glTF alphaCutoff, default 0.5); unused when stochastic.
-    pub cutoff: f32,
-    /// Whether alpha is a probability instead (glTF BLEND): each ray keeps the hit when alpha
-    /// exceeds a value hashed from the ray and the triangle, uniform in [0, 1). Over a pixel's
-    /// samples this converges to the blend of the surface over what lies behind, in any order of
-    /// layers; at one sample a pixel it dithers.
-    pub stochastic: bool,
-    /// Constant alpha factor (glTF baseColorFactor's alpha).
-    pub factor: f32,
-    /// The image whose alpha channel modulates coverage, if any (glTF baseColorTexture).
-    pub map: Option<ImageMap>,
-}
-
-/// The hash of a ray, from its f32 origin and a direction vector (the BVH passes its reciprocal),
-/// that stochastic coverage draws from: the same ray meets the same decision in every query of
-/// one kind, different rays independent ones, and the image stays the same for any thread count.
-#[inline]
-pub(crate) fn coverage_key(origin: Vec3, dir: Vec3) -> u32 {
-    [origin.x, origin.y, origin.z, dir.x, dir.y, dir.z]
-        .iter()
-        .fold(0x2545_F491, |h, c| mix(h ^ c.to_bits()))
-}
-
-/// A 32-bit finaliser (the murmur3 mix): every input bit flips each output bit about half the time.
-#[inline]
-fn mix(mut h: u32) -> u32 {
-    h ^= h >> 16;
-    h = h.wrapping_mul(0x85EB_CA6B);
-    h ^= h >> 13;
-    h = h.wrapping_mul(0xC2B2_AE35);
-    h ^ (h >> 16)
 }
 
 /// A triangle mesh in world space (loaders bake the object's transform into the vertices).
@@ -328,27 +286,6 @@ impl Mesh {
         self.attributes_at(tri, [b0 as f32, b1 as f32, b2 as f32])
     }
 
-    /// Whether the coverage at barycentric coordinates `b` of triangle `tri` keeps the hit of the
-    /// ray with [`coverage_key`] `key`.
-    #[inline]
-    fn covered(&self, mask: &AlphaMask, tri: u32, b: [f32; 3], key: u32) -> bool {
-        let mut alpha = mask.factor;
-        if mask.map.is_some() || self.colors.is_some() {
-            let a = self.attributes_at(tri, b);
-            alpha *= a.color.w;
-            if let Some(map) = &mask.map {
-                alpha *= map.sample(&a).w;
-            }
-        }
-        if mask.stochastic {
-            // 24 bits of the hash as a uniform value in [0, 1).
-            let u = (mix(key ^ tri.wrapping_mul(0x9E37_79B9)) >> 8) as f32 / (1u32 << 24) as f32;
-            alpha > u
-        } else {
-            alpha >= mask.cutoff
-        }
-    }
-
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.indices.len()
@@ -398,16 +335,6 @@ impl Mesh {
     pub(crate) fn triangle_positions(&self, tri: u32) -> [&[f32; 3]; 3] {
         let [a, b, c] = self.indices[tri as usize];
         [a, b, c].map(|i| self.positions[i as usize].as_ref())
-    }
-
-    /// Whether the mesh's coverage keeps the point at barycentrics `b` of triangle `tri` (true
-    /// without a mask); `key` gives the ray's [`coverage_key`] when stochastic coverage needs it.
-    #[inline]
-    pub(crate) fn covers(&self, tri: u32, b: [f32; 3], key: impl FnOnce() -> u32) -> bool {
-        match &self.alpha_mask {
-            Some(mask) => self.covered(mask, tri, b, if mask.stochastic { key() } else { 0 }),
-            None => true,
-        }
     }
 
     /// Surface geometry where `ray` meets triangle `tri` at parameter `t`.
@@ -471,151 +398,9 @@ fn barycentrics(e1: DVec3, e2: DVec3, p: DVec3) -> [f64; 3] {
     [1.0 - b1 - b2, b1, b2]
 }
 
+mod coverage;
+
+pub use coverage::AlphaMask;
+pub(crate) use coverage::coverage_key;
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A zero-area triangle gives 0/0 barycentrics: they fall back to a vertex instead of
-    /// panicking inside `clamp` (found by hostile input: a degenerate triangle hit and shaded).
-    #[test]
-    fn degenerate_triangles_have_finite_barycentrics() {
-        for (e1, e2) in [
-            (DVec3::ZERO, DVec3::ZERO),
-            (DVec3::X, DVec3::X * 2.0),
-            (DVec3::splat(1e300), DVec3::splat(-1e300)),
-        ] {
-            let b = barycentrics(e1, e2, DVec3::new(0.3, 0.2, 0.0));
-            assert!(b.iter().all(|x| x.is_finite()), "{b:?}");
-        }
-    }
-
-    fn quad() -> Mesh {
-        let p = vec![
-            Vec3::new(-1.0, -1.0, 0.0),
-            Vec3::new(1.0, -1.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(-1.0, 1.0, 0.0),
-        ];
-        Mesh::new(p, vec![[0, 1, 2], [0, 2, 3]], None, 0).unwrap()
-    }
-
-    #[test]
-    fn rejects_out_of_range_indices() {
-        let err = Mesh::new(vec![Vec3::ZERO; 3], vec![[0, 1, 3]], None, 0).unwrap_err();
-        assert_eq!(
-            err,
-            MeshError::IndexOutOfRange {
-                triangle: 0,
-                index: 3,
-                vertices: 3
-            }
-        );
-        assert!(Mesh::new(vec![Vec3::NAN; 3], vec![[0, 1, 2]], None, 0).is_err());
-    }
-
-    #[test]
-    fn shared_edge_is_watertight() {
-        let m = quad();
-        // Rays through the diagonal shared by both triangles hit at least one of them.
-        for k in 0..=100 {
-            let s = -1.0 + 2.0 * k as f64 / 100.0;
-            let r = Ray::new(DVec3::new(s, s, 1.0), -DVec3::Z);
-            let hit = (0..2).any(|t| m.intersect(t, &r, f64::INFINITY, false).is_some());
-            assert!(hit, "hole at {s}");
-        }
-    }
-
-    #[test]
-    fn normal_faces_by_winding() {
-        let m = quad();
-        let r = Ray::new(DVec3::new(0.3, -0.2, 2.0), -DVec3::Z);
-        let t = m.intersect(0, &r, f64::INFINITY, false).unwrap();
-        assert_eq!(t, 2.0);
-        let g = m.surface(0, &r, t);
-        assert_eq!(g.geometric_normal, DVec3::Z);
-        assert!((g.point - DVec3::new(0.3, -0.2, 0.0)).length() < 1e-15);
-    }
-
-    #[test]
-    fn attributes_interpolate_barycentrically() {
-        let m = quad()
-            .with_texcoords(
-                0,
-                vec![
-                    Vec2::new(0.0, 1.0),
-                    Vec2::new(1.0, 1.0),
-                    Vec2::new(1.0, 0.0),
-                    Vec2::new(0.0, 0.0),
-                ],
-            )
-            .unwrap()
-            .with_colors(vec![
-                Vec4::new(1.0, 0.0, 0.0, 1.0),
-                Vec4::new(0.0, 1.0, 0.0, 1.0),
-                Vec4::new(0.0, 0.0, 1.0, 1.0),
-                Vec4::ONE,
-            ])
-            .unwrap();
-        let a = m.attributes(0, DVec3::new(0.5, -0.5, 0.0));
-        // (0.5, -0.5) = 0.25·v0 + 0.5·v1 + 0.25·v2 on triangle 0.
-        assert!(
-            (a.uv[0] - Vec2::new(0.75, 0.75)).length() < 1e-6,
-            "{:?}",
-            a.uv
-        );
-        assert!((a.color - Vec4::new(0.25, 0.5, 0.25, 1.0)).length() < 1e-6);
-        assert_eq!(a.uv[1], Vec2::ZERO);
-        assert!(matches!(
-            quad().with_texcoords(0, vec![Vec2::ZERO; 3]),
-            Err(MeshError::AttributeCount { count: 3, .. })
-        ));
-        assert!(matches!(
-            quad().with_texcoords(2, vec![Vec2::ZERO; 4]),
-            Err(MeshError::TexCoordSet(2))
-        ));
-        assert_eq!(m.memory_bytes(), 4 * (12 + 8 + 16) + 2 * 12);
-    }
-
-    #[test]
-    fn alpha_mask_cuts_holes_inside_intersection() {
-        // Vertex alpha 0 at x = -1 rising to 1 at x = +1: the left half is cut away at cutoff 0.5.
-        let colors = [-1.0f32, 1.0, 1.0, -1.0]
-            .map(|x| Vec4::new(1.0, 1.0, 1.0, (x + 1.0) * 0.5))
-            .to_vec();
-        let m = quad()
-            .with_colors(colors)
-            .unwrap()
-            .with_alpha_mask(AlphaMask {
-                stochastic: false,
-                cutoff: 0.5,
-                factor: 1.0,
-                map: None,
-            })
-            .unwrap();
-        let hit = |x: f64| {
-            let r = Ray::new(DVec3::new(x, 0.1, 1.0), -DVec3::Z);
-            (0..2).any(|t| m.intersect(t, &r, f64::INFINITY, false).is_some())
-        };
-        assert!(!hit(-0.5));
-        assert!(hit(0.5));
-        let dim = quad().with_alpha_mask(AlphaMask {
-            stochastic: false,
-            cutoff: 0.5,
-            factor: 0.4,
-            map: None,
-        });
-        let dim = dim.unwrap();
-        let r = Ray::new(DVec3::new(0.5, 0.1, 1.0), -DVec3::Z);
-        assert!(dim.intersect(0, &r, f64::INFINITY, false).is_none());
-        assert!(
-            quad()
-                .with_alpha_mask(AlphaMask {
-                    stochastic: false,
-                    cutoff: 1.5,
-                    factor: 1.0,
-                    map: None
-                })
-                .is_err()
-        );
-    }
-}
+mod tests;
