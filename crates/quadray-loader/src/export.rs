@@ -86,6 +86,15 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
 
     // Meshes, quadrics, spheres and instances (prototypes written once: export_shapes.rs).
     children.extend(ShapeWriter::new(g).level_nodes(&mut doc, 0, None)?);
+    let normal_mapped = (0..g.level_count())
+        .flat_map(|l| g.level(l).meshes)
+        .filter(|m| m.normal_map().is_some())
+        .count();
+    if normal_mapped > 0 {
+        notes.push(format!(
+            "{normal_mapped} normal-mapped meshes are written without their normal maps (not exported yet)"
+        ));
+    }
     if !g.planes.is_empty() {
         notes.push(format!(
             "infinite planes get a square of side {:.4} as their fallback mesh in other viewers",

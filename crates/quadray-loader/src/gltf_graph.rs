@@ -480,6 +480,7 @@ impl<'a> GraphBuild<'a> {
                     mask: None,
                     uv_transform: None,
                     single_sided: false,
+                    normal_map: None,
                 }
             } else {
                 self.materials
@@ -488,6 +489,10 @@ impl<'a> GraphBuild<'a> {
             };
             let built = gltf_mesh::build(&primitive, self.file, m, &material)
                 .map_err(|e| self.invalid(pkey.clone(), e))?;
+            if let Some(why) = built.normal_map_skipped {
+                self.notes
+                    .push(format!("{pkey}: normal map left off: {why}"));
+            }
             let dropped = (built.degenerate as u64).saturating_mul(copies);
             self.degenerate = self
                 .degenerate

@@ -19,13 +19,16 @@
 //! | `extensions.QUADRAY_quadrics.whitted` | quadray's parameters exactly, overriding all of the above |
 //! | `emissiveFactor`, `emissiveTexture` (sRGB), KHR_materials_emissive_strength | `emission`: their product, the surface's own light, seen directly and in mirrors (it lights nothing else) |
 //! | KHR_materials_transmission, KHR_materials_ior, KHR_materials_volume | opaque, with a warning naming the extension: no refraction yet |
-//! | metallicRoughnessTexture, normal and occlusion maps | ignored, with a note |
+//! | `normalTexture` (its `scale` and coordinate set) | a tangent-space [`NormalMap`] on the meshes drawn with it, with the file's TANGENTs or MikkTSpace's |
+//! | metallicRoughnessTexture | its mean metalness and roughness, with a note |
+//! | occlusionTexture | ignored, with a note |
 
 use crate::gltf_document::{GltfFile, read_image};
 use crate::quadrics_ext::{self, MaterialExtension};
 use glam::{Vec2, Vec3};
 use quadray::{
-    AlphaMask, Filter, Image, ImageMap, ImageTexture, Material, SpecularModel, Texture, Wrap,
+    AlphaMask, ColorEncoding, Filter, Image, ImageMap, ImageTexture, Material, NormalMap,
+    SpecularModel, Texture, Wrap,
 };
 use std::collections::{BTreeSet, HashMap};
 use std::sync::Arc;
@@ -73,6 +76,8 @@ pub struct MaterialUse {
     pub uv_transform: Option<UvTransform>,
     /// Whether meshes drawn with it are seen from the front only (`doubleSided: false`).
     pub single_sided: bool,
+    /// The tangent-space normal map meshes drawn with it carry (`normalTexture`).
+    pub normal_map: Option<NormalMap>,
 }
 
 /// Converts glTF materials on first use, and their images once each.
@@ -126,6 +131,7 @@ impl<'a> Materials<'a> {
             uv_transform: None,
             // The default material is single-sided, as every material that does not say.
             single_sided: true,
+            normal_map: None,
         };
         self.list.push(("default".into(), material));
         self.converted.insert(None, used.clone());
@@ -191,9 +197,7 @@ impl<'a> Materials<'a> {
             }
             map = self.image_map(&info.texture(), set, "base colour", notes);
         }
-        if m.normal_texture().is_some() {
-            self.ignored.insert("normalTexture");
-        }
+        let normal_map = self.normal_map(m, &label, uv_transform.as_ref(), notes);
         if m.occlusion_texture().is_some() {
             self.ignored.insert("occlusionTexture");
         }
@@ -264,6 +268,7 @@ impl<'a> Materials<'a> {
             mask,
             uv_transform,
             single_sided: !m.double_sided(),
+            normal_map,
         })
     }
 }
@@ -345,6 +350,42 @@ impl Materials<'_> {
         };
         self.averaged_metal_roughness = true;
         (metallic * mean(2) as f32, roughness * mean(1) as f32)
+    }
+
+    /// The tangent-space normal map of material `m`, read linearly, if it has a readable one.
+    fn normal_map(
+        &mut self,
+        m: &gltf::Material<'_>,
+        label: &str,
+        base_transform: Option<&UvTransform>,
+        notes: &mut Vec<String>,
+    ) -> Option<NormalMap> {
+        let info = m.normal_texture()?;
+        let set = info.tex_coord() as usize;
+        if set > 1 {
+            notes.push(format!(
+                "{label}: the normal map reads TEXCOORD_{set}; quadray keeps sets 0 and 1, so it is skipped"
+            ));
+            return None;
+        }
+        if base_transform.is_some_and(|b| b.set == set) {
+            notes.push(format!(
+                "{label}: the normal map is looked up through the base colour texture's KHR_texture_transform (a mesh carries one)"
+            ));
+        }
+        let map = self.image_map(&info.texture(), set, "interpolated normals", notes)?;
+        // Normals are data, not colours: the same texels, read without the sRGB curve.
+        let image = &map.image;
+        let bytes = image.texels().iter().flatten().copied().collect();
+        let linear =
+            Image::from_rgba8(image.width(), image.height(), bytes, ColorEncoding::Linear).ok()?;
+        Some(NormalMap {
+            map: ImageMap {
+                image: Arc::new(linear),
+                ..map
+            },
+            scale: info.scale(),
+        })
     }
 
     /// The light material `m` gives off: emissiveFactor × emissiveTexture (sRGB) ×

@@ -33,6 +33,10 @@ const TEXCOORDS: Expect = Expect {
     dimensions: &[Dimensions::Vec2],
     types: &[DataType::F32, DataType::U8, DataType::U16],
 };
+const TANGENTS: Expect = Expect {
+    dimensions: &[Dimensions::Vec4],
+    types: &[DataType::F32],
+};
 const COLORS: Expect = Expect {
     dimensions: &[Dimensions::Vec3, Dimensions::Vec4],
     types: &[DataType::F32, DataType::U8, DataType::U16],
@@ -96,6 +100,8 @@ pub struct Built {
     pub mesh: Option<Mesh>,
     /// Triangles with a repeated vertex index, dropped (they cannot be hit).
     pub degenerate: usize,
+    /// Why the material's normal map was left off, if it was.
+    pub normal_map_skipped: Option<&'static str>,
 }
 
 /// The quadray mesh of `primitive` placed by `to_world` (none when no triangle is left).
@@ -144,12 +150,14 @@ pub fn build(
         return Ok(Built {
             mesh: None,
             degenerate: 0,
+            normal_map_skipped: None,
         });
     };
     if triangles.is_empty() {
         return Ok(Built {
             mesh: None,
             degenerate,
+            normal_map_skipped: None,
         });
     }
     if to_world.matrix3.determinant() < 0.0 {
@@ -222,10 +230,59 @@ pub fn build(
             .map_err(|e| e.to_string())?;
     }
     mesh = mesh.with_single_sided(material.single_sided);
+    let mut normal_map_skipped = None;
+    if let Some(map) = &material.normal_map {
+        let set = map.map.set as usize;
+        if mesh.normals().is_none() {
+            normal_map_skipped = Some("the primitive has no NORMAL");
+        } else if mesh.texcoords(set).is_none() {
+            normal_map_skipped = Some("the primitive lacks the texture coordinates it reads");
+        } else {
+            let tangents = match primitive.get(&Semantic::Tangents) {
+                Some(acc) => {
+                    check(&acc, &TANGENTS, buffers).map_err(|e| format!("TANGENT: {e}"))?;
+                    let tangents: Vec<Vec4> = reader
+                        .read_tangents()
+                        .ok_or("TANGENT could not be read")?
+                        .map(|t| baked_tangent(t, &to_world))
+                        .collect();
+                    same_count("TANGENT", tangents.len(), n)?;
+                    Some(tangents)
+                }
+                // Computed on the baked mesh, so in world space already.
+                None => crate::tangents::generate(&mesh, set),
+            };
+            match tangents {
+                Some(tangents) => {
+                    mesh = mesh
+                        .with_tangents(tangents)
+                        .and_then(|m| m.with_normal_map(map.clone()))
+                        .map_err(|e| e.to_string())?;
+                }
+                None => normal_map_skipped = Some("no tangents could be generated"),
+            }
+        }
+    }
     Ok(Built {
         mesh: Some(mesh),
         degenerate,
+        normal_map_skipped,
     })
+}
+
+/// A file tangent baked into world space: xyz by the node's linear map (a tangent is a direction
+/// along the surface), w negated by a mirroring map, so that w · (normal × tangent) is still the
+/// image of the bitangent.
+fn baked_tangent(t: [f32; 4], to_world: &DAffine3) -> Vec4 {
+    let xyz = (to_world.matrix3 * Vec3::new(t[0], t[1], t[2]).as_dvec3())
+        .normalize_or_zero()
+        .as_vec3();
+    let mirror = if to_world.matrix3.determinant() < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    xyz.extend(if t[3] < 0.0 { -mirror } else { mirror })
 }
 
 fn same_count(what: &str, got: usize, vertices: usize) -> Result<(), String> {

@@ -34,6 +34,7 @@ pub mod quadrics_ext;
 pub mod read_limited;
 pub mod standalone;
 pub mod suggest;
+pub mod tangents;
 pub mod tessellate;
 
 pub use error::{LoadError, LoadErrorKind, Location};

@@ -110,3 +110,90 @@ fn default_lighting_brings_a_studio_environment() {
     let s = load("lit", &gltf, Some(&bin)).unwrap();
     assert_eq!(s.description.environment, None);
 }
+
+/// The triangle with normals +z and texture coordinates (u along +x, the top of the image along
+/// +y), drawn with a material whose normal map is one texel `rgb`, given as a data URI.
+fn normal_mapped(rgb: [u8; 3], with_normals: bool) -> (Value, Vec<u8>) {
+    use base64::Engine;
+    let (mut gltf, mut bin) = triangle();
+    let offset = bin.len();
+    for v in [[0f32, 0.0, 1.0]; 3] {
+        for c in v {
+            bin.extend(c.to_le_bytes());
+        }
+    }
+    for uv in [[0f32, 1.0], [1.0, 1.0], [0.0, 0.0]] {
+        for c in uv {
+            bin.extend(c.to_le_bytes());
+        }
+    }
+    gltf["buffers"][0]["byteLength"] = json!(bin.len());
+    gltf["bufferViews"].as_array_mut().unwrap().extend([
+        json!({"buffer": 0, "byteOffset": offset, "byteLength": 36}),
+        json!({"buffer": 0, "byteOffset": offset + 36, "byteLength": 24}),
+    ]);
+    gltf["accessors"].as_array_mut().unwrap().extend([
+        json!({"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3"}),
+        json!({"bufferView": 3, "componentType": 5126, "count": 3, "type": "VEC2"}),
+    ]);
+    let attributes = &mut gltf["meshes"][0]["primitives"][0]["attributes"];
+    if with_normals {
+        attributes["NORMAL"] = json!(2);
+    }
+    attributes["TEXCOORD_0"] = json!(3);
+    let mut png = Vec::new();
+    image::RgbImage::from_pixel(1, 1, image::Rgb(rgb))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let uri = format!(
+        "data:image/png;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&png)
+    );
+    gltf["images"] = json!([{"uri": uri}]);
+    gltf["textures"] = json!([{"source": 0}]);
+    gltf["materials"] = json!([{"normalTexture": {"index": 0, "scale": 0.5}}]);
+    gltf["meshes"][0]["primitives"][0]["material"] = json!(0);
+    (gltf, bin)
+}
+
+/// A normal map is read linearly, gets MikkTSpace tangents when the file has none (u along +x,
+/// the bitangent towards the top of the image: in quadray's z-up axes +x and +z), and bends the
+/// shading normal by the texel: (200, 90, 230) at scale 0.5 is (0.5·(2·200/255 − 1),
+/// 0.5·(2·90/255 − 1), 2·230/255 − 1) in (tangent, bitangent, normal) = (+x, +z, −y).
+#[test]
+fn normal_maps_get_tangents_and_bend_normals() {
+    let (gltf, bin) = normal_mapped([200, 90, 230], true);
+    let s = load("normal-map", &gltf, Some(&bin)).unwrap();
+    let mesh = &s.description.geometry.meshes[0];
+    let map = mesh.normal_map().expect("a normal map");
+    assert_eq!(map.scale, 0.5);
+    assert_eq!(map.map.image.encoding(), quadray::ColorEncoding::Linear);
+    for t in mesh.tangents().unwrap() {
+        assert!(
+            (*t - glam::Vec4::new(1.0, 0.0, 0.0, 1.0)).length() < 1e-5,
+            "{t}"
+        );
+    }
+    // A ray down the file's −z, which is quadray's +y, onto the triangle's middle.
+    let ray = quadray::math::Ray::new(glam::DVec3::new(0.25, -3.0, 0.25), glam::DVec3::Y);
+    let g = mesh.surface(0, &ray, 3.0);
+    let code = |c: u8| 2.0 * c as f64 / 255.0 - 1.0;
+    let expected = (glam::DVec3::X * 0.5 * code(200)
+        + glam::DVec3::Z * 0.5 * code(90)
+        + glam::DVec3::NEG_Y * code(230))
+    .normalize();
+    assert!(
+        (g.shading_normal - expected).length() < 1e-5,
+        "{}",
+        g.shading_normal
+    );
+
+    let (gltf, bin) = normal_mapped([200, 90, 230], false);
+    let s = load("normal-map-without-normals", &gltf, Some(&bin)).unwrap();
+    assert!(s.description.geometry.meshes[0].normal_map().is_none());
+    assert!(
+        s.notes.iter().any(|n| n.contains("normal map left off")),
+        "{:?}",
+        s.notes
+    );
+}

@@ -84,7 +84,7 @@ pub use integrator::{RayCounts, Whitted};
 pub use light::Light;
 pub use material::{Material, MaterialId, SpecularModel};
 pub use math::{Ray, Transform};
-pub use mesh::{AlphaMask, Mesh, MeshError};
+pub use mesh::{AlphaMask, Mesh, MeshError, NormalMap};
 pub use plane::Plane;
 pub use quadric::{
     ClipBox, Coefficients, Quadric, QuadricClass, QuadricError, QuadricKind, QuadricSurface,

@@ -1,8 +1,9 @@
-//! Indexed triangle meshes with optional per-vertex normals, texture coordinates and colours,
-//! intersected in f64, with optional alpha cut-outs.
+//! Indexed triangle meshes with optional per-vertex normals, texture coordinates, colours and
+//! tangents, intersected in f64, with optional partial coverage and normal maps.
 //!
 //! Memory: 12 bytes a triangle (indices) plus 12 a vertex (position), and per vertex 12 more for
-//! normals, 8 per texture coordinate set and 16 for colours, each only when the mesh has them.
+//! normals, 8 per texture coordinate set, 16 for colours and 16 for tangents, each only when the
+//! mesh has them.
 
 use crate::material::MaterialId;
 use crate::math::{Ray, gamma};
@@ -64,6 +65,9 @@ pub enum MeshError {
         /// The factor.
         factor: f32,
     },
+    /// A normal map on a mesh without what it needs.
+    #[error("a normal map needs {0}")]
+    NormalMapNeeds(&'static str),
 }
 
 /// A triangle mesh in world space (loaders bake the object's transform into the vertices).
@@ -76,6 +80,8 @@ pub struct Mesh {
     z_range: (f64, f64),
     texcoords: [Option<Vec<Vec2>>; 2],
     colors: Option<Vec<Vec4>>,
+    tangents: Option<Vec<Vec4>>,
+    normal_map: Option<NormalMap>,
     alpha_mask: Option<AlphaMask>,
     single_sided: bool,
 }
@@ -124,6 +130,8 @@ impl Mesh {
             z_range: (lo, hi),
             texcoords: [None, None],
             colors: None,
+            tangents: None,
+            normal_map: None,
             alpha_mask: None,
             single_sided: false,
         })
@@ -354,7 +362,10 @@ impl Mesh {
                 let interp = n[a as usize].as_dvec3() * b0
                     + n[b as usize].as_dvec3() * b1
                     + n[c as usize].as_dvec3() * b2;
-                let s = normal_or(interp, geometric_normal);
+                let mut s = normal_or(interp, geometric_normal);
+                if let Some(map) = &self.normal_map {
+                    s = self.bend(map, tri, [b0, b1, b2], s);
+                }
                 // Keep the shading normal on the geometric normal's side.
                 if s.dot(geometric_normal) < 0.0 { -s } else { s }
             }
@@ -399,8 +410,10 @@ fn barycentrics(e1: DVec3, e2: DVec3, p: DVec3) -> [f64; 3] {
 }
 
 mod coverage;
+mod normal_map;
 
 pub use coverage::AlphaMask;
 pub(crate) use coverage::coverage_key;
+pub use normal_map::NormalMap;
 #[cfg(test)]
 mod tests;

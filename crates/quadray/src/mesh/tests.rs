@@ -145,3 +145,93 @@ fn alpha_mask_cuts_holes_inside_intersection() {
             .is_err()
     );
 }
+
+/// The unit square at z = 0 with normals +z and texture coordinates (0, 0) at its top-left
+/// corner (−1, 1): u grows along +x, v along −y, so the top of the image is +y.
+fn textured_quad() -> Mesh {
+    quad()
+        .with_texcoords(
+            0,
+            vec![
+                Vec2::new(0.0, 1.0),
+                Vec2::new(1.0, 1.0),
+                Vec2::new(1.0, 0.0),
+                Vec2::new(0.0, 0.0),
+            ],
+        )
+        .unwrap()
+}
+
+/// A one-texel linear normal map.
+fn normal_map(rgb: [u8; 3], scale: f32) -> NormalMap {
+    let image = crate::Image::from_rgba8(
+        1,
+        1,
+        vec![rgb[0], rgb[1], rgb[2], 255],
+        crate::ColorEncoding::Linear,
+    )
+    .unwrap();
+    NormalMap {
+        map: crate::ImageMap {
+            image: std::sync::Arc::new(image),
+            wrap: [crate::Wrap::Repeat; 2],
+            filter: crate::Filter::Nearest,
+            set: 0,
+        },
+        scale,
+    }
+}
+
+/// The texel's normal lands in the frame (tangent +x, bitangent +y, normal +z): a texel
+/// (200, 90, 230) is the normal (2·200/255 − 1, 2·90/255 − 1, 2·230/255 − 1), normalised; the
+/// scale multiplies its x and y; a mesh without tangents cannot take a map.
+#[test]
+fn normal_maps_bend_the_shading_normal_in_the_tangent_frame() {
+    let normals = vec![Vec3::Z; 4];
+    let quad = textured_quad();
+    let with_normals = Mesh::new(
+        quad.positions().to_vec(),
+        quad.indices().to_vec(),
+        Some(normals),
+        0,
+    )
+    .unwrap()
+    .with_texcoords(0, quad.texcoords(0).unwrap().to_vec())
+    .unwrap();
+    assert_eq!(
+        with_normals
+            .clone()
+            .with_normal_map(normal_map([128, 128, 255], 1.0))
+            .unwrap_err(),
+        MeshError::NormalMapNeeds("tangents")
+    );
+    let tangent = Vec4::new(1.0, 0.0, 0.0, 1.0);
+    let mapped = |rgb, scale| {
+        with_normals
+            .clone()
+            .with_tangents(vec![tangent; 4])
+            .unwrap()
+            .with_normal_map(normal_map(rgb, scale))
+            .unwrap()
+    };
+    let ray = Ray::new(DVec3::new(0.2, 0.3, 1.0), -DVec3::Z);
+    let code = |c: u8| 2.0 * c as f64 / 255.0 - 1.0;
+    for scale in [1.0, 0.5] {
+        let g = mapped([200, 90, 230], scale).surface(0, &ray, 1.0);
+        let expected =
+            DVec3::new(code(200) * scale as f64, code(90) * scale as f64, code(230)).normalize();
+        assert!(
+            (g.shading_normal - expected).length() < 1e-6,
+            "{} vs {expected}",
+            g.shading_normal
+        );
+        assert_eq!(g.geometric_normal, DVec3::Z);
+    }
+    // A flipped bitangent sign mirrors y.
+    let flipped = with_normals
+        .with_tangents(vec![Vec4::new(1.0, 0.0, 0.0, -1.0); 4])
+        .unwrap()
+        .with_normal_map(normal_map([200, 90, 230], 1.0))
+        .unwrap();
+    assert!(flipped.surface(0, &ray, 1.0).shading_normal.y > 0.0);
+}
