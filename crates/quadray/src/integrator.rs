@@ -126,6 +126,7 @@ impl Whitted {
             color += scene.emitted(hit);
         }
 
+        let highlight = m.highlight_color(base);
         for light in scene.lights() {
             let Some(inc) = light.incident(g.point) else {
                 continue;
@@ -153,7 +154,7 @@ impl Whitted {
                     SpecularModel::Blinn => (inc.to_light + view).normalize().dot(ns),
                 };
                 if alignment > 0.0 {
-                    response += m.highlight_color(base) * m.specular_lobe(alignment as f32);
+                    response += highlight * m.specular_lobe(alignment as f32);
                 }
             }
             color += inc.irradiance * response;

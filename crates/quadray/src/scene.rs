@@ -209,14 +209,26 @@ impl Scene {
     /// The base colour (albedo) at a hit: its material's texture times the hit's vertex colour.
     #[inline]
     pub fn albedo(&self, hit: &SurfaceHit) -> Vec3 {
-        let material = &self.materials[hit.material as usize];
-        self.with_attributes(hit, |attributes, point| {
-            material.base_color(point, attributes)
-        })
+        // Vertex attributes are defaults off meshes (at once); the texture point is computed only
+        // for the procedural textures that read it.
+        let point = hit.geometry.point;
+        let decoded;
+        let path = match hit.prim.placement {
+            0 => &crate::instance::WORLD_PATH,
+            p => {
+                decoded = self.accel.placements().path(&self.geometry, p);
+                &decoded
+            }
+        };
+        let attributes = self.geometry.attributes(hit.prim, path, point);
+        self.materials[hit.material as usize].base_color(
+            || self.geometry.texture_point(hit.prim, path, point),
+            &attributes,
+        )
     }
 
     /// The radiance the hit's surface gives off itself (zero for most materials).
-    #[inline]
+    #[inline(never)]
     pub fn emitted(&self, hit: &SurfaceHit) -> Vec3 {
         match &self.materials[hit.material as usize].emission {
             None => Vec3::ZERO,
@@ -282,52 +294,59 @@ impl Scene {
     /// [`Scene::intersect`] for a ray spawned on primitive `from`, whose self-hits are skipped.
     /// The ray passes through the back faces of single-sided meshes ([`Mesh::with_single_sided`]):
     /// the hit is the first surface it sees, with `t` along `ray`.
+    #[inline]
     pub fn intersect_from(&self, ray: &Ray, from: Option<PrimRef>) -> Option<SurfaceHit> {
-        let mut leg = *ray;
-        let mut from = from;
-        let mut passed = 0;
-        loop {
-            let (t, prim) = self
-                .accel
-                .closest(&self.geometry, &leg, f64::INFINITY, from)?;
-            // The world's primitives (placement 0) need no path decoded.
-            let decoded;
-            let path = match prim.placement {
-                0 => &crate::instance::WORLD_PATH,
-                p => {
-                    decoded = self.accel.placements().path(&self.geometry, p);
-                    &decoded
-                }
-            };
-            let geometry = self.geometry.surface(prim, path, &leg, t);
-            if self.single_sided
-                && passed < MAX_PASSED_FACES
-                && self.geometry.passes_through(prim, path, &leg)
-            {
-                // Continue from just beyond the face, skipping it.
-                let origin = offset_origin(
-                    geometry.point,
-                    geometry.geometric_normal,
-                    geometry.error,
-                    leg.dir,
-                );
-                leg = Ray::new(origin, leg.dir);
-                from = Some(prim);
-                passed += 1;
-                continue;
-            }
-            let t = if passed == 0 {
-                t
-            } else {
-                (geometry.point - ray.origin).dot(ray.dir) / ray.dir.length_squared()
-            };
-            return Some(SurfaceHit {
-                t,
-                prim,
-                material: self.geometry.material(prim, path),
-                geometry,
-            });
+        let hit = self.first_hit(ray, from)?;
+        if self.single_sided {
+            self.past_back_faces(ray, hit)
+        } else {
+            Some(hit)
         }
+    }
+
+    /// The nearest surface `ray` meets, whichever side.
+    #[inline(always)]
+    fn first_hit(&self, ray: &Ray, from: Option<PrimRef>) -> Option<SurfaceHit> {
+        let (t, prim) = self
+            .accel
+            .closest(&self.geometry, ray, f64::INFINITY, from)?;
+        // The world's primitives (placement 0) need no path decoded.
+        let decoded;
+        let path = match prim.placement {
+            0 => &crate::instance::WORLD_PATH,
+            p => {
+                decoded = self.accel.placements().path(&self.geometry, p);
+                &decoded
+            }
+        };
+        Some(SurfaceHit {
+            t,
+            prim,
+            material: self.geometry.material(prim, path),
+            geometry: self.geometry.surface(prim, path, ray, t),
+        })
+    }
+
+    /// `hit`, or while it is the back of a single-sided mesh the next surface beyond it along
+    /// `ray` (at most [`MAX_PASSED_FACES`] passed), with `t` along `ray`.
+    #[inline(never)]
+    fn past_back_faces(&self, ray: &Ray, mut hit: SurfaceHit) -> Option<SurfaceHit> {
+        let mut leg = *ray;
+        for _ in 0..MAX_PASSED_FACES {
+            let path = self.path(hit.prim);
+            if !self.geometry.passes_through(hit.prim, &path, &leg) {
+                break;
+            }
+            // Continue from just beyond the face, skipping it.
+            let g = &hit.geometry;
+            leg = Ray::new(
+                offset_origin(g.point, g.geometric_normal, g.error, leg.dir),
+                leg.dir,
+            );
+            hit = self.first_hit(&leg, Some(hit.prim))?;
+            hit.t = (hit.geometry.point - ray.origin).dot(ray.dir) / ray.dir.length_squared();
+        }
+        Some(hit)
     }
 
     /// Whether anything blocks `ray` in (0, `t_max`): the any-hit query of shadow rays.

@@ -91,7 +91,9 @@ pub fn lighten(c: Vec3) -> Vec3 {
 
 impl Texture {
     /// The colour at `p`, whose interpolated vertex attributes are `attributes`.
-    #[inline]
+    // Always inlined: every shaded hit calls it for the base colour, and a second caller (the
+    // emission) made the compiler stop inlining it there (measured: 0.4% more instructions).
+    #[inline(always)]
     pub fn eval(&self, p: &TexturePoint, attributes: &VertexAttributes) -> Vec3 {
         match self {
             Texture::Constant(c) => *c,
