@@ -238,14 +238,20 @@ mod tests {
         assert!((cam.orbited(360.0).from - cam.from).length() < 1e-12);
     }
 
-    #[test]
-    fn project_inverts_ray() {
+    /// An orbit camera, and the same looking the same way with an orthographic projection.
+    fn perspective_and_orthographic() -> [Camera; 2] {
         let perspective = Camera::orbit(DVec3::new(1.0, 2.0, 3.0), 30.0, 20.0, 7.0, 50.0);
         let orthographic = Camera {
             projection: Projection::Orthographic { height: 3.0 },
             ..perspective
         };
-        for camera in [perspective, orthographic] {
+        [perspective, orthographic]
+    }
+
+    #[test]
+    fn project_inverts_ray() {
+        let [perspective, _] = perspective_and_orthographic();
+        for camera in perspective_and_orthographic() {
             let frame = camera.prepare(16.0 / 9.0).unwrap();
             for (u, v) in [(0.5, 0.5), (0.1, 0.8), (1.2, -0.3)] {
                 let ray = frame.ray(u, v);
@@ -261,12 +267,7 @@ mod tests {
     /// and at camera-space depth equal to its distance along the viewing axis, in front (+z).
     #[test]
     fn exr_matrices_follow_the_rays() {
-        let perspective = Camera::orbit(DVec3::new(1.0, 2.0, 3.0), 30.0, 20.0, 7.0, 50.0);
-        let orthographic = Camera {
-            projection: Projection::Orthographic { height: 3.0 },
-            ..perspective
-        };
-        for camera in [perspective, orthographic] {
+        for camera in perspective_and_orthographic() {
             let frame = camera.prepare(16.0 / 9.0).unwrap();
             let (to_camera, to_ndc) = (frame.world_to_camera(), frame.world_to_ndc());
             for (u, v) in [(0.5, 0.5), (0.1, 0.8), (1.0, 0.0)] {

@@ -78,6 +78,23 @@ pub struct Scene {
     single_sided: bool,
 }
 
+/// Where a hit's texture point comes from: computed when a texture asks for it.
+struct PointSource<'a> {
+    geometry: &'a Geometry,
+    prim: PrimRef,
+    path: &'a InstancePath,
+    point: glam::DVec3,
+}
+
+impl PointSource<'_> {
+    /// The hit's texture point.
+    #[inline]
+    fn get(&self) -> TexturePoint {
+        self.geometry
+            .texture_point(self.prim, self.path, self.point)
+    }
+}
+
 /// Back faces of single-sided meshes one closest-hit query passes through at most; a ray that
 /// meets more stops at the next one (none of the Khronos samples comes near).
 const MAX_PASSED_FACES: u32 = 64;
@@ -207,24 +224,12 @@ impl Scene {
     }
 
     /// The base colour (albedo) at a hit: its material's texture times the hit's vertex colour.
-    #[inline]
+    #[inline(always)]
     pub fn albedo(&self, hit: &SurfaceHit) -> Vec3 {
-        // Vertex attributes are defaults off meshes (at once); the texture point is computed only
-        // for the procedural textures that read it.
-        let point = hit.geometry.point;
-        let decoded;
-        let path = match hit.prim.placement {
-            0 => &crate::instance::WORLD_PATH,
-            p => {
-                decoded = self.accel.placements().path(&self.geometry, p);
-                &decoded
-            }
-        };
-        let attributes = self.geometry.attributes(hit.prim, path, point);
-        self.materials[hit.material as usize].base_color(
-            || self.geometry.texture_point(hit.prim, path, point),
-            &attributes,
-        )
+        let material = &self.materials[hit.material as usize];
+        self.with_attributes(hit, |attributes, point| {
+            material.base_color(|| point.get(), attributes)
+        })
     }
 
     /// The radiance the hit's surface gives off itself (zero for most materials).
@@ -235,7 +240,7 @@ impl Scene {
             Some(Texture::Constant(c)) => *c,
             Some(texture) => self.with_attributes(hit, |attributes, point| {
                 let p = if texture.reads_point() {
-                    point()
+                    point.get()
                 } else {
                     TexturePoint {
                         local: glam::DVec3::ZERO,
@@ -247,16 +252,14 @@ impl Scene {
         }
     }
 
-    /// Calls `f` with the hit's vertex attributes and a way to compute its texture point.
-    #[inline]
+    /// Calls `f` with the hit's vertex attributes (defaults off meshes, at once) and the source
+    /// of its texture point, computed only for the procedural textures that read it.
+    #[inline(always)]
     fn with_attributes<T>(
         &self,
         hit: &SurfaceHit,
-        f: impl FnOnce(&VertexAttributes, &dyn Fn() -> TexturePoint) -> T,
+        f: impl FnOnce(&VertexAttributes, &PointSource<'_>) -> T,
     ) -> T {
-        // Vertex attributes are defaults off meshes (at once); the texture point is computed only
-        // for the procedural textures that read it.
-        let point = hit.geometry.point;
         let decoded;
         let path = match hit.prim.placement {
             0 => &crate::instance::WORLD_PATH,
@@ -265,10 +268,17 @@ impl Scene {
                 &decoded
             }
         };
+        let point = hit.geometry.point;
         let attributes = self.geometry.attributes(hit.prim, path, point);
-        f(&attributes, &|| {
-            self.geometry.texture_point(hit.prim, path, point)
-        })
+        f(
+            &attributes,
+            &PointSource {
+                geometry: &self.geometry,
+                prim: hit.prim,
+                path,
+                point,
+            },
+        )
     }
 
     /// The instances leading from the world to `prim`'s placement.

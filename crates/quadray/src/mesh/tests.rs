@@ -65,17 +65,7 @@ fn normal_faces_by_winding() {
 
 #[test]
 fn attributes_interpolate_barycentrically() {
-    let m = quad()
-        .with_texcoords(
-            0,
-            vec![
-                Vec2::new(0.0, 1.0),
-                Vec2::new(1.0, 1.0),
-                Vec2::new(1.0, 0.0),
-                Vec2::new(0.0, 0.0),
-            ],
-        )
-        .unwrap()
+    let m = textured_quad()
         .with_colors(vec![
             Vec4::new(1.0, 0.0, 0.0, 1.0),
             Vec4::new(0.0, 1.0, 0.0, 1.0),
