@@ -174,29 +174,7 @@ impl<'a> Materials<'a> {
         }
         let base = base.clamp(Vec3::ZERO, Vec3::ONE);
         let (metallic, roughness) = self.metal_roughness(&pbr, notes);
-        let mut uv_transform = None;
-        let mut map = None;
-        if let Some(info) = pbr.base_color_texture() {
-            let mut set = info.tex_coord() as usize;
-            if let Some(t) = info.texture_transform() {
-                if let Some(s) = t.tex_coord() {
-                    set = s as usize;
-                }
-                uv_transform = Some(UvTransform::from_khr(
-                    set,
-                    Vec2::from_array(t.offset()),
-                    t.rotation(),
-                    Vec2::from_array(t.scale()),
-                ));
-            }
-            if set > 1 {
-                notes.push(format!(
-                    "{label}: base colour texture reads TEXCOORD_{set}; quadray keeps sets 0 and 1, so set 0 is used"
-                ));
-                set = 0;
-            }
-            map = self.image_map(&info.texture(), set, "base colour", notes);
-        }
+        let (map, uv_transform) = self.base_color_map(&pbr, &label, notes);
         let normal_map = self.normal_map(m, &label, uv_transform.as_ref(), notes);
         if m.occlusion_texture().is_some() {
             self.ignored.insert("occlusionTexture");
@@ -216,23 +194,7 @@ impl<'a> Materials<'a> {
             }),
             None => Texture::Constant(base),
         };
-        let alpha = alpha.clamp(0.0, 1.0);
-        let mask = match m.alpha_mode() {
-            gltf::material::AlphaMode::Opaque => None,
-            gltf::material::AlphaMode::Mask => Some(AlphaMask {
-                cutoff: m.alpha_cutoff().unwrap_or(0.5).clamp(0.0, 1.0),
-                stochastic: false,
-                factor: alpha,
-                map: map.clone(),
-            }),
-            // Coverage as a probability per ray: converges to the blend with a pixel's samples.
-            gltf::material::AlphaMode::Blend => Some(AlphaMask {
-                cutoff: 0.5,
-                stochastic: true,
-                factor: alpha,
-                map: map.clone(),
-            }),
-        };
+        let mask = coverage(m, alpha.clamp(0.0, 1.0), &map);
         let material = if let Some(ext) = m.extension_value(quadrics_ext::EXTENSION) {
             let ext: MaterialExtension = serde_json::from_value(ext.clone())
                 .map_err(|e| format!("{label}: extensions.{}: {e}", quadrics_ext::EXTENSION))?;
@@ -352,6 +314,40 @@ impl Materials<'_> {
         (metallic * mean(2) as f32, roughness * mean(1) as f32)
     }
 
+    /// The base colour texture's image map, if it has a readable one, and its KHR_texture_transform
+    /// (baked into the mesh's coordinates of its set).
+    fn base_color_map(
+        &mut self,
+        pbr: &gltf::material::PbrMetallicRoughness<'_>,
+        label: &str,
+        notes: &mut Vec<String>,
+    ) -> (Option<ImageMap>, Option<UvTransform>) {
+        let Some(info) = pbr.base_color_texture() else {
+            return (None, None);
+        };
+        let mut set = info.tex_coord() as usize;
+        let mut uv_transform = None;
+        if let Some(t) = info.texture_transform() {
+            if let Some(s) = t.tex_coord() {
+                set = s as usize;
+            }
+            uv_transform = Some(UvTransform::from_khr(
+                set,
+                Vec2::from_array(t.offset()),
+                t.rotation(),
+                Vec2::from_array(t.scale()),
+            ));
+        }
+        if set > 1 {
+            notes.push(format!(
+                "{label}: base colour texture reads TEXCOORD_{set}; quadray keeps sets 0 and 1, so set 0 is used"
+            ));
+            set = 0;
+        }
+        let map = self.image_map(&info.texture(), set, "base colour", notes);
+        (map, uv_transform)
+    }
+
     /// The tangent-space normal map of material `m`, read linearly, if it has a readable one.
     fn normal_map(
         &mut self,
@@ -446,6 +442,23 @@ impl Materials<'_> {
             },
         ))
     }
+}
+
+/// The coverage of material `m` with base colour alpha `alpha` and base colour texture `map`:
+/// none (OPAQUE), a cut-out (MASK), or stochastic (BLEND: a probability per ray, converging to the
+/// blend over a pixel's samples).
+fn coverage(m: &gltf::Material<'_>, alpha: f32, map: &Option<ImageMap>) -> Option<AlphaMask> {
+    let (cutoff, stochastic) = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => return None,
+        gltf::material::AlphaMode::Mask => (m.alpha_cutoff().unwrap_or(0.5).clamp(0.0, 1.0), false),
+        gltf::material::AlphaMode::Blend => (0.5, true),
+    };
+    Some(AlphaMask {
+        cutoff,
+        stochastic,
+        factor: alpha,
+        map: map.clone(),
+    })
 }
 
 /// The glTF extension that scales emission beyond 1.

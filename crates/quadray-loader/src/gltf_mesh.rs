@@ -173,7 +173,34 @@ pub fn build(
                 .as_vec3()
         })
         .collect();
-    let normals = match primitive.get(&Semantic::Normals) {
+    let normals = baked_normals(primitive, &reader, buffers, &to_world, n)?;
+    let mesh = Mesh::new(positions, triangles, normals, material.id).map_err(|e| e.to_string())?;
+    let mesh = with_surface_attributes(mesh, primitive, &reader, buffers, material)?;
+    let (mesh, normal_map_skipped) =
+        with_normal_map(mesh, primitive, &reader, buffers, material, &to_world)?;
+    Ok(Built {
+        mesh: Some(mesh),
+        degenerate,
+        normal_map_skipped,
+    })
+}
+
+/// The primitive's reader of vertex attributes.
+type Reader<'a, 's, F> = gltf::mesh::Reader<'a, 's, F>;
+
+/// The primitive's NORMALs baked by `to_world` (by its inverse transpose, renormalised), if it
+/// has them.
+fn baked_normals<'a, 's, F>(
+    primitive: &gltf::Primitive<'_>,
+    reader: &Reader<'a, 's, F>,
+    buffers: &[Vec<u8>],
+    to_world: &DAffine3,
+    n: usize,
+) -> Result<Option<Vec<Vec3>>, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    Ok(match primitive.get(&Semantic::Normals) {
         Some(acc) => {
             check(&acc, &NORMALS, buffers).map_err(|e| format!("NORMAL: {e}"))?;
             let normal_matrix = to_world.matrix3.inverse().transpose();
@@ -190,9 +217,22 @@ pub fn build(
             Some(normals)
         }
         None => None,
-    };
-    let mut mesh =
-        Mesh::new(positions, triangles, normals, material.id).map_err(|e| e.to_string())?;
+    })
+}
+
+/// `mesh` with the primitive's texture coordinates (the material's KHR_texture_transform
+/// applied), vertex colours, and the material's coverage and sides.
+fn with_surface_attributes<'a, 's, F>(
+    mut mesh: Mesh,
+    primitive: &gltf::Primitive<'_>,
+    reader: &Reader<'a, 's, F>,
+    buffers: &[Vec<u8>],
+    material: &MaterialUse,
+) -> Result<Mesh, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let n = mesh.positions().len();
     for set in 0..2u32 {
         let Some(acc) = primitive.get(&Semantic::TexCoords(set)) else {
             continue;
@@ -229,45 +269,57 @@ pub fn build(
             .with_alpha_mask(mask.clone())
             .map_err(|e| e.to_string())?;
     }
-    mesh = mesh.with_single_sided(material.single_sided);
-    let mut normal_map_skipped = None;
-    if let Some(map) = &material.normal_map {
-        let set = map.map.set as usize;
-        if mesh.normals().is_none() {
-            normal_map_skipped = Some("the primitive has no NORMAL");
-        } else if mesh.texcoords(set).is_none() {
-            normal_map_skipped = Some("the primitive lacks the texture coordinates it reads");
-        } else {
-            let tangents = match primitive.get(&Semantic::Tangents) {
-                Some(acc) => {
-                    check(&acc, &TANGENTS, buffers).map_err(|e| format!("TANGENT: {e}"))?;
-                    let tangents: Vec<Vec4> = reader
-                        .read_tangents()
-                        .ok_or("TANGENT could not be read")?
-                        .map(|t| baked_tangent(t, &to_world))
-                        .collect();
-                    same_count("TANGENT", tangents.len(), n)?;
-                    Some(tangents)
-                }
-                // Computed on the baked mesh, so in world space already.
-                None => crate::tangents::generate(&mesh, set),
-            };
-            match tangents {
-                Some(tangents) => {
-                    mesh = mesh
-                        .with_tangents(tangents)
-                        .and_then(|m| m.with_normal_map(map.clone()))
-                        .map_err(|e| e.to_string())?;
-                }
-                None => normal_map_skipped = Some("no tangents could be generated"),
-            }
-        }
+    Ok(mesh.with_single_sided(material.single_sided))
+}
+
+/// `mesh` with the material's normal map and its tangents (the file's TANGENT baked by
+/// `to_world`, else MikkTSpace's), or as it is with the reason the map was left off.
+fn with_normal_map<'a, 's, F>(
+    mesh: Mesh,
+    primitive: &gltf::Primitive<'_>,
+    reader: &Reader<'a, 's, F>,
+    buffers: &[Vec<u8>],
+    material: &MaterialUse,
+    to_world: &DAffine3,
+) -> Result<(Mesh, Option<&'static str>), String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let Some(map) = &material.normal_map else {
+        return Ok((mesh, None));
+    };
+    let set = map.map.set as usize;
+    if mesh.normals().is_none() {
+        return Ok((mesh, Some("the primitive has no NORMAL")));
     }
-    Ok(Built {
-        mesh: Some(mesh),
-        degenerate,
-        normal_map_skipped,
-    })
+    if mesh.texcoords(set).is_none() {
+        return Ok((
+            mesh,
+            Some("the primitive lacks the texture coordinates it reads"),
+        ));
+    }
+    let tangents = match primitive.get(&Semantic::Tangents) {
+        Some(acc) => {
+            check(&acc, &TANGENTS, buffers).map_err(|e| format!("TANGENT: {e}"))?;
+            let tangents: Vec<Vec4> = reader
+                .read_tangents()
+                .ok_or("TANGENT could not be read")?
+                .map(|t| baked_tangent(t, to_world))
+                .collect();
+            same_count("TANGENT", tangents.len(), mesh.positions().len())?;
+            Some(tangents)
+        }
+        // Computed on the baked mesh, so in world space already.
+        None => crate::tangents::generate(&mesh, set),
+    };
+    let Some(tangents) = tangents else {
+        return Ok((mesh, Some("no tangents could be generated")));
+    };
+    let mesh = mesh
+        .with_tangents(tangents)
+        .and_then(|m| m.with_normal_map(map.clone()))
+        .map_err(|e| e.to_string())?;
+    Ok((mesh, None))
 }
 
 /// A file tangent baked into world space: xyz by the node's linear map (a tangent is a direction

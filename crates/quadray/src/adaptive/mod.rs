@@ -16,7 +16,7 @@
 //!   limit ([`Adaptive::time_limit`]) trades that for a bound: it stops between rows, and which
 //!   rows got their last round then depends on timing.
 
-use crate::aov::Aovs;
+use crate::aov::{AovSample, Aovs};
 use crate::film::{ERROR_BATCHES, Film, PixelEstimate};
 use crate::integrator::RayCounts;
 use crate::render::{MAX_SPP, PixelWindow, Progress, RenderError, Rendered, SampleContext};
@@ -242,22 +242,9 @@ pub(crate) fn render_adaptive(
                     row_done();
                     return;
                 }
-                let mut counts = RayCounts::default();
-                for (column, estimate) in row.iter_mut().enumerate() {
-                    if !row_refine[column] {
-                        continue;
-                    }
-                    let x = window.x0 + column as u32;
-                    let pattern = pixel_pattern(x, y, settings.seed);
-                    for index in estimate.count()..adaptive.round_count(round) {
-                        let first_hit = match aov_row.as_deref_mut() {
-                            Some(aovs) if index == 0 => Some(&mut aovs[column]),
-                            _ => None,
-                        };
-                        let offset = progressive_2d(index, pattern);
-                        estimate.add(context.trace((x, y), offset, first_hit, &mut counts));
-                    }
-                }
+                let target = adaptive.round_count(round);
+                let counts =
+                    sample_row(context, y, row, row_refine, aov_row.as_deref_mut(), target);
                 *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
                 row_done();
             });
@@ -266,51 +253,106 @@ pub(crate) fn render_adaptive(
             .zip(&estimates)
             .for_each(|(error, estimate)| *error = estimate.relative_error());
         adaptive.select(round + 1, &estimates, &errors, ww, &mut refine);
-        let inner_errors = crop(&errors, window, inner);
-        let summary = RoundSummary {
+        progress.round_done(&RoundSummary::of_window(
             round,
-            active: crop(&refine, window, inner).iter().filter(|&&r| r).count() as u64,
-            pixels: inner_errors.len() as u64,
-            worst_error: stats::worst_error(&inner_errors),
-            target_error: adaptive.target_error,
-        };
-        progress.round_done(&summary);
+            &crop(&errors, window, inner),
+            &crop(&refine, window, inner),
+            adaptive.target_error,
+        ));
         round += 1;
         if !refine.contains(&true) || timed_out.load(Ordering::Relaxed) || out_of_time() {
             break;
         }
     }
 
-    let (estimates, errors) = (
-        crop(&estimates, window, inner),
-        crop(&errors, window, inner),
-    );
-    let film = Film::from_pixels(
-        inner.width(),
-        inner.height(),
-        estimates.iter().map(PixelEstimate::mean).collect(),
-    )
-    .expect("one estimate per pixel");
-    let mut aov_samples = crop(&aov_samples, window, inner);
-    for (aov, estimate) in aov_samples.iter_mut().zip(&estimates) {
-        aov.fill_sampling(
-            context.selection,
-            estimate.count(),
-            Some(estimate.variance()),
-        );
+    let sampled = Sampled {
+        estimates,
+        errors,
+        aov_samples,
+        rounds: round,
+        timed_out: timed_out.into_inner(),
+        counts: totals.into_inner().unwrap_or_else(|e| e.into_inner()),
+    };
+    Ok(sampled.finish(&context.with_window(inner), adaptive, window))
+}
+
+/// Brings the pixels of one row of the window that `refine` marks to `count` samples, taking each
+/// pixel's surface passes from its first sample; returns the rays traced.
+fn sample_row(
+    context: &SampleContext<'_>,
+    y: u32,
+    row: &mut [PixelEstimate],
+    refine: &[bool],
+    mut aovs: Option<&mut [AovSample]>,
+    count: u32,
+) -> RayCounts {
+    let mut counts = RayCounts::default();
+    for (column, estimate) in row.iter_mut().enumerate() {
+        if !refine[column] {
+            continue;
+        }
+        let x = context.window.x0 + column as u32;
+        let pattern = pixel_pattern(x, y, context.settings.seed);
+        for index in estimate.count()..count {
+            let first_hit = match aovs.as_deref_mut() {
+                Some(aovs) if index == 0 => Some(&mut aovs[column]),
+                _ => None,
+            };
+            let offset = progressive_2d(index, pattern);
+            estimate.add(context.trace((x, y), offset, first_hit, &mut counts));
+        }
     }
-    let sampling =
-        stats::sampling_stats(&estimates, &errors, adaptive, round, timed_out.into_inner());
-    let counts = totals.into_inner().unwrap_or_else(|e| e.into_inner());
-    Ok((
-        Rendered {
-            film,
-            window: inner,
-            counts,
-            sampling,
-        },
-        context.with_window(inner).finish_aovs(aov_samples),
-    ))
+    counts
+}
+
+/// What the rounds left over the bordered window.
+struct Sampled {
+    estimates: Vec<PixelEstimate>,
+    errors: Vec<f64>,
+    aov_samples: Vec<AovSample>,
+    rounds: u32,
+    timed_out: bool,
+    counts: RayCounts,
+}
+
+impl Sampled {
+    /// The render of `context`'s window, cut out of the bordered `sampled` window: the image, the
+    /// passes (with each pixel's count and variance) and the sampling statistics.
+    fn finish(
+        self,
+        context: &SampleContext<'_>,
+        adaptive: &Adaptive,
+        sampled: PixelWindow,
+    ) -> (Rendered, Option<Aovs>) {
+        let window = context.window;
+        let estimates = crop(&self.estimates, sampled, window);
+        let errors = crop(&self.errors, sampled, window);
+        let film = Film::from_pixels(
+            window.width(),
+            window.height(),
+            estimates.iter().map(PixelEstimate::mean).collect(),
+        )
+        .expect("one estimate per pixel");
+        let mut aov_samples = crop(&self.aov_samples, sampled, window);
+        for (aov, estimate) in aov_samples.iter_mut().zip(&estimates) {
+            aov.fill_sampling(
+                context.selection,
+                estimate.count(),
+                Some(estimate.variance()),
+            );
+        }
+        let sampling =
+            stats::sampling_stats(&estimates, &errors, adaptive, self.rounds, self.timed_out);
+        (
+            Rendered {
+                film,
+                window,
+                counts: self.counts,
+                sampling,
+            },
+            context.finish_aovs(aov_samples),
+        )
+    }
 }
 
 /// `window` grown by `border` pixels on every side, within a `width` × `height` image.

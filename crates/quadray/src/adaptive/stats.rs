@@ -9,7 +9,8 @@ use crate::film::PixelEstimate;
 pub struct RoundSummary {
     /// The round just finished, from 0.
     pub round: u32,
-    /// Pixels still above the target error and below the maximum count.
+    /// Pixels the next round samples: those still above the target error and below the maximum
+    /// count, and in the first rounds their neighbours.
     pub active: u64,
     /// Pixels in the render.
     pub pixels: u64,
@@ -17,6 +18,20 @@ pub struct RoundSummary {
     pub worst_error: f64,
     /// The target error.
     pub target_error: f64,
+}
+
+impl RoundSummary {
+    /// The summary of `round` over a window's pixels: their errors after it, and which of them
+    /// the next round samples.
+    pub(super) fn of_window(round: u32, errors: &[f64], refine: &[bool], target: f64) -> Self {
+        RoundSummary {
+            round,
+            active: refine.iter().filter(|&&r| r).count() as u64,
+            pixels: errors.len() as u64,
+            worst_error: worst_error(errors),
+            target_error: target,
+        }
+    }
 }
 
 /// Why an adaptive render stopped.
