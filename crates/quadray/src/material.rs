@@ -60,15 +60,7 @@ impl Material {
         point: impl FnOnce() -> TexturePoint,
         attributes: &VertexAttributes,
     ) -> Vec3 {
-        let p = if self.texture.reads_point() {
-            point()
-        } else {
-            TexturePoint {
-                local: glam::DVec3::ZERO,
-                height: 0.0,
-            }
-        };
-        self.texture.eval(&p, attributes) * attributes.color.truncate()
+        self.texture.eval_at(point, attributes) * attributes.color.truncate()
     }
 
     /// The specular lobe `alignment^shininess` for an alignment in (0, 1]: by repeated

@@ -9,7 +9,7 @@ use crate::material::Material;
 use crate::math::{Ray, offset_origin};
 use crate::mesh::Mesh;
 use crate::shape::{PrimRef, SurfaceHit};
-use crate::texture::{Texture, TexturePoint, VertexAttributes};
+use crate::texture::Texture;
 use glam::Vec3;
 
 pub use crate::math::MAX_COORDINATE;
@@ -78,21 +78,12 @@ pub struct Scene {
     single_sided: bool,
 }
 
-/// Where a hit's texture point comes from: computed when a texture asks for it.
-struct PointSource<'a> {
-    geometry: &'a Geometry,
-    prim: PrimRef,
-    path: &'a InstancePath,
-    point: glam::DVec3,
-}
-
-impl PointSource<'_> {
-    /// The hit's texture point.
-    #[inline]
-    fn get(&self) -> TexturePoint {
-        self.geometry
-            .texture_point(self.prim, self.path, self.point)
-    }
+/// Which colour [`Scene::colour_at`] looks up.
+enum HitColour<'a> {
+    /// A material's base colour: its texture times the vertex colour.
+    Base(&'a Material),
+    /// A texture alone.
+    Texture(&'a Texture),
 }
 
 /// Back faces of single-sided meshes one closest-hit query passes through at most; a ray that
@@ -226,22 +217,7 @@ impl Scene {
     /// The base colour (albedo) at a hit: its material's texture times the hit's vertex colour.
     #[inline(always)]
     pub fn albedo(&self, hit: &SurfaceHit) -> Vec3 {
-        // Written out rather than through `with_attributes`: every shaded hit comes here, and the
-        // shared version cost 2.5% on the reflective scene (its texture point was not inlined).
-        let point = hit.geometry.point;
-        let decoded;
-        let path = match hit.prim.placement {
-            0 => &crate::instance::WORLD_PATH,
-            p => {
-                decoded = self.accel.placements().path(&self.geometry, p);
-                &decoded
-            }
-        };
-        let attributes = self.geometry.attributes(hit.prim, path, point);
-        self.materials[hit.material as usize].base_color(
-            || self.geometry.texture_point(hit.prim, path, point),
-            &attributes,
-        )
+        self.colour_at(hit, HitColour::Base(&self.materials[hit.material as usize]))
     }
 
     /// The radiance the hit's surface gives off itself (zero for most materials).
@@ -250,28 +226,15 @@ impl Scene {
         match &self.materials[hit.material as usize].emission {
             None => Vec3::ZERO,
             Some(Texture::Constant(c)) => *c,
-            Some(texture) => self.with_attributes(hit, |attributes, point| {
-                let p = if texture.reads_point() {
-                    point.get()
-                } else {
-                    TexturePoint {
-                        local: glam::DVec3::ZERO,
-                        height: 0.0,
-                    }
-                };
-                texture.eval(&p, attributes)
-            }),
+            Some(texture) => self.colour_at(hit, HitColour::Texture(texture)),
         }
     }
 
-    /// Calls `f` with the hit's vertex attributes (defaults off meshes, at once) and the source
-    /// of its texture point, computed only for the procedural textures that read it.
+    /// A colour at a hit: the vertex attributes are interpolated at once (defaults off meshes),
+    /// the texture point only for the procedural textures that read it.
     #[inline(always)]
-    fn with_attributes<T>(
-        &self,
-        hit: &SurfaceHit,
-        f: impl FnOnce(&VertexAttributes, &PointSource<'_>) -> T,
-    ) -> T {
+    fn colour_at(&self, hit: &SurfaceHit, colour: HitColour<'_>) -> Vec3 {
+        let point = hit.geometry.point;
         let decoded;
         let path = match hit.prim.placement {
             0 => &crate::instance::WORLD_PATH,
@@ -280,17 +243,12 @@ impl Scene {
                 &decoded
             }
         };
-        let point = hit.geometry.point;
         let attributes = self.geometry.attributes(hit.prim, path, point);
-        f(
-            &attributes,
-            &PointSource {
-                geometry: &self.geometry,
-                prim: hit.prim,
-                path,
-                point,
-            },
-        )
+        let texture_point = || self.geometry.texture_point(hit.prim, path, point);
+        match colour {
+            HitColour::Base(material) => material.base_color(texture_point, &attributes),
+            HitColour::Texture(texture) => texture.eval_at(texture_point, &attributes),
+        }
     }
 
     /// The instances leading from the world to `prim`'s placement.

@@ -115,6 +115,25 @@ impl Texture {
         }
     }
 
+    /// The colour at a hit whose interpolated vertex attributes are `attributes`; `point` is asked
+    /// for only by the procedural textures that read it.
+    #[inline]
+    pub fn eval_at(
+        &self,
+        point: impl FnOnce() -> TexturePoint,
+        attributes: &VertexAttributes,
+    ) -> Vec3 {
+        let p = if self.reads_point() {
+            point()
+        } else {
+            TexturePoint {
+                local: glam::DVec3::ZERO,
+                height: 0.0,
+            }
+        };
+        self.eval(&p, attributes)
+    }
+
     /// Whether the colour depends on the hit's [`TexturePoint`] (the procedural textures do;
     /// constants and images do not).
     pub fn reads_point(&self) -> bool {
