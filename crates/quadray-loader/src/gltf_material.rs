@@ -325,25 +325,8 @@ impl Materials<'_> {
         let Some(info) = pbr.base_color_texture() else {
             return (None, None);
         };
-        let mut set = info.tex_coord() as usize;
-        let mut uv_transform = None;
-        if let Some(t) = info.texture_transform() {
-            if let Some(s) = t.tex_coord() {
-                set = s as usize;
-            }
-            uv_transform = Some(UvTransform::from_khr(
-                set,
-                Vec2::from_array(t.offset()),
-                t.rotation(),
-                Vec2::from_array(t.scale()),
-            ));
-        }
-        if set > 1 {
-            notes.push(format!(
-                "{label}: base colour texture reads TEXCOORD_{set}; quadray keeps sets 0 and 1, so set 0 is used"
-            ));
-            set = 0;
-        }
+        let (set, uv_transform) = lookup(&info);
+        let set = kept_set(set, label, "base colour texture", notes);
         let map = self.image_map(&info.texture(), set, "base colour", notes);
         (map, uv_transform)
     }
@@ -411,30 +394,14 @@ impl Materials<'_> {
         let Some(info) = m.emissive_texture() else {
             return Ok(Some(Texture::Constant(factor)));
         };
-        let mut set = info.tex_coord() as usize;
-        let transform = info.texture_transform().map(|t| {
-            if let Some(s) = t.tex_coord() {
-                set = s as usize;
-            }
-            UvTransform::from_khr(
-                set,
-                Vec2::from_array(t.offset()),
-                t.rotation(),
-                Vec2::from_array(t.scale()),
-            )
-        });
+        let (set, transform) = lookup(&info);
         // A mesh's coordinates carry one transform, the base colour texture's.
         if transform.as_ref() != base_transform && base_transform.is_none_or(|b| b.set == set) {
             notes.push(format!(
                 "{label}: the emissive texture's KHR_texture_transform differs from the base colour texture's; it is looked up through the base colour's"
             ));
         }
-        if set > 1 {
-            notes.push(format!(
-                "{label}: emissive texture reads TEXCOORD_{set}; quadray keeps sets 0 and 1, so set 0 is used"
-            ));
-            set = 0;
-        }
+        let set = kept_set(set, label, "emissive texture", notes);
         Ok(Some(
             match self.image_map(&info.texture(), set, "emissive factor", notes) {
                 Some(map) => Texture::Image(ImageTexture { map, factor }),
@@ -442,6 +409,35 @@ impl Materials<'_> {
             },
         ))
     }
+}
+
+/// The texture coordinate set a texture reads (its KHR_texture_transform may name another) and
+/// that transform.
+fn lookup(info: &gltf::texture::Info<'_>) -> (usize, Option<UvTransform>) {
+    let mut set = info.tex_coord() as usize;
+    let transform = info.texture_transform().map(|t| {
+        if let Some(s) = t.tex_coord() {
+            set = s as usize;
+        }
+        UvTransform::from_khr(
+            set,
+            Vec2::from_array(t.offset()),
+            t.rotation(),
+            Vec2::from_array(t.scale()),
+        )
+    });
+    (set, transform)
+}
+
+/// `set`, or set 0 with a note naming `what` when it is beyond the two sets quadray keeps.
+fn kept_set(set: usize, label: &str, what: &str, notes: &mut Vec<String>) -> usize {
+    if set > 1 {
+        notes.push(format!(
+            "{label}: {what} reads TEXCOORD_{set}; quadray keeps sets 0 and 1, so set 0 is used"
+        ));
+        return 0;
+    }
+    set
 }
 
 /// The coverage of material `m` with base colour alpha `alpha` and base colour texture `map`:
