@@ -23,6 +23,7 @@ use crate::render::{MAX_SPP, PixelWindow, Progress, RenderError, Rendered, Sampl
 use crate::sampler::{pixel_pattern, progressive_2d};
 use rayon::prelude::*;
 pub use stats::{ErrorStats, RoundSummary, SamplingStats, Stop};
+use std::borrow::Cow;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -333,8 +334,8 @@ impl Sampled {
             estimates.iter().map(PixelEstimate::mean).collect(),
         )
         .expect("one estimate per pixel");
-        let mut aov_samples = crop(&self.aov_samples, sampled, window);
-        for (aov, estimate) in aov_samples.iter_mut().zip(&estimates) {
+        let mut aov_samples = crop(&self.aov_samples, sampled, window).into_owned();
+        for (aov, estimate) in aov_samples.iter_mut().zip(estimates.iter()) {
             aov.fill_sampling(
                 context.selection,
                 estimate.count(),
@@ -365,10 +366,11 @@ fn bordered(window: PixelWindow, border: u32, width: u32, height: u32) -> PixelW
     }
 }
 
-/// The values of the pixels of `inner` out of row-major values over `outer`, which contains it.
-fn crop<T: Clone>(values: &[T], outer: PixelWindow, inner: PixelWindow) -> Vec<T> {
+/// The values of the pixels of `inner` out of row-major values over `outer`, which contains it
+/// (the values themselves, not a copy, when the two windows are one).
+fn crop<T: Clone>(values: &[T], outer: PixelWindow, inner: PixelWindow) -> Cow<'_, [T]> {
     if values.is_empty() || outer == inner {
-        return values.to_vec();
+        return Cow::Borrowed(values);
     }
     let ow = outer.width() as usize;
     let (dx, w) = ((inner.x0 - outer.x0) as usize, inner.width() as usize);
@@ -377,7 +379,8 @@ fn crop<T: Clone>(values: &[T], outer: PixelWindow, inner: PixelWindow) -> Vec<T
             let start = (y - outer.y0) as usize * ow + dx;
             values[start..start + w].iter().cloned()
         })
-        .collect()
+        .collect::<Vec<T>>()
+        .into()
 }
 
 mod stats;
