@@ -1,11 +1,11 @@
-//! glTF files written by the tests: a valid one-triangle file to edit, and loading it from a
-//! fresh folder.
+//! What the loader's tests share: the real assets' folder, and glTF files written by the tests (a
+//! valid one-triangle file to edit, loaded from a fresh folder).
 
 #![allow(dead_code)]
 
 use quadray_loader::load_any;
 use serde_json::{Value, json};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A fresh temporary folder for test `name`.
 pub fn dir(name: &str) -> PathBuf {
@@ -61,4 +61,18 @@ pub fn load(
     let r = load_any(&path).map_err(|e| e.to_string());
     std::fs::remove_dir_all(&d).unwrap();
     r
+}
+
+/// `<workspace>/../shared/assets`, or `None` (with the reason printed) when it is absent.
+pub fn assets() -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets");
+    if dir.join("SOURCES.md").is_file() {
+        Some(dir)
+    } else {
+        eprintln!(
+            "skipping: the shared test assets are not at {} (../shared is absent)",
+            dir.display()
+        );
+        None
+    }
 }

@@ -17,12 +17,8 @@ use crate::oracle::{self, Reference};
 use crate::variants::{Variant, VariantQuadric};
 use glam::DVec3;
 use quadray::math::slab_interval;
-use quadray::{
-    Camera, ClipBox, Geometry, Light, Material, Projection, Quadric, QuadricKind, QuadricSurface,
-    Ray, Scene, SceneDescription, Transform, Whitted,
-};
+use quadray::{Quadric, Ray, Scene, Whitted};
 use rayon::prelude::*;
-use std::fmt::Write as _;
 
 /// Why a hole map cannot be made.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -60,118 +56,6 @@ pub struct HoleScene {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
-}
-
-/// The built-in scenes' row of quadrics in their own frame: an ellipsoid (a unit sphere), a
-/// hyperboloid of one sheet open at both ends, a double cone with its apex in view, and an
-/// elliptic paraboloid cup, 2.6 units apart along x and tilted 30° towards a camera on −y.
-fn row(offset: DVec3) -> Vec<Quadric> {
-    let tilt = DVec3::new(30.0, 0.0, 0.0);
-    let items = [
-        (
-            QuadricKind::Ellipsoid,
-            [1.0, 1.0, 1.0],
-            ClipBox::cube(1.0),
-            0.0,
-        ),
-        (
-            QuadricKind::Hyperboloid1,
-            [0.5, 0.5, 0.7],
-            ClipBox::cube(1.0),
-            0.0,
-        ),
-        (QuadricKind::Cone, [0.6, 0.6, 1.0], ClipBox::cube(1.0), 0.0),
-        // z = (x² + y²)/0.64 from its vertex up to z = 1.2, lowered to centre it.
-        (
-            QuadricKind::EllipticParaboloid,
-            [0.8, 0.8, 1.0],
-            ClipBox {
-                min: DVec3::new(-1.0, -1.0, 0.0),
-                max: DVec3::new(1.0, 1.0, 1.2),
-            },
-            -0.6,
-        ),
-    ];
-    items
-        .iter()
-        .enumerate()
-        .map(|(i, &(kind, [a, b, c], clip, lift))| {
-            let at = offset + DVec3::new(-3.9 + 2.6 * i as f64, 0.0, lift);
-            let transform = Transform::from_srt(DVec3::ONE, tilt, at)
-                .expect("the row's placements are invertible");
-            Quadric::new(
-                QuadricSurface::Canonical { kind, a, b, c },
-                clip,
-                transform,
-                i as u32,
-            )
-            .expect("the row's quadrics are valid")
-        })
-        .collect()
-}
-
-fn row_scene(quadrics: Vec<Quadric>, camera: Camera) -> Scene {
-    let materials = (0..quadrics.len()).map(|_| Material::default()).collect();
-    Scene::new(SceneDescription {
-        camera,
-        background: glam::Vec3::splat(0.05),
-        environment: None,
-        materials,
-        lights: vec![Light::Directional {
-            direction: DVec3::new(-0.4, 1.0, -0.6).normalize(),
-            irradiance: glam::Vec3::ONE,
-        }],
-        geometry: Geometry {
-            quadrics,
-            ..Geometry::default()
-        },
-    })
-    .expect("the built-in hole-map scenes are valid")
-}
-
-/// The row seen from 10⁷ units away through a 1.9·10⁻⁵ degree field of view (§4.1 of the
-/// catalogue): every variant that evaluates f at the far ray origin loses the discriminant to
-/// cancellation (β² and aγ are ~10¹⁴ times the object's own scale).
-pub fn far(width: u32, height: u32) -> HoleScene {
-    let distance = 1e7;
-    let target = DVec3::new(0.0, distance, 0.0);
-    let vfov = 2.0 * (1.7f64 / distance).atan().to_degrees();
-    let camera = Camera {
-        from: DVec3::ZERO,
-        to: target,
-        up: DVec3::Z,
-        projection: Projection::Perspective { vfov_deg: vfov },
-    };
-    HoleScene {
-        name: "far-1e7".into(),
-        about: "ellipsoid, hyperboloid, cone apex and paraboloid cup 10⁷ units from the camera"
-            .into(),
-        scene: row_scene(row(target), camera),
-        width,
-        height,
-    }
-}
-
-/// The row and its camera (12 units in front of it) moved 10⁶ units from the world origin along
-/// every axis (§4.17): nothing is far from the camera, but world coordinates carry only about
-/// 10⁻¹⁰ of their size in f64 and 6·10⁻⁸ in f32, so an intersector that maps the ray to the object
-/// in world coordinates (the f32 variant) shifts every edge.
-pub fn moved(width: u32, height: u32) -> HoleScene {
-    let shift = DVec3::splat(1e6);
-    let camera = Camera {
-        from: shift + DVec3::new(0.0, -12.0, 0.0),
-        to: shift,
-        up: DVec3::Z,
-        projection: Projection::Perspective { vfov_deg: 16.0 },
-    };
-    HoleScene {
-        name: "moved-1e6".into(),
-        about: "the same row and a camera 12 units away, all moved 10⁶ units along each axis"
-            .into(),
-        scene: row_scene(row(shift), camera),
-        width,
-        height,
-    }
 }
 
 /// What the oracle says one pixel shows.
@@ -415,52 +299,6 @@ impl HoleCounts {
     }
 }
 
-/// Colour of a miss that agrees with the oracle.
-pub const BACKGROUND: [u8; 3] = [28, 28, 34];
-/// Colour of a hole (the oracle hits, the variant misses).
-pub const HOLE: [u8; 3] = [235, 30, 30];
-/// Colour of a phantom (the variant hits, the oracle misses).
-pub const PHANTOM: [u8; 3] = [40, 110, 255];
-/// Colour of a wrong object (both hit, different objects).
-pub const WRONG_OBJECT: [u8; 3] = [255, 170, 0];
-/// Colour of an ambiguous pixel (within the oracle's margin), whatever the variant says.
-pub const AMBIGUOUS: [u8; 3] = [0, 230, 230];
-
-/// Muted grey-green tones for objects hit in agreement with the oracle, by quadric index.
-fn object_colour(i: u32) -> [u8; 3] {
-    const TONES: [[u8; 3]; 6] = [
-        [150, 150, 150],
-        [120, 135, 120],
-        [175, 170, 155],
-        [105, 115, 135],
-        [160, 140, 150],
-        [135, 160, 160],
-    ];
-    TONES[i as usize % TONES.len()]
-}
-
-/// The hole map as 8-bit RGB (row-major): agreeing pixels in their object's muted tone (dark where
-/// both miss), differing ones in [`HOLE`], [`PHANTOM`] or [`WRONG_OBJECT`], ambiguous ones in
-/// [`AMBIGUOUS`]. With `got` = `None`, the oracle's own map (objects and ambiguous pixels).
-pub fn hole_map_rgb8(oracle: &[OraclePixel], got: Option<&[Option<u32>]>) -> Vec<u8> {
-    oracle
-        .iter()
-        .enumerate()
-        .flat_map(|(i, o)| {
-            let answer = got.map_or(o.object, |g| g[i]);
-            if o.ambiguous {
-                return AMBIGUOUS;
-            }
-            match PixelClass::of(o.object, answer) {
-                PixelClass::Agrees => o.object.map_or(BACKGROUND, object_colour),
-                PixelClass::Hole => HOLE,
-                PixelClass::Phantom => PHANTOM,
-                PixelClass::WrongObject => WRONG_OBJECT,
-            }
-        })
-        .collect()
-}
-
 /// One scene's hole maps: the oracle's verdicts and every variant's answers and counts.
 #[derive(Clone, Debug)]
 pub struct SceneHoles {
@@ -510,33 +348,11 @@ impl SceneHoles {
     }
 }
 
-/// The counts of every scene and variant as a markdown table.
-pub fn markdown(scenes: &[SceneHoles]) -> String {
-    let mut s = String::new();
-    s.push_str("| scene | variant | pixels | oracle hits | differing | holes | phantoms | wrong object | ambiguous | ambiguous and differing |\n");
-    s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-    for sc in scenes {
-        for (v, _, c) in &sc.variants {
-            let _ = writeln!(
-                s,
-                "| {} ({}x{}) | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                sc.name,
-                sc.width,
-                sc.height,
-                v.name(),
-                c.pixels,
-                c.oracle_hits,
-                c.differing(),
-                c.holes,
-                c.phantoms,
-                c.wrong_object,
-                c.ambiguous,
-                c.ambiguous_differing
-            );
-        }
-    }
-    s
-}
+mod map;
+mod scenes;
+
+pub use map::{AMBIGUOUS, BACKGROUND, HOLE, PHANTOM, WRONG_OBJECT, hole_map_rgb8, markdown};
+pub use scenes::{far, moved};
 
 #[cfg(test)]
 mod tests {
@@ -581,7 +397,7 @@ mod tests {
         assert_eq!(
             colours,
             vec![
-                object_colour(0),
+                map::object_colour(0),
                 HOLE,
                 PHANTOM,
                 WRONG_OBJECT,
