@@ -61,6 +61,7 @@ pub mod material;
 pub mod math;
 pub mod mesh;
 pub mod plane;
+pub mod progressive;
 pub mod quadric;
 pub mod render;
 pub mod sampler;
@@ -86,6 +87,7 @@ pub use material::{Material, MaterialId, SpecularModel};
 pub use math::{Ray, Transform};
 pub use mesh::{AlphaMask, Mesh, MeshError, NormalMap};
 pub use plane::Plane;
+pub use progressive::ProgressiveFilm;
 pub use quadric::{
     ClipBox, Coefficients, Quadric, QuadricClass, QuadricError, QuadricKind, QuadricSurface,
 };

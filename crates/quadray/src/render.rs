@@ -42,6 +42,9 @@ pub struct RenderSettings {
     pub crop: Option<PixelWindow>,
     /// Error-targeted adaptive sampling instead of `spp` samples in every pixel.
     pub adaptive: Option<Adaptive>,
+    /// A camera to render through instead of the scene's (an interactive view that moved away
+    /// from it), so the scene and its acceleration structure need not be rebuilt.
+    pub camera: Option<crate::camera::Camera>,
 }
 
 /// A rectangle of pixels inside the full image: columns `x0..x1`, rows `y0..y1` (half-open),
@@ -120,6 +123,7 @@ impl Default for RenderSettings {
             whitted: Whitted::default(),
             crop: None,
             adaptive: None,
+            camera: None,
         }
     }
 }
@@ -159,6 +163,9 @@ pub enum RenderError {
     /// The camera cannot produce rays at this aspect.
     #[error("camera: {0}")]
     Camera(#[from] crate::camera::CameraError),
+    /// [`Progress::cancelled`] asked to stop before the render finished.
+    #[error("the render was cancelled")]
+    Cancelled,
 }
 
 /// Checks an image size against the documented limits: sides, pixel count and aspect ratio.
@@ -214,6 +221,12 @@ pub trait Progress: Sync {
 
     /// Called after each round of adaptive sampling, with where the image stands.
     fn round_done(&self, _round: &adaptive::RoundSummary) {}
+
+    /// Whether the caller no longer wants the result (an interactive view that changed): rows
+    /// not yet started are skipped and the render returns [`RenderError::Cancelled`].
+    fn cancelled(&self) -> bool {
+        false
+    }
 }
 
 /// A progress sink that ignores everything.
@@ -277,19 +290,20 @@ pub(crate) struct SampleContext<'a> {
 }
 
 impl<'a> SampleContext<'a> {
-    fn new(
+    pub(crate) fn new(
         scene: &'a Scene,
         settings: &'a RenderSettings,
         selection: AovSelection,
     ) -> Result<SampleContext<'a>, RenderError> {
         let aspect = settings.width as f64 / settings.height as f64;
+        let camera = settings.camera.as_ref().unwrap_or(scene.camera());
         Ok(SampleContext {
             scene,
             settings,
             window: settings.window(),
             selection,
-            camera: scene.camera().prepare(aspect)?,
-            forward: (scene.camera().to - scene.camera().from).normalize(),
+            camera: camera.prepare(aspect)?,
+            forward: (camera.to - camera.from).normalize(),
         })
     }
 
@@ -384,6 +398,9 @@ fn render_uniform(
         .zip(aov_rows)
         .enumerate()
         .for_each(|(row_index, (row, mut aov_row))| {
+            if progress.cancelled() {
+                return;
+            }
             // Pixels are sampled by their position in the full image, so a window's pixels equal
             // the whole render's.
             let y = window.y0 + row_index as u32;
@@ -412,6 +429,9 @@ fn render_uniform(
             *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
             progress.row_done();
         });
+    if progress.cancelled() {
+        return Err(RenderError::Cancelled);
+    }
     let counts = totals.into_inner().unwrap_or_else(|e| e.into_inner());
     Ok((
         Rendered {

@@ -238,6 +238,9 @@ pub(crate) fn render_adaptive(
                         progress.row_done();
                     }
                 };
+                if progress.cancelled() {
+                    return;
+                }
                 if round > 0 && out_of_time() {
                     timed_out.store(true, Ordering::Relaxed);
                     row_done();
@@ -249,6 +252,9 @@ pub(crate) fn render_adaptive(
                 *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
                 row_done();
             });
+        if progress.cancelled() {
+            return Err(RenderError::Cancelled);
+        }
         errors
             .par_iter_mut()
             .zip(&estimates)
@@ -279,7 +285,7 @@ pub(crate) fn render_adaptive(
 
 /// Brings the pixels of one row of the window that `refine` marks to `count` samples, taking each
 /// pixel's surface passes from its first sample; returns the rays traced.
-fn sample_row(
+pub(crate) fn sample_row(
     context: &SampleContext<'_>,
     y: u32,
     row: &mut [PixelEstimate],
