@@ -226,6 +226,30 @@ mod tests {
     }
 
     #[test]
+    fn a_camera_in_the_settings_renders_as_if_the_scene_had_it() {
+        let moved = Camera::orbit(DVec3::ZERO, -70.0, 35.0, 5.0, 30.0);
+        let mut description = scene().into_description();
+        description.camera = moved;
+        let rebuilt = Scene::new(description).unwrap();
+        let through = RenderSettings {
+            camera: Some(moved),
+            spp: 4,
+            ..settings()
+        };
+        let own = RenderSettings {
+            spp: 4,
+            ..settings()
+        };
+        let a = render(&scene(), &through, &NoProgress).unwrap().film;
+        let b = render(&rebuilt, &own, &NoProgress).unwrap().film;
+        assert_eq!(a.pixels(), b.pixels());
+        assert_ne!(
+            a.pixels(),
+            render(&scene(), &own, &NoProgress).unwrap().film.pixels()
+        );
+    }
+
+    #[test]
     fn counts_outside_the_limits_are_refused() {
         let mut film = ProgressiveFilm::new(settings()).unwrap();
         assert_eq!(
