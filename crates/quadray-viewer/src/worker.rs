@@ -59,7 +59,7 @@ pub struct Frame {
     pub mrays_per_s: f64,
     /// Mean relative error of the pixels ([`ProgressiveFilm::mean_relative_error`]), from 8 spp.
     pub error: Option<f64>,
-    /// Time from the request to this frame.
+    /// Time from the worker taking up the request to this frame.
     pub latency: Duration,
 }
 
@@ -206,7 +206,7 @@ impl Looper {
             let result = self.serve(&request, generation, &stale);
             if !stale.cancelled() {
                 if let Err(e) = result {
-                    log::error!("rendering the view failed: {e}");
+                    log::error!("rendering the view failed: {e:#}");
                 }
                 self.shared.busy.store(false, Ordering::SeqCst);
                 (self.notify)();
@@ -215,12 +215,7 @@ impl Looper {
     }
 
     /// Sends the request's frames until it is done or stale.
-    fn serve(
-        &self,
-        request: &Request,
-        generation: u64,
-        stale: &Staleness,
-    ) -> Result<(), RenderError> {
+    fn serve(&self, request: &Request, generation: u64, stale: &Staleness) -> anyhow::Result<()> {
         let started = Instant::now();
         let send = |frame: Frame| {
             let _ = self.send.send(frame);
@@ -259,8 +254,7 @@ impl Looper {
                 stale,
             )?;
             let planes = request.scene.geometry().plane_object_indices();
-            let rgb = pass_rgb8(request.pass, &rendered.film, aovs.as_ref(), &planes)
-                .map_err(|_| RenderError::Cancelled)?;
+            let rgb = pass_rgb8(request.pass, &rendered.film, aovs.as_ref(), &planes)?;
             send(Frame {
                 done: true,
                 ..frame(request.width, request.height, &rgb)
