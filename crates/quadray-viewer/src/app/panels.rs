@@ -127,6 +127,7 @@ impl Viewer {
     /// Resolution, samples, ray rate and error of the frame on screen.
     pub(super) fn status_line(&mut self, ui: &mut egui::Ui) {
         let text = match &self.frame {
+            None if self.error.is_some() => "no scene to show".to_string(),
             None => "loading…".to_string(),
             Some(shown) if shown.frame.preview => format!(
                 "preview {}x{} of {}x{}, 1 spp",
