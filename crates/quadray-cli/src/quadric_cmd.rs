@@ -9,6 +9,11 @@ use clap::{Args, ValueEnum};
 use quadray::{Coefficients, QuadricKind, QuadricSurface, RenderSettings, Scene, Texture};
 use std::path::PathBuf;
 
+/// The explorer's checkerboard colours: a warm white and a deep red.
+pub const CHECKER_EVEN: glam::Vec3 = glam::Vec3::new(0.85, 0.83, 0.78);
+/// The odd squares of the explorer's checkerboard.
+pub const CHECKER_ODD: glam::Vec3 = glam::Vec3::new(0.55, 0.07, 0.06);
+
 /// The explorer's textures (the seed's three, or a plain colour).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum TextureChoice {
@@ -30,8 +35,8 @@ impl TextureChoice {
             TextureChoice::Bands => Texture::Bands { steps: 8 },
             TextureChoice::Checker => Texture::Checker {
                 size: 0.25,
-                even: glam::Vec3::new(0.85, 0.83, 0.78),
-                odd: glam::Vec3::new(0.55, 0.07, 0.06),
+                even: CHECKER_EVEN,
+                odd: CHECKER_ODD,
             },
             TextureChoice::None => Texture::Constant(glam::Vec3::new(0.75, 0.72, 0.66)),
         }

@@ -9,7 +9,7 @@ use glam::DVec3;
 use quadray::{
     ClipBox, Coefficients, QuadricKind, QuadricSurface, SceneDescription, Texture, Transform,
 };
-use quadray_cli::quadric_cmd::TextureChoice;
+use quadray_cli::quadric_cmd::{CHECKER_EVEN, CHECKER_ODD, TextureChoice};
 use quadray_cli::showcase::{GENERAL, Showcase};
 
 /// The surface kinds the explorer offers: the nine named ones and the general quadric.
@@ -148,13 +148,10 @@ impl Explorer {
         match self.texture {
             TextureKind::Ramp => Texture::HeightRamp,
             TextureKind::Bands => Texture::Bands { steps: self.bands },
-            TextureKind::Checker => match TextureChoice::Checker.texture() {
-                Texture::Checker { even, odd, .. } => Texture::Checker {
-                    size: self.checker_size,
-                    even,
-                    odd,
-                },
-                other => other,
+            TextureKind::Checker => Texture::Checker {
+                size: self.checker_size,
+                even: CHECKER_EVEN,
+                odd: CHECKER_ODD,
             },
             TextureKind::Constant => TextureChoice::None.texture(),
         }

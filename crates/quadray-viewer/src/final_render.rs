@@ -85,16 +85,6 @@ impl FinalRender {
             ))),
         }
     }
-
-    /// Waits for the render to finish.
-    pub fn wait(self) -> Result<PathBuf> {
-        self.result.recv().unwrap_or_else(|_| {
-            Err(anyhow::anyhow!(
-                "the render of {} stopped without a result",
-                self.output.display()
-            ))
-        })
-    }
 }
 
 fn render_and_write(

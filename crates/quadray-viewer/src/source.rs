@@ -128,17 +128,6 @@ impl FileSource {
         self.loading = None;
         Some(result)
     }
-
-    /// Waits for the load under way (for tests and one-shot use); `None` when none is.
-    pub fn wait(&mut self) -> Option<Result<LoadedFile>> {
-        let result = self.loading.take()?.recv().unwrap_or_else(|_| {
-            Err(anyhow::anyhow!(
-                "loading {} stopped without a result",
-                self.path.display()
-            ))
-        });
-        Some(result)
-    }
 }
 
 /// The file's modification time and length (`None` when it cannot be read), which change on
