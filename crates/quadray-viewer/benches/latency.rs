@@ -53,11 +53,13 @@ fn main() {
     let mut orbit = Orbit::from_camera(loaded.scene.camera());
     let request = |scene: &Arc<Scene>, orbit: &Orbit, spp: u32, settings: RenderSettings| Request {
         scene: scene.clone(),
-        camera: orbit.camera(),
-        width: SIZE.0,
-        height: SIZE.1,
-        spp,
-        settings,
+        settings: RenderSettings {
+            width: SIZE.0,
+            height: SIZE.1,
+            spp,
+            camera: Some(orbit.camera()),
+            ..settings
+        },
         pass: Pass::Combined,
         preview: true,
     };

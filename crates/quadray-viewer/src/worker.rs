@@ -2,7 +2,7 @@
 //! low-resolution preview, then full-resolution frames refined sample by sample, and drops work
 //! the moment a newer request arrives. The UI thread only posts requests and picks up frames.
 
-use quadray::{Camera, Progress, ProgressiveFilm, RenderError, RenderSettings, Scene};
+use quadray::{Progress, ProgressiveFilm, RenderError, RenderSettings, Scene};
 use quadray_cli::passes::{Pass, pass_rgb8};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -22,15 +22,9 @@ const MAX_PREVIEW_SCALE: u32 = 8;
 pub struct Request {
     /// The scene (shared with the UI, which picks objects in it).
     pub scene: Arc<Scene>,
-    /// The camera to render through.
-    pub camera: Camera,
-    /// Full resolution of the view, pixels.
-    pub width: u32,
-    /// Full resolution of the view, pixels.
-    pub height: u32,
-    /// Samples per pixel to refine to.
-    pub spp: u32,
-    /// Recursion limits and the rest of the scene's render settings.
+    /// The view: its full resolution, its camera ([`RenderSettings::camera`]), the samples per
+    /// pixel to refine to, and the scene's recursion limits. Crop and adaptive sampling are not
+    /// used.
     pub settings: RenderSettings,
     /// The pass shown.
     pub pass: Pass,
@@ -236,10 +230,12 @@ impl Looper {
             error: None,
             latency: started.elapsed(),
         };
+        let (width, height, target) = (
+            request.settings.width,
+            request.settings.height,
+            request.settings.spp,
+        );
         let settings = RenderSettings {
-            width: request.width,
-            height: request.height,
-            camera: Some(request.camera),
             adaptive: None,
             crop: None,
             spp: 1,
@@ -257,25 +253,25 @@ impl Looper {
             let rgb = pass_rgb8(request.pass, &rendered.film, aovs.as_ref(), &planes)?;
             send(Frame {
                 done: true,
-                ..frame(request.width, request.height, &rgb)
+                ..frame(width, height, &rgb)
             });
             return Ok(());
         }
         if request.preview {
-            self.preview(request, &settings, stale, &send, &frame)?;
+            self.preview(&request.scene, &settings, stale, &send, &frame)?;
         }
         let mut film = ProgressiveFilm::new(settings)?;
         let mut rays = 0u64;
         let refine_start = Instant::now();
-        for count in refinement_steps(request.spp) {
+        for count in refinement_steps(target) {
             rays += film.refine(&request.scene, count, stale)?.total();
             let seconds = refine_start.elapsed().as_secs_f64().max(1e-9);
             send(Frame {
                 spp: count,
-                done: count == request.spp,
+                done: count == target,
                 mrays_per_s: rays as f64 / seconds / 1e6,
                 error: film.mean_relative_error(),
-                ..frame(request.width, request.height, &film.film().to_srgb8())
+                ..frame(width, height, &film.film().to_srgb8())
             });
         }
         Ok(())
@@ -285,7 +281,7 @@ impl Looper {
     /// the next preview fits the budget.
     fn preview(
         &self,
-        request: &Request,
+        scene: &Scene,
         settings: &RenderSettings,
         stale: &Staleness,
         send: &dyn Fn(Frame),
@@ -293,8 +289,8 @@ impl Looper {
     ) -> Result<(), RenderError> {
         let scale = self.preview_scale.get();
         let (width, height) = (
-            request.width.div_ceil(scale).max(1),
-            request.height.div_ceil(scale).max(1),
+            settings.width.div_ceil(scale).max(1),
+            settings.height.div_ceil(scale).max(1),
         );
         let started = Instant::now();
         let mut film = ProgressiveFilm::new(RenderSettings {
@@ -302,7 +298,7 @@ impl Looper {
             height,
             ..*settings
         })?;
-        film.refine(&request.scene, 1, stale)?;
+        film.refine(scene, 1, stale)?;
         let took = started.elapsed();
         // Halve or double the pixel count (√2 per axis, rounded) to stay inside the budget.
         if took > PREVIEW_BUDGET && scale < MAX_PREVIEW_SCALE {

@@ -35,9 +35,9 @@ fn step_until(harness: &mut Harness<'_, Viewer>, what: &str, done: impl Fn(&View
 fn refined(viewer: &Viewer) -> bool {
     viewer.frame().is_some_and(|f| {
         f.frame.done
-            && viewer
-                .last_request()
-                .is_some_and(|r| (r.width, r.height) == (f.frame.width, f.frame.height))
+            && viewer.last_request().is_some_and(|r| {
+                (r.settings.width, r.settings.height) == (f.frame.width, f.frame.height)
+            })
     })
 }
 
@@ -50,7 +50,7 @@ fn requested_class(viewer: &Viewer) -> QuadricClass {
 fn moving_a_slider_requests_a_preview_with_the_new_value() {
     let mut harness = harness(Viewer::new(None, 2).unwrap());
     step_until(&mut harness, "the first refined frame", refined);
-    let before = harness.state().last_request().unwrap().camera;
+    let before = harness.state().last_request().unwrap().settings.camera;
     harness
         .get_by_role_and_label(Role::Slider, "yaw")
         .set_value_accesskit(75.0);
@@ -59,8 +59,9 @@ fn moving_a_slider_requests_a_preview_with_the_new_value() {
     assert!((viewer.orbit().yaw - 75.0).abs() < 1e-9);
     let request = viewer.last_request().unwrap();
     assert!(request.preview, "a change starts with a quick preview");
-    assert_ne!(request.camera, before);
-    let eye = request.camera.from - request.camera.to;
+    assert_ne!(request.settings.camera, before);
+    let camera = request.settings.camera.unwrap();
+    let eye = camera.from - camera.to;
     assert!(
         (eye.y.atan2(eye.x).to_degrees() - 75.0).abs() < 1e-6,
         "{eye}"

@@ -329,7 +329,9 @@ impl Viewer {
         let view = self
             .requested
             .as_ref()
-            .map_or((frame.width, frame.height), |r| (r.width, r.height));
+            .map_or((frame.width, frame.height), |r| {
+                (r.settings.width, r.settings.height)
+            });
         self.frame = Some(ShownFrame { frame, view });
     }
 
@@ -350,11 +352,13 @@ impl Viewer {
         };
         Some(Request {
             scene: shown.scene.clone(),
-            camera: self.orbit.camera(),
-            width,
-            height,
-            spp,
-            settings: shown.settings,
+            settings: RenderSettings {
+                width,
+                height,
+                spp,
+                camera: Some(self.orbit.camera()),
+                ..shown.settings
+            },
             pass: self.pass,
             preview: true,
         })
@@ -368,9 +372,8 @@ impl Viewer {
         };
         let same = self.requested.as_ref().is_some_and(|r| {
             Arc::ptr_eq(&r.scene, &wanted.scene)
-                && r.camera == wanted.camera
-                && (r.width, r.height, r.spp, r.pass)
-                    == (wanted.width, wanted.height, wanted.spp, wanted.pass)
+                && r.settings == wanted.settings
+                && r.pass == wanted.pass
         });
         if !same {
             self.generation = self.worker.request(wanted.clone());

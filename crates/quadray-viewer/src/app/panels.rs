@@ -135,7 +135,7 @@ impl Viewer {
             ),
             Some(shown) => {
                 let f = &shown.frame;
-                let target = self.requested.as_ref().map_or(f.spp, |r| r.spp);
+                let target = self.requested.as_ref().map_or(f.spp, |r| r.settings.spp);
                 let mut text = format!(
                     "{}x{}, {}/{} spp, {:.1} Mrays/s",
                     f.width, f.height, f.spp, target, f.mrays_per_s
