@@ -321,17 +321,17 @@ fn emission_is_seen_directly_and_in_mirrors_and_lights_nothing() {
     let mut counts = RayCounts::default();
     let down = |x: f64, z: f64| Ray::new(DVec3::new(x, 0.0, z), -DVec3::Z);
     assert_eq!(
-        whitted.camera_ray(&scene, &down(0.0, 10.0), &mut counts),
+        whitted.camera_ray(&scene, &down(0.0, 10.0), RayCone::POINT, &mut counts),
         glow
     );
     // Down to the mirror at z = 0, back up to the emitter's underside.
     assert_eq!(
-        whitted.camera_ray(&scene, &down(0.0, 3.0), &mut counts),
+        whitted.camera_ray(&scene, &down(0.0, 3.0), RayCone::POINT, &mut counts),
         glow
     );
     assert_eq!(counts.reflection, 1);
     assert_eq!(
-        whitted.camera_ray(&scene, &down(5.0, 10.0), &mut counts),
+        whitted.camera_ray(&scene, &down(5.0, 10.0), RayCone::POINT, &mut counts),
         Vec3::ZERO
     );
 }
@@ -371,17 +371,17 @@ fn reflections_that_miss_see_the_environment() {
     );
     let studio = scene(Some(Vec3::splat(0.5)));
     assert_eq!(
-        whitted.camera_ray(&studio, &up, &mut counts),
+        whitted.camera_ray(&studio, &up, RayCone::POINT, &mut counts),
         Vec3::splat(0.1)
     );
     assert_eq!(
-        whitted.camera_ray(&studio, &down, &mut counts),
+        whitted.camera_ray(&studio, &down, RayCone::POINT, &mut counts),
         Vec3::splat(0.5)
     );
     let plain = scene(None);
     assert_eq!(plain.environment(), Vec3::splat(0.1));
     assert_eq!(
-        whitted.camera_ray(&plain, &down, &mut counts),
+        whitted.camera_ray(&plain, &down, RayCone::POINT, &mut counts),
         Vec3::splat(0.1)
     );
     assert!(
@@ -390,5 +390,101 @@ fn reflections_that_miss_see_the_environment() {
             ..plain.into_description()
         })
         .is_err()
+    );
+}
+
+/// The share of the square [x0, x0 + side] × [y0, y0 + side] that lies on odd cells of a
+/// checker of cell edge `cell` (cells (i, j) with i + j odd), by summing the overlap with every
+/// cell the square touches: an area count independent of the renderer's closed form.
+fn odd_share(x0: f64, y0: f64, side: f64, cell: f64) -> f64 {
+    let cells = |lo: f64| (lo / cell).floor() as i64..=((lo + side) / cell).floor() as i64;
+    let overlap = |lo: f64, k: i64| {
+        ((lo + side).min((k + 1) as f64 * cell) - lo.max(k as f64 * cell)).max(0.0)
+    };
+    let mut odd = 0.0;
+    for i in cells(x0) {
+        for j in cells(y0) {
+            if (i + j).rem_euclid(2) == 1 {
+                odd += overlap(x0, i) * overlap(y0, j);
+            }
+        }
+    }
+    odd / (side * side)
+}
+
+/// A checkerboard seen head-on through an orthographic camera: every pixel's exact value is the
+/// share of its square on odd cells. One filtered sample a pixel averages the texture over
+/// exactly that square, so it gives the pixel integral; point samples alias.
+#[test]
+fn one_filtered_sample_gives_a_checkered_pixel_its_exact_integral() {
+    const SIDE: u32 = 64;
+    const HEIGHT: f64 = 8.0;
+    const CELL: f64 = 0.3;
+    let pixel = HEIGHT / SIDE as f64;
+    let centre = DVec3::new(0.013, 0.021, 10.0);
+    let glowing_checker = Material {
+        texture: Texture::Constant(Vec3::ZERO),
+        emission: Some(Texture::Checker {
+            size: CELL,
+            even: Vec3::ZERO,
+            odd: Vec3::ONE,
+        }),
+        ..Material::default()
+    };
+    let scene = Scene::new(SceneDescription {
+        camera: Camera {
+            from: centre,
+            to: centre - DVec3::Z,
+            up: DVec3::Y,
+            projection: Projection::Orthographic { height: HEIGHT },
+        },
+        background: Vec3::ZERO,
+        environment: None,
+        materials: vec![glowing_checker],
+        lights: vec![],
+        geometry: Geometry {
+            planes: vec![Plane {
+                point: DVec3::ZERO,
+                normal: DVec3::Z,
+                material: 0,
+            }],
+            ..Geometry::default()
+        },
+    })
+    .unwrap();
+    let exact: Vec<f64> = (0..SIDE * SIDE)
+        .map(|k| {
+            let (i, j) = ((k % SIDE) as f64, (k / SIDE) as f64);
+            // +x to the right, +y up the image: row j's top edge is HEIGHT/2 − j·pixel.
+            let x0 = centre.x - HEIGHT / 2.0 + i * pixel;
+            let y0 = centre.y + HEIGHT / 2.0 - (j + 1.0) * pixel;
+            odd_share(x0, y0, pixel, CELL)
+        })
+        .collect();
+    let rmse = |spp: u32, texture_filter: bool| {
+        let settings = RenderSettings {
+            spp,
+            texture_filter,
+            ..settings(SIDE, SIDE)
+        };
+        let film = render(&scene, &settings, &NoProgress).unwrap().film;
+        let squares: f64 = film
+            .pixels()
+            .iter()
+            .zip(&exact)
+            .map(|(p, e)| (p.x as f64 - e).powi(2))
+            .sum();
+        (squares / exact.len() as f64).sqrt()
+    };
+    let filtered = rmse(1, true);
+    assert!(filtered < 1e-5, "one filtered sample: RMSE {filtered:e}");
+    let point = rmse(1, false);
+    assert!(point > 0.1, "one point sample: RMSE {point:e}");
+    // More samples, each a quarter of the pixel wide: jittered boxes no longer tile the pixel
+    // exactly, but they stay closer than as many point samples (measured 0.016 against 0.031).
+    let (filtered, point) = (rmse(16, true), rmse(16, false));
+    assert!(
+        filtered < point / 1.5,
+        "16 spp: {filtered:e} against {point:e}"
     );
 }

@@ -40,7 +40,8 @@ print(round(w * k), round(h * k), kind)" "$scene")
   esac
   (cd "$out" && povray "+I$name.pov" "+O$name.pov.png" "+W$w" "+H$h" -D -V +FN \
       File_Gamma=sRGB -A +WT2 2>"$name.pov.log") || { echo "$name: POV-Ray failed, see $out/$name.pov.log"; continue; }
-  "$quadray" render "$scene" -o "$out/$name.quadray.png" --res "${w}x$h" --spp 1 -q
+  # Point-sampled textures, as POV-Ray samples them (the references filter them; see README).
+  "$quadray" render "$scene" -o "$out/$name.quadray.png" --res "${w}x$h" --spp 1 --texture-filter none -q
   echo "$name: $("$quadray" compare "$out/$name.pov.png" "$out/$name.quadray.png" \
       --diff "$out/$name.diff.png" 2>&1 | tr '\n' ' ')"
 done

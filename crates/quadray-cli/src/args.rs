@@ -75,6 +75,11 @@ pub struct RenderArgs {
     /// Most rays in one reflection chain, camera ray included (overrides the scene).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
     pub max_depth: Option<u32>,
+    /// How the checker and contour bands are sampled: `box` averages them over each sample's
+    /// share of its pixel (carried through mirrors by ray cones); `none` point samples them, as
+    /// POV-Ray does.
+    #[arg(long, value_name = "FILTER", default_value = "box")]
+    pub texture_filter: TextureFilterArg,
     /// Worker threads (default: all cores).
     #[arg(short = 't', long, value_name = "THREADS", value_parser = parse_threads)]
     pub threads: Option<usize>,
@@ -345,4 +350,13 @@ mod tests {
         assert!(thread_pool(Some(0)).is_err());
         assert!(thread_pool(Some(5000)).is_err());
     }
+}
+
+/// `--texture-filter`: how procedural textures with hard edges are sampled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum TextureFilterArg {
+    /// Averaged over each sample's footprint.
+    Box,
+    /// Point sampled.
+    None,
 }

@@ -173,6 +173,7 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
     s.adaptive = args.sampling.resolve(args.spp, s.adaptive)?;
     let mut settings = s.render_settings();
     settings.seed = args.seed;
+    settings.texture_filter = args.texture_filter == crate::args::TextureFilterArg::Box;
     if let Some(crop) = args.crop {
         let window = PixelWindow::from_normalized(crop, settings.width, settings.height)
             .ok_or_else(|| {

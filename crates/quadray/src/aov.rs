@@ -8,6 +8,7 @@
 //! only when asked for: a render without them does no extra work. Two passes describe the sampling
 //! instead of the surface: the pixel's sample count and the variance of its samples.
 
+use crate::footprint::HitFootprint;
 use crate::geometry::Geometry;
 use crate::scene::Scene;
 use crate::shape::SurfaceHit;
@@ -98,14 +99,15 @@ impl AovSample {
     }
 
     /// The selected passes of a camera ray starting at `origin` with direction `dir`, given its
-    /// first hit; `forward` is the camera's unit viewing axis.
+    /// first hit and the footprint the albedo averages over; `forward` is the camera's unit
+    /// viewing axis.
     pub fn from_hit(
         scene: &Scene,
         selection: AovSelection,
-        origin: DVec3,
-        dir: DVec3,
+        (origin, dir): (DVec3, DVec3),
         forward: DVec3,
         hit: Option<&SurfaceHit>,
+        footprint: &HitFootprint,
     ) -> AovSample {
         let Some(hit) = hit else {
             return AovSample::MISS;
@@ -126,7 +128,7 @@ impl AovSample {
             out.normal = n.as_vec3();
         }
         if selection.albedo {
-            out.albedo = scene.albedo(hit);
+            out.albedo = scene.albedo(hit, footprint);
         }
         if selection.object_id {
             out.object_id = scene.geometry().object_index(hit.prim);

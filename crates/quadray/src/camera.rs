@@ -1,5 +1,6 @@
 //! Cameras: perspective look-at, the seed's orbit camera, and orthographic.
 
+use crate::footprint::RayCone;
 use crate::math::{MAX_COORDINATE, Ray};
 use glam::{DMat4, DVec3, DVec4};
 
@@ -153,6 +154,25 @@ impl CameraFrame {
                 self.origin,
                 (self.forward + self.right * sx + self.up * sy).normalize(),
             )
+        }
+    }
+
+    /// The cone of a camera sample standing for `scale` of a pixel's width, in an image
+    /// `image_height` pixels high: a pinhole's cones start as points and spread by the pixel's
+    /// angle at the image centre; an orthographic camera's keep the pixel's width.
+    pub fn pixel_cone(&self, image_height: u32, scale: f64) -> RayCone {
+        // `up` spans half the image height (at unit distance for a pinhole).
+        let pixel = 2.0 * self.up.length() / image_height.max(1) as f64 * scale;
+        if self.orthographic {
+            RayCone {
+                width: pixel,
+                spread: 0.0,
+            }
+        } else {
+            RayCone {
+                width: 0.0,
+                spread: pixel,
+            }
         }
     }
 

@@ -233,6 +233,25 @@ impl Geometry {
         }
     }
 
+    /// The larger principal curvature of `prim` at world-space `point` (inverse world units):
+    /// computed in the primitive's own space, then divided by the instances' mean scales
+    /// (exact for similarity transforms; 0 for planes and triangles, which are flat).
+    pub fn curvature(&self, prim: PrimRef, path: &InstancePath, point: DVec3) -> f64 {
+        let level = match path.is_empty() {
+            true => self.level(0),
+            false => self.level(path.level(self)),
+        };
+        let local = || self.point_to_level(path, point);
+        let curvature = match prim.local {
+            LocalPrim::Sphere(i) => level.spheres[i as usize].curvature(),
+            LocalPrim::Quadric(i) => level.quadrics[i as usize].curvature(local()),
+            LocalPrim::Triangle { .. } | LocalPrim::Plane(_) => return 0.0,
+        };
+        path.instances(self).fold(curvature, |k, inst| {
+            k / inst.transform.to_world.matrix3.determinant().abs().cbrt()
+        })
+    }
+
     /// Interpolated vertex attributes at world-space `point` on `prim` (texture coordinates and
     /// colours exist only on meshes; other primitives get the defaults).
     #[inline]

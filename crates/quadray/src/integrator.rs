@@ -1,5 +1,6 @@
 //! Whitted-style recursive ray tracing: local Phong/Blinn shading with hard shadows, plus mirror reflection.
 
+use crate::footprint::{HitFootprint, RayCone};
 use crate::material::SpecularModel;
 use crate::math::{Ray, offset_origin};
 use crate::scene::Scene;
@@ -52,10 +53,17 @@ impl Default for Whitted {
 }
 
 impl Whitted {
-    /// Radiance arriving along a camera ray.
-    pub fn camera_ray(&self, scene: &Scene, ray: &Ray, counts: &mut RayCounts) -> Vec3 {
+    /// Radiance arriving along a camera ray whose sample stands for `cone` ([`RayCone::POINT`]
+    /// in scenes without filtered textures).
+    pub fn camera_ray(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        cone: RayCone,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
         counts.camera += 1;
-        self.radiance(scene, ray, None, 1, 1.0, counts)
+        self.radiance(scene, ray, cone, None, 1, 1.0, counts)
     }
 
     /// Radiance arriving along a camera ray, and the ray's first hit (for the AOV passes, which
@@ -64,12 +72,13 @@ impl Whitted {
         &self,
         scene: &Scene,
         ray: &Ray,
+        cone: RayCone,
         counts: &mut RayCounts,
     ) -> (Vec3, Option<SurfaceHit>) {
         counts.camera += 1;
         let hit = self.intersect(scene, ray, None);
         let radiance = match &hit {
-            Some(h) => self.shade(scene, ray, h, 1, 1.0, counts),
+            Some(h) => self.shade(scene, ray, cone, h, 1, 1.0, counts),
             None => scene.background(),
         };
         (radiance, hit)
@@ -80,28 +89,34 @@ impl Whitted {
         scene.intersect_from(ray, from)
     }
 
-    /// Radiance along `ray`, the `depth`-th ray of its chain, whose contribution is weighted by `throughput`.
+    /// Radiance along `ray` (with its `cone`), the `depth`-th ray of its chain, whose contribution
+    /// is weighted by `throughput`.
+    #[allow(clippy::too_many_arguments)]
     fn radiance(
         &self,
         scene: &Scene,
         ray: &Ray,
+        cone: RayCone,
         from: Option<PrimRef>,
         depth: u32,
         throughput: f32,
         counts: &mut RayCounts,
     ) -> Vec3 {
         match self.intersect(scene, ray, from) {
-            Some(hit) => self.shade(scene, ray, &hit, depth, throughput, counts),
+            Some(hit) => self.shade(scene, ray, cone, &hit, depth, throughput, counts),
             None if depth > 1 => scene.environment(),
             None => scene.background(),
         }
     }
 
-    /// Radiance leaving `hit` back along `ray`: local shading plus the mirror reflection.
+    /// Radiance leaving `hit` back along `ray` (with its `cone`): local shading plus the mirror
+    /// reflection.
+    #[allow(clippy::too_many_arguments)]
     fn shade(
         &self,
         scene: &Scene,
         ray: &Ray,
+        cone: RayCone,
         hit: &SurfaceHit,
         depth: u32,
         throughput: f32,
@@ -109,8 +124,15 @@ impl Whitted {
     ) -> Vec3 {
         let m = &scene.materials()[hit.material as usize];
         let g = &hit.geometry;
-        let base = scene.albedo(hit);
         let incoming = ray.dir.normalize();
+        // Rays carry cones only in scenes with filtered textures; elsewhere this costs nothing.
+        let distance = if cone.is_point() {
+            0.0
+        } else {
+            hit.t * ray.dir.length()
+        };
+        let footprint = HitFootprint::new(&cone, incoming, distance);
+        let base = scene.albedo(hit, &footprint);
         let view = -incoming;
         // Two-sided shading: face both normals towards the viewer.
         let facing = if g.geometric_normal.dot(view) >= 0.0 {
@@ -123,7 +145,7 @@ impl Whitted {
         let matte = 1.0 - m.reflectivity;
         let mut color = base * (m.ambient * matte);
         if m.emission.is_some() {
-            color += scene.emitted(hit);
+            color += scene.emitted(hit, &footprint);
         }
 
         let highlight = m.highlight_color(base);
@@ -169,8 +191,20 @@ impl Whitted {
             }
             counts.reflection += 1;
             let reflected = Ray::new(offset_origin(g.point, ng, g.error, dir), dir);
-            color += self.radiance(scene, &reflected, Some(hit.prim), depth + 1, weight, counts)
-                * m.reflection_color(base);
+            let reflected_cone = if cone.is_point() {
+                cone
+            } else {
+                cone.reflected(distance, scene.curvature(hit))
+            };
+            color += self.radiance(
+                scene,
+                &reflected,
+                reflected_cone,
+                Some(hit.prim),
+                depth + 1,
+                weight,
+                counts,
+            ) * m.reflection_color(base);
         }
         color
     }

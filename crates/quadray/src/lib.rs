@@ -52,6 +52,7 @@ pub mod adaptive;
 pub mod aov;
 pub mod camera;
 pub mod film;
+pub mod footprint;
 pub mod geometry;
 pub mod image_texture;
 pub mod instance;
@@ -76,6 +77,7 @@ pub use adaptive::{Adaptive, AdaptiveError, SamplingStats};
 pub use aov::{AovSample, AovSelection, Aovs};
 pub use camera::{Camera, CameraError, CameraFrame, Projection};
 pub use film::Film;
+pub use footprint::{HitFootprint, RayCone};
 pub use geometry::{Geometry, Level, Prototype};
 pub use image_texture::{ColorEncoding, Filter, Image, ImageError, ImageMap, Wrap};
 pub use instance::{

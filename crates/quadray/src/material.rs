@@ -1,6 +1,6 @@
 //! The Whitted material: ambient, Lambert diffuse, Phong or Blinn specular, mirror reflection.
 
-use crate::texture::{Texture, TexturePoint, VertexAttributes};
+use crate::texture::{Texture, TextureExtent, TexturePoint, VertexAttributes};
 use glam::Vec3;
 
 /// Index of a material in [`crate::Scene::materials`].
@@ -53,11 +53,11 @@ pub struct Material {
 
 impl Material {
     /// The base colour (albedo) at a hit: the texture times the vertex colour. `point` is asked
-    /// for only by the procedural textures that read it.
+    /// for only by the procedural textures that read it ([`Texture::eval_at`]).
     #[inline]
     pub fn base_color(
         &self,
-        point: impl FnOnce() -> TexturePoint,
+        point: impl FnOnce(bool) -> (TexturePoint, TextureExtent),
         attributes: &VertexAttributes,
     ) -> Vec3 {
         self.texture.eval_at(point, attributes) * attributes.color.truncate()
@@ -145,7 +145,7 @@ mod tests {
             color: Vec4::new(1.0, 0.5, 1.0, 1.0),
             ..VertexAttributes::default()
         };
-        let base = m.base_color(|| p, &a);
+        let base = m.base_color(|_| (p, TextureExtent::POINT), &a);
         assert_eq!(base, Vec3::new(0.5, 0.5, 1.0));
         assert_eq!(m.reflection_color(base), Vec3::new(0.25, 0.25, 0.5));
         let coating = Material {

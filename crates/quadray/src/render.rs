@@ -4,6 +4,7 @@ use crate::adaptive::{self, Adaptive, AdaptiveError, SamplingStats};
 use crate::aov::{AovSample, AovSelection, Aovs};
 use crate::camera::CameraFrame;
 use crate::film::{Film, PixelEstimate};
+use crate::footprint::{HitFootprint, RayCone, footprint_scale};
 use crate::integrator::{RayCounts, Whitted};
 use crate::sampler::{pixel_pattern, sample_2d};
 use crate::scene::Scene;
@@ -45,6 +46,9 @@ pub struct RenderSettings {
     /// A camera to render through instead of the scene's (an interactive view that moved away
     /// from it), so the scene and its acceleration structure need not be rebuilt.
     pub camera: Option<crate::camera::Camera>,
+    /// Whether the checker and contour bands are averaged over each sample's footprint
+    /// ([`crate::footprint`]); off, they are point sampled, as POV-Ray samples them.
+    pub texture_filter: bool,
 }
 
 /// A rectangle of pixels inside the full image: columns `x0..x1`, rows `y0..y1` (half-open),
@@ -124,6 +128,7 @@ impl Default for RenderSettings {
             crop: None,
             adaptive: None,
             camera: None,
+            texture_filter: true,
         }
     }
 }
@@ -312,12 +317,26 @@ impl<'a> SampleContext<'a> {
         SampleContext { window, ..*self }
     }
 
-    /// The radiance of the camera ray through `(dx, dy)` inside pixel `(x, y)` of the full image;
-    /// with `aov`, also the pixel's surface passes from the ray's first hit.
+    /// The cone of each camera sample of a pixel that takes `samples` of them
+    /// ([`footprint_scale`]), or [`RayCone::POINT`] when no texture of the scene is filtered or
+    /// filtering is off.
+    pub fn sample_cone(&self, samples: u32) -> RayCone {
+        if self.settings.texture_filter && self.scene.filters_textures() {
+            self.camera
+                .pixel_cone(self.settings.height, footprint_scale(samples))
+        } else {
+            RayCone::POINT
+        }
+    }
+
+    /// The radiance of the camera ray through `(dx, dy)` inside pixel `(x, y)` of the full image,
+    /// for a sample standing for `cone`; with `aov`, also the pixel's surface passes from the
+    /// ray's first hit (its albedo averaged over the whole pixel, as one sample gives the pass).
     pub fn trace(
         &self,
         (x, y): (u32, u32),
         (dx, dy): (f64, f64),
+        cone: RayCone,
         aov: Option<&mut AovSample>,
         counts: &mut RayCounts,
     ) -> Vec3 {
@@ -326,18 +345,26 @@ impl<'a> SampleContext<'a> {
         let whitted = &self.settings.whitted;
         match aov {
             Some(aov) => {
-                let (radiance, hit) = whitted.camera_ray_hit(self.scene, &ray, counts);
+                let (radiance, hit) = whitted.camera_ray_hit(self.scene, &ray, cone, counts);
+                let footprint = match &hit {
+                    Some(hit) if !cone.is_point() => HitFootprint::new(
+                        &self.sample_cone(1),
+                        ray.dir.normalize(),
+                        hit.t * ray.dir.length(),
+                    ),
+                    _ => HitFootprint::POINT,
+                };
                 *aov = AovSample::from_hit(
                     self.scene,
                     self.selection,
-                    ray.origin,
-                    ray.dir,
+                    (ray.origin, ray.dir),
                     self.forward,
                     hit.as_ref(),
+                    &footprint,
                 );
                 radiance
             }
-            None => whitted.camera_ray(self.scene, &ray, counts),
+            None => whitted.camera_ray(self.scene, &ray, cone, counts),
         }
     }
 
@@ -393,6 +420,7 @@ fn render_uniform(
     let totals = Mutex::new(RayCounts::default());
     let spp = settings.spp;
     let inv_spp = 1.0 / spp as f32;
+    let cone = context.sample_cone(spp);
     film.pixels_mut()
         .par_chunks_mut(ww)
         .zip(aov_rows)
@@ -415,7 +443,7 @@ fn render_uniform(
                 for s in 0..spp {
                     let offset = sample_2d(s, spp, pattern);
                     let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
-                    let radiance = context.trace((x, y), offset, first_hit, &mut counts);
+                    let radiance = context.trace((x, y), offset, cone, first_hit, &mut counts);
                     if let Some(e) = &mut estimate {
                         e.add(radiance);
                     }

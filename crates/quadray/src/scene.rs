@@ -2,6 +2,7 @@
 
 use crate::accel::{Accel, max_abs_coordinate};
 use crate::camera::{Camera, CameraError, Projection};
+use crate::footprint::HitFootprint;
 use crate::geometry::Geometry;
 use crate::instance::{InstancePath, PlacementError};
 use crate::light::Light;
@@ -9,7 +10,7 @@ use crate::material::Material;
 use crate::math::{Ray, offset_origin};
 use crate::mesh::Mesh;
 use crate::shape::{PrimRef, SurfaceHit};
-use crate::texture::Texture;
+use crate::texture::{Texture, TextureExtent};
 use glam::Vec3;
 
 pub use crate::math::MAX_COORDINATE;
@@ -76,6 +77,9 @@ pub struct Scene {
     accel: Accel,
     /// Whether any mesh is single-sided: only then do closest hits check for back faces.
     single_sided: bool,
+    /// Whether any material has a texture that is filtered over ray cones: only then do rays
+    /// carry cones.
+    filters_textures: bool,
 }
 
 /// Which colour [`Scene::colour_at`] looks up.
@@ -159,6 +163,9 @@ impl Scene {
         let accel = Accel::build_with(&d.geometry, layout, origin_extent);
         let single_sided = (0..d.geometry.level_count())
             .any(|l| d.geometry.level(l).meshes.iter().any(Mesh::single_sided));
+        let filters_textures = d.materials.iter().any(|m| {
+            m.texture.is_filtered() || m.emission.as_ref().is_some_and(Texture::is_filtered)
+        });
         Ok(Scene {
             camera: d.camera,
             background: d.background,
@@ -168,6 +175,7 @@ impl Scene {
             geometry: d.geometry,
             accel,
             single_sided,
+            filters_textures,
         })
     }
 
@@ -214,26 +222,45 @@ impl Scene {
         }
     }
 
-    /// The base colour (albedo) at a hit: its material's texture times the hit's vertex colour.
+    /// Whether any material's texture is filtered over the samples' footprints (a checker or
+    /// contour bands): only then do rays carry [`RayCone`]s.
+    pub fn filters_textures(&self) -> bool {
+        self.filters_textures
+    }
+
+    /// The base colour (albedo) at a hit: its material's texture, averaged over `footprint`,
+    /// times the hit's vertex colour.
     #[inline(always)]
-    pub fn albedo(&self, hit: &SurfaceHit) -> Vec3 {
-        self.colour_at(hit, HitColour::Base(&self.materials[hit.material as usize]))
+    pub fn albedo(&self, hit: &SurfaceHit, footprint: &HitFootprint) -> Vec3 {
+        self.colour_at(
+            hit,
+            footprint,
+            HitColour::Base(&self.materials[hit.material as usize]),
+        )
     }
 
     /// The radiance the hit's surface gives off itself (zero for most materials).
     #[inline(never)]
-    pub fn emitted(&self, hit: &SurfaceHit) -> Vec3 {
+    pub fn emitted(&self, hit: &SurfaceHit, footprint: &HitFootprint) -> Vec3 {
         match &self.materials[hit.material as usize].emission {
             None => Vec3::ZERO,
             Some(Texture::Constant(c)) => *c,
-            Some(texture) => self.colour_at(hit, HitColour::Texture(texture)),
+            Some(texture) => self.colour_at(hit, footprint, HitColour::Texture(texture)),
         }
     }
 
+    /// The larger principal curvature of `hit`'s surface at its point (inverse world units; 0 for
+    /// planes and triangles), which widens the cones of mirror reflections.
+    pub fn curvature(&self, hit: &SurfaceHit) -> f64 {
+        let path = self.path(hit.prim);
+        self.geometry.curvature(hit.prim, &path, hit.geometry.point)
+    }
+
     /// A colour at a hit: the vertex attributes are interpolated at once (defaults off meshes),
-    /// the texture point only for the procedural textures that read it.
+    /// the texture point only for the procedural textures that read it, and the footprint's
+    /// extent in texture space only for those filtered over it.
     #[inline(always)]
-    fn colour_at(&self, hit: &SurfaceHit, colour: HitColour<'_>) -> Vec3 {
+    fn colour_at(&self, hit: &SurfaceHit, footprint: &HitFootprint, colour: HitColour<'_>) -> Vec3 {
         let point = hit.geometry.point;
         let decoded;
         let path = match hit.prim.placement {
@@ -244,7 +271,18 @@ impl Scene {
             }
         };
         let attributes = self.geometry.attributes(hit.prim, path, point);
-        let texture_point = || self.geometry.texture_point(hit.prim, path, point);
+        let texture_point = |filtered: bool| {
+            let at = |p| self.geometry.texture_point(hit.prim, path, p);
+            let centre = at(point);
+            if !filtered || footprint.is_point() {
+                return (centre, TextureExtent::POINT);
+            }
+            // The texture maps are affine (or nearly so over a footprint): the texture points at
+            // the ends of the footprint's axes give its extent in texture space.
+            let (ax, ay) = footprint.axes(hit.geometry.geometric_normal);
+            let extent = TextureExtent::spanned(&centre, &at(point + ax), &at(point + ay));
+            (centre, extent)
+        };
         match colour {
             HitColour::Base(material) => material.base_color(texture_point, &attributes),
             HitColour::Texture(texture) => texture.eval_at(texture_point, &attributes),

@@ -77,6 +77,11 @@ impl Sphere {
         }
     }
 
+    /// Curvature, the same in every direction: one over the radius.
+    pub fn curvature(&self) -> f64 {
+        1.0 / self.radius
+    }
+
     /// Axis-aligned bounds, world space.
     pub fn bounds(&self) -> (DVec3, DVec3) {
         (

@@ -12,6 +12,36 @@ pub struct TexturePoint {
     pub height: f32,
 }
 
+/// How far around a [`TexturePoint`] a sample's footprint reaches: half-widths of the box, in
+/// the same coordinates, over which a filtered texture averages.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TextureExtent {
+    /// Half-widths along the object frame's axes.
+    pub local: DVec3,
+    /// Half-width in normalised height.
+    pub height: f32,
+}
+
+impl TextureExtent {
+    /// No extent: the texture is point sampled.
+    pub const POINT: TextureExtent = TextureExtent {
+        local: DVec3::ZERO,
+        height: 0.0,
+    };
+
+    /// The box around `centre` that holds the footprint spanned by the texture points `centre`,
+    /// `along_x` and `along_y` (the footprint's centre and the ends of its two axes): half the
+    /// sum of the axes' absolute extents, per coordinate.
+    pub fn spanned(centre: &TexturePoint, along_x: &TexturePoint, along_y: &TexturePoint) -> Self {
+        TextureExtent {
+            local: 0.5
+                * ((along_x.local - centre.local).abs() + (along_y.local - centre.local).abs()),
+            height: 0.5
+                * ((along_x.height - centre.height).abs() + (along_y.height - centre.height).abs()),
+        }
+    }
+}
+
 /// Per-vertex data interpolated at a hit: texture coordinates and vertex colour.
 ///
 /// Only meshes carry them; analytic shapes (and meshes without the attribute) use the
@@ -89,18 +119,118 @@ pub fn lighten(c: Vec3) -> Vec3 {
     c.lerp(Vec3::ONE, 0.5)
 }
 
+/// The band (0 to `steps` − 1) holding height `h`: band k covers [k/n, (k+1)/n), heights below 0
+/// fall in the first and the top edge and above in the last.
+fn band_of(h: f32, steps: u32) -> u32 {
+    let n = steps.max(1) as f32;
+    (h.clamp(0.0, 1.0) * n).floor().min(n - 1.0) as u32
+}
+
+/// The colour of band `k` of `steps`: the ramp at the band's place in the sequence.
+fn band_colour(k: u32, steps: u32) -> Vec3 {
+    if steps <= 1 {
+        height_ramp(0.5)
+    } else {
+        height_ramp(k as f32 / (steps - 1) as f32)
+    }
+}
+
+/// Beyond this many bands under one footprint, the bands average as the ramp they step through.
+const MAX_SUMMED_BANDS: u32 = 64;
+
+/// The mean band colour over heights [h − w, h + w]: each band's colour weighted by its overlap
+/// (the clamped ends included), or the ramp's mean where the footprint covers too many bands for
+/// their steps to matter.
+fn filtered_bands(h: f32, w: f32, steps: u32) -> Vec3 {
+    let steps = steps.max(1);
+    let (lo, hi) = (h - w, h + w);
+    // A footprint too thin to widen the height in f32 is a point sample.
+    if hi.is_nan() || hi <= lo {
+        return band_colour(band_of(h, steps), steps);
+    }
+    let (first, last) = (band_of(lo, steps), band_of(hi, steps));
+    if last - first > MAX_SUMMED_BANDS {
+        return (ramp_integral(hi) - ramp_integral(lo)) / (hi - lo);
+    }
+    let n = steps as f32;
+    let mut sum = Vec3::ZERO;
+    for k in first..=last {
+        // Band k's interval, opened out to ±∞ at the ends where the clamp extends it.
+        let start = if k == 0 { lo } else { (k as f32 / n).max(lo) };
+        let end = if k + 1 == steps {
+            hi
+        } else {
+            ((k + 1) as f32 / n).min(hi)
+        };
+        if end > start {
+            sum += band_colour(k, steps) * (end - start);
+        }
+    }
+    sum / (hi - lo)
+}
+
+/// ∫₀ʰ of the clamped height ramp: the ramp is linear on [0, ½] and [½, 1] and constant outside.
+fn ramp_integral(h: f32) -> Vec3 {
+    // ∫₀ˣ (R₀ + (R₁ − R₀)·2s) ds = R₀x + (R₁ − R₀)x² on each linear half.
+    let half = |x: f32, from: Vec3, to: Vec3| from * x + (to - from) * (x * x);
+    let at_half = half(0.5, RAMP[0], RAMP[1]);
+    let at_one = at_half + half(0.5, RAMP[1], RAMP[2]);
+    if h <= 0.0 {
+        RAMP[0] * h
+    } else if h <= 0.5 {
+        half(h, RAMP[0], RAMP[1])
+    } else if h <= 1.0 {
+        at_half + half(h - 0.5, RAMP[1], RAMP[2])
+    } else {
+        at_one + RAMP[2] * (h - 1.0)
+    }
+}
+
+/// The mean over [x − w, x + w] of the square wave that is +1 on even cells [2k, 2k + 1) and −1 on
+/// odd ones: the change of its integral, a triangle wave, over the interval's width.
+fn square_wave_mean(x: f64, w: f64) -> f64 {
+    if w <= 0.0 {
+        return if x.floor().rem_euclid(2.0) == 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+    }
+    // ∫₀ˣ of the wave: rises on even cells, falls on odd ones, period 2.
+    let integral = |x: f64| {
+        let m = x - 2.0 * (0.5 * x).floor();
+        if m < 1.0 { m } else { 2.0 - m }
+    };
+    // Far from the origin the two integrals cancel badly; the mean stays a mean.
+    ((integral(x + w) - integral(x - w)) / (2.0 * w)).clamp(-1.0, 1.0)
+}
+
 impl Texture {
-    /// The colour at `p`, whose interpolated vertex attributes are `attributes`.
+    /// The colour at `p`, averaged over `extent` around it (a point sample when the extent is
+    /// zero), whose interpolated vertex attributes are `attributes`.
     #[inline]
-    pub fn eval(&self, p: &TexturePoint, attributes: &VertexAttributes) -> Vec3 {
+    pub fn eval(
+        &self,
+        p: &TexturePoint,
+        extent: &TextureExtent,
+        attributes: &VertexAttributes,
+    ) -> Vec3 {
         match self {
             Texture::Constant(c) => *c,
             Texture::HeightRamp => height_ramp(p.height),
-            Texture::Bands { steps } => {
-                let n = (*steps).max(1) as f32;
-                // Band k covers [k/n, (k+1)/n) and shows the ramp at its centre; the top edge joins the last band.
-                let k = (p.height.clamp(0.0, 1.0) * n).floor().min(n - 1.0);
-                height_ramp(if n == 1.0 { 0.5 } else { k / (n - 1.0) })
+            Texture::Bands { steps } if extent.height > 0.0 => {
+                filtered_bands(p.height, extent.height, *steps)
+            }
+            Texture::Bands { steps } => band_colour(band_of(p.height, *steps), *steps),
+            Texture::Checker { size, even, odd } if extent.local != DVec3::ZERO => {
+                // The checker is the product of three square waves, and a box average of a
+                // product of functions of one axis each is the product of their averages.
+                let q = p.local / *size;
+                let w = extent.local / *size;
+                let sign = square_wave_mean(q.x, w.x)
+                    * square_wave_mean(q.y, w.y)
+                    * square_wave_mean(q.z, w.z);
+                even.lerp(*odd, (0.5 - 0.5 * sign) as f32)
             }
             Texture::Checker { size, even, odd } => {
                 // Integer parity of the cell (the float fmod of rem_euclid showed up in profiles).
@@ -115,23 +245,33 @@ impl Texture {
         }
     }
 
-    /// The colour at a hit whose interpolated vertex attributes are `attributes`; `point` is asked
-    /// for only by the procedural textures that read it.
+    /// The colour at a hit whose interpolated vertex attributes are `attributes`. `point` is asked
+    /// only by the procedural textures that read it: `point(filtered)` gives the texture point,
+    /// and when `filtered` also the extent of the sample's footprint around it.
     #[inline]
     pub fn eval_at(
         &self,
-        point: impl FnOnce() -> TexturePoint,
+        point: impl FnOnce(bool) -> (TexturePoint, TextureExtent),
         attributes: &VertexAttributes,
     ) -> Vec3 {
-        let p = if self.reads_point() {
-            point()
+        let (p, extent) = if self.reads_point() {
+            point(self.is_filtered())
         } else {
-            TexturePoint {
-                local: glam::DVec3::ZERO,
-                height: 0.0,
-            }
+            (
+                TexturePoint {
+                    local: glam::DVec3::ZERO,
+                    height: 0.0,
+                },
+                TextureExtent::POINT,
+            )
         };
-        self.eval(&p, attributes)
+        self.eval(&p, &extent, attributes)
+    }
+
+    /// Whether the texture averages over a footprint (the ones with hard edges: bands and
+    /// checker; the ramp is smooth and images have their own filters).
+    pub fn is_filtered(&self) -> bool {
+        matches!(self, Texture::Bands { .. } | Texture::Checker { .. })
     }
 
     /// Whether the colour depends on the hit's [`TexturePoint`] (the procedural textures do;
@@ -162,7 +302,7 @@ mod tests {
 
     /// Evaluates without vertex attributes, as for an analytic shape.
     fn eval(t: &Texture, p: &TexturePoint) -> Vec3 {
-        t.eval(p, &VertexAttributes::default())
+        t.eval(p, &TextureExtent::POINT, &VertexAttributes::default())
     }
 
     #[test]
@@ -204,6 +344,124 @@ mod tests {
         assert_eq!(c(0.6, 0.6, 0.1), Vec3::ZERO);
     }
 
+    /// The mean of the point-sampled texture over the extent's box, by the midpoint rule on a
+    /// fine grid (the axes with no extent are not sampled).
+    fn brute_mean(t: &Texture, p: &TexturePoint, e: &TextureExtent) -> Vec3 {
+        const N: usize = 200;
+        let offset = |i: usize, w: f64| w * (2.0 * (i as f64 + 0.5) / N as f64 - 1.0);
+        let mut sum = Vec3::ZERO;
+        for i in 0..N {
+            for j in 0..N {
+                let local = p.local + DVec3::new(offset(i, e.local.x), offset(j, e.local.y), 0.0);
+                let height = p.height + offset(i, e.height as f64) as f32;
+                sum += eval(t, &TexturePoint { local, height });
+            }
+        }
+        sum / (N * N) as f32
+    }
+
+    #[test]
+    fn filtered_checker_is_the_mean_over_the_footprint() {
+        let t = Texture::Checker {
+            size: 0.5,
+            even: Vec3::new(0.9, 0.1, 0.2),
+            odd: Vec3::new(0.1, 0.3, 0.8),
+        };
+        for (x, y, wx, wy) in [
+            (0.2, 0.3, 0.1, 0.05),
+            (0.49, -0.02, 0.3, 0.3),
+            (-3.7, 12.1, 0.02, 1.7),
+            (100.26, -7.5, 5.0, 0.01),
+        ] {
+            let p = TexturePoint {
+                local: DVec3::new(x, y, 0.1),
+                height: 0.0,
+            };
+            let e = TextureExtent {
+                local: DVec3::new(wx, wy, 0.0),
+                height: 0.0,
+            };
+            let filtered = t.eval(&p, &e, &VertexAttributes::default());
+            let brute = brute_mean(&t, &p, &e);
+            assert!(
+                (filtered - brute).abs().max_element() < 0.01,
+                "({x}, {y}) ± ({wx}, {wy}): {filtered} against {brute}"
+            );
+        }
+        // Far wider than a cell, the checker averages to the mean of its two colours.
+        let wide = TextureExtent {
+            local: DVec3::new(1000.0, 1000.0, 0.0),
+            height: 0.0,
+        };
+        let p = at(0.0);
+        let mean = t.eval(&p, &wide, &VertexAttributes::default());
+        assert!((mean - Vec3::new(0.5, 0.2, 0.5)).abs().max_element() < 1e-3);
+    }
+
+    #[test]
+    fn filtered_bands_are_the_mean_over_the_footprint() {
+        let t = Texture::Bands { steps: 8 };
+        for (h, w) in [
+            (0.5, 0.01),
+            (0.3, 0.2),
+            (0.02, 0.1),
+            (0.97, 0.3),
+            (-0.5, 0.2),
+            (0.5, 2.0),
+        ] {
+            let p = at(h);
+            let e = TextureExtent {
+                local: DVec3::ZERO,
+                height: w,
+            };
+            let filtered = t.eval(&p, &e, &VertexAttributes::default());
+            let brute = brute_mean(&t, &p, &e);
+            assert!(
+                (filtered - brute).abs().max_element() < 0.01,
+                "{h} ± {w}: {filtered} against {brute}"
+            );
+        }
+        // Inside one band the filter changes nothing.
+        let inside = TextureExtent {
+            local: DVec3::ZERO,
+            height: 0.01,
+        };
+        assert_eq!(
+            t.eval(&at(0.3), &inside, &VertexAttributes::default()),
+            eval(&t, &at(0.3))
+        );
+        // A footprint over thousands of bands averages as the ramp itself.
+        let fine = Texture::Bands { steps: 100_000 };
+        let e = TextureExtent {
+            local: DVec3::ZERO,
+            height: 0.25,
+        };
+        let filtered = fine.eval(&at(0.5), &e, &VertexAttributes::default());
+        let ramp = brute_mean(&Texture::HeightRamp, &at(0.5), &e);
+        assert!(
+            (filtered - ramp).abs().max_element() < 1e-3,
+            "{filtered} against {ramp}"
+        );
+    }
+
+    #[test]
+    fn a_point_extent_is_the_point_sample() {
+        let t = Texture::Checker {
+            size: 1.0,
+            even: Vec3::ZERO,
+            odd: Vec3::ONE,
+        };
+        let p = TexturePoint {
+            local: DVec3::new(0.5, 1.5, 0.0),
+            height: 0.4,
+        };
+        assert_eq!(
+            t.eval(&p, &TextureExtent::POINT, &VertexAttributes::default()),
+            Vec3::ONE
+        );
+        assert!(square_wave_mean(1e17, 1e-3).abs() <= 1.0);
+    }
+
     #[test]
     fn image_texture_reads_uv_and_scales_by_factor() {
         use crate::image_texture::{ColorEncoding, Filter, Image, Wrap};
@@ -227,8 +485,14 @@ mod tests {
             uv: [Vec2::new(u, 0.5), Vec2::ZERO],
             color: Vec4::ONE,
         };
-        assert_eq!(t.eval(&at(0.0), &with_uv(0.2)), Vec3::new(1.0, 0.5, 0.25));
-        assert_eq!(t.eval(&at(0.0), &with_uv(0.7)), Vec3::ZERO);
+        assert_eq!(
+            t.eval(&at(0.0), &TextureExtent::POINT, &with_uv(0.2)),
+            Vec3::new(1.0, 0.5, 0.25)
+        );
+        assert_eq!(
+            t.eval(&at(0.0), &TextureExtent::POINT, &with_uv(0.7)),
+            Vec3::ZERO
+        );
         assert!(!t.is_constant());
     }
 }

@@ -294,6 +294,8 @@ pub(crate) fn sample_row(
     count: u32,
 ) -> RayCounts {
     let mut counts = RayCounts::default();
+    // The samples a round adds stand for their share of the pixel at the round's count.
+    let cone = context.sample_cone(count);
     for (column, estimate) in row.iter_mut().enumerate() {
         if !refine[column] {
             continue;
@@ -306,7 +308,7 @@ pub(crate) fn sample_row(
                 _ => None,
             };
             let offset = progressive_2d(index, pattern);
-            estimate.add(context.trace((x, y), offset, first_hit, &mut counts));
+            estimate.add(context.trace((x, y), offset, cone, first_hit, &mut counts));
         }
     }
     counts

@@ -27,7 +27,7 @@ pub use conditioning::{ROUNDING_WARNING, RoundingSensitivity};
 pub use given::{ClipBox, Coefficients, QuadricKind, QuadricSurface};
 
 use crate::material::MaterialId;
-use crate::math::{Ray, Transform, discriminant, gamma, slab_interval};
+use crate::math::{Ray, Transform, discriminant, gamma, orthonormal_basis, slab_interval};
 use crate::shape::{SurfaceGeometry, normal_or};
 use crate::texture::TexturePoint;
 use glam::{DAffine3, DMat3, DVec3};
@@ -392,6 +392,33 @@ impl Quadric {
             local: self.transform.from_world.transform_point3(point),
             height,
         }
+    }
+
+    /// The larger principal curvature, in magnitude, at a surface point (world units of the
+    /// quadric's own space; 0 where the gradient vanishes, at a cone's apex).
+    ///
+    /// With f(p) = uᵀAu + 2bᵀu + c and u = L(p − T) − c/h, the world gradient is 2Lᵀ(Au + b) and
+    /// the Hessian 2LᵀAL; on the tangent plane (unit e₁, e₂ ⟂ the normal) the shape operator is
+    /// eᵢᵀLᵀALeⱼ / |Lᵀ(Au + b)|, whose eigenvalues are the principal curvatures.
+    pub fn curvature(&self, point: DVec3) -> f64 {
+        let u = self.to_local_point(point);
+        let l = self.local.from_world.matrix3;
+        let half_grad = l.transpose() * (self.a * u + self.b);
+        let length = half_grad.length();
+        if length.is_nan() || length <= 0.0 {
+            return 0.0;
+        }
+        let (e1, e2) = orthonormal_basis(half_grad / length);
+        let (l1, l2) = (l * e1, l * e2);
+        let (m11, m12, m22) = (
+            l1.dot(self.a * l1) / length,
+            l1.dot(self.a * l2) / length,
+            l2.dot(self.a * l2) / length,
+        );
+        // Eigenvalues of the symmetric 2×2: mean ± radius; the larger magnitude is |mean| + radius.
+        let mean = 0.5 * (m11 + m22);
+        let radius = (0.25 * (m11 - m22) * (m11 - m22) + m12 * m12).sqrt();
+        mean.abs() + radius
     }
 
     /// Bound on the world distance from the computed hit `point` (local `u`) to the true surface.

@@ -311,3 +311,55 @@ fn height_range_follows_the_visible_surface() {
             .is_visible()
     );
 }
+
+#[test]
+fn curvature_is_the_larger_principal_curvature() {
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-9 * b.abs().max(1.0);
+    // A sphere of radius 2 (an ellipsoid with equal axes), anywhere on it.
+    let sphere = quadric(QuadricKind::Ellipsoid, 2.0, 2.0, 2.0, 3.0);
+    for p in [
+        DVec3::new(2.0, 0.0, 0.0),
+        DVec3::new(0.0, 0.0, -2.0),
+        DVec3::splat(2.0 / 3f64.sqrt()),
+    ] {
+        assert!(
+            close(sphere.curvature(p), 0.5),
+            "{p}: {}",
+            sphere.curvature(p)
+        );
+    }
+    // A cylinder of radius 0.5: 2 around it, 0 along it; the larger is 2.
+    let cylinder = quadric(QuadricKind::EllipticCylinder, 0.5, 0.5, 1.0, 1.0);
+    assert!(close(cylinder.curvature(DVec3::new(0.0, 0.5, 0.3)), 2.0));
+    // An ellipsoid's tip on its long axis c: both curvatures c/a² there (here 4/1 = 4).
+    let ellipsoid = quadric(QuadricKind::Ellipsoid, 1.0, 1.0, 4.0, 5.0);
+    assert!(close(ellipsoid.curvature(DVec3::new(0.0, 0.0, 4.0)), 4.0));
+    // Placed by a rotation and a translation, the sphere keeps its curvature; scaled by 3,
+    // it has a third of it.
+    let placed = Quadric::new(
+        QuadricSurface::Canonical {
+            kind: QuadricKind::Ellipsoid,
+            a: 2.0,
+            b: 2.0,
+            c: 2.0,
+        },
+        ClipBox::cube(3.0),
+        Transform::from_srt(
+            DVec3::splat(3.0),
+            DVec3::new(10.0, 20.0, 30.0),
+            DVec3::new(1.0, 2.0, 3.0),
+        )
+        .unwrap(),
+        0,
+    )
+    .unwrap();
+    let on_it = DVec3::new(1.0, 2.0, 3.0 + 6.0);
+    assert!(
+        close(placed.curvature(on_it), 0.5 / 3.0),
+        "{}",
+        placed.curvature(on_it)
+    );
+    // The cone's apex has no normal: no curvature rather than NaN.
+    let cone = quadric(QuadricKind::Cone, 1.0, 1.0, 1.0, 1.0);
+    assert_eq!(cone.curvature(DVec3::ZERO), 0.0);
+}
