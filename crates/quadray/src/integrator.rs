@@ -63,7 +63,11 @@ impl Whitted {
         counts: &mut RayCounts,
     ) -> Vec3 {
         counts.camera += 1;
-        self.radiance(scene, ray, cone, None, 1, 1.0, counts)
+        if cone.is_point() {
+            self.radiance::<false>(scene, ray, cone, None, 1, 1.0, counts)
+        } else {
+            self.radiance::<true>(scene, ray, cone, None, 1, 1.0, counts)
+        }
     }
 
     /// Radiance arriving along a camera ray, and the ray's first hit (for the AOV passes, which
@@ -78,7 +82,8 @@ impl Whitted {
         counts.camera += 1;
         let hit = self.intersect(scene, ray, None);
         let radiance = match &hit {
-            Some(h) => self.shade(scene, ray, cone, h, 1, 1.0, counts),
+            Some(h) if cone.is_point() => self.shade::<false>(scene, ray, cone, h, 1, 1.0, counts),
+            Some(h) => self.shade::<true>(scene, ray, cone, h, 1, 1.0, counts),
             None => scene.background(),
         };
         (radiance, hit)
@@ -89,10 +94,10 @@ impl Whitted {
         scene.intersect_from(ray, from)
     }
 
-    /// Radiance along `ray` (with its `cone`), the `depth`-th ray of its chain, whose contribution
-    /// is weighted by `throughput`.
+    /// Radiance along `ray` (with its `cone` when `CONES`), the `depth`-th ray of its chain,
+    /// whose contribution is weighted by `throughput`.
     #[allow(clippy::too_many_arguments)]
-    fn radiance(
+    fn radiance<const CONES: bool>(
         &self,
         scene: &Scene,
         ray: &Ray,
@@ -103,16 +108,17 @@ impl Whitted {
         counts: &mut RayCounts,
     ) -> Vec3 {
         match self.intersect(scene, ray, from) {
-            Some(hit) => self.shade(scene, ray, cone, &hit, depth, throughput, counts),
+            Some(hit) => self.shade::<CONES>(scene, ray, cone, &hit, depth, throughput, counts),
             None if depth > 1 => scene.environment(),
             None => scene.background(),
         }
     }
 
-    /// Radiance leaving `hit` back along `ray` (with its `cone`): local shading plus the mirror
-    /// reflection.
+    /// Radiance leaving `hit` back along `ray` (with its `cone` when `CONES`): local shading plus
+    /// the mirror reflection. Without cones (scenes with no filtered texture) the cone is a
+    /// compile-time point, and the shading compiles as if cones did not exist.
     #[allow(clippy::too_many_arguments)]
-    fn shade(
+    fn shade<const CONES: bool>(
         &self,
         scene: &Scene,
         ray: &Ray,
@@ -125,7 +131,7 @@ impl Whitted {
         let m = &scene.materials()[hit.material as usize];
         let g = &hit.geometry;
         let incoming = ray.dir.normalize();
-        // Rays carry cones only in scenes with filtered textures; elsewhere this costs nothing.
+        let cone = if CONES { cone } else { RayCone::POINT };
         let distance = if cone.is_point() {
             0.0
         } else {
@@ -196,7 +202,7 @@ impl Whitted {
             } else {
                 cone.reflected(distance, scene.curvature(hit))
             };
-            color += self.radiance(
+            color += self.radiance::<CONES>(
                 scene,
                 &reflected,
                 reflected_cone,

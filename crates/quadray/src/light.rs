@@ -59,7 +59,7 @@ pub struct Incident {
 impl Light {
     /// The light arriving at `p`, or `None` when none does: `p` sits on a point or spot light, or
     /// lies outside a spot light's cone (so no shadow ray is wasted on it).
-    #[inline]
+    #[inline(always)]
     pub fn incident(&self, p: DVec3) -> Option<Incident> {
         match self {
             Light::Point {

@@ -10,7 +10,7 @@ use crate::material::Material;
 use crate::math::{Ray, offset_origin};
 use crate::mesh::Mesh;
 use crate::shape::{PrimRef, SurfaceHit};
-use crate::texture::{Texture, TextureExtent};
+use crate::texture::{Texture, TextureExtent, TexturePoint};
 use glam::Vec3;
 
 pub use crate::math::MAX_COORDINATE;
@@ -272,21 +272,35 @@ impl Scene {
         };
         let attributes = self.geometry.attributes(hit.prim, path, point);
         let texture_point = |filtered: bool| {
-            let at = |p| self.geometry.texture_point(hit.prim, path, p);
-            let centre = at(point);
-            if !filtered || footprint.is_point() {
-                return (centre, TextureExtent::POINT);
+            let centre = self.geometry.texture_point(hit.prim, path, point);
+            if filtered && !footprint.is_point() {
+                let extent = self.texture_extent(hit, path, &centre, footprint);
+                (centre, extent)
+            } else {
+                (centre, TextureExtent::POINT)
             }
-            // The texture maps are affine (or nearly so over a footprint): the texture points at
-            // the ends of the footprint's axes give its extent in texture space.
-            let (ax, ay) = footprint.axes(hit.geometry.geometric_normal);
-            let extent = TextureExtent::spanned(&centre, &at(point + ax), &at(point + ay));
-            (centre, extent)
         };
         match colour {
             HitColour::Base(material) => material.base_color(texture_point, &attributes),
             HitColour::Texture(texture) => texture.eval_at(texture_point, &attributes),
         }
+    }
+
+    /// The extent in texture space of `footprint` around `hit`, whose texture point is `centre`.
+    /// The texture maps are affine (or nearly so over a footprint), so the texture points at the
+    /// ends of the footprint's axes give it. Out of line: only filtered textures ask for it.
+    #[inline(never)]
+    fn texture_extent(
+        &self,
+        hit: &SurfaceHit,
+        path: &InstancePath,
+        centre: &TexturePoint,
+        footprint: &HitFootprint,
+    ) -> TextureExtent {
+        let point = hit.geometry.point;
+        let at = |p| self.geometry.texture_point(hit.prim, path, p);
+        let (ax, ay) = footprint.axes(hit.geometry.geometric_normal);
+        TextureExtent::spanned(centre, &at(point + ax), &at(point + ay))
     }
 
     /// The instances leading from the world to `prim`'s placement.

@@ -140,7 +140,8 @@ const MAX_SUMMED_BANDS: u32 = 64;
 
 /// The mean band colour over heights [h − w, h + w]: each band's colour weighted by its overlap
 /// (the clamped ends included), or the ramp's mean where the footprint covers too many bands for
-/// their steps to matter.
+/// their steps to matter. Out of line, as [`filtered_checker`].
+#[inline(never)]
 fn filtered_bands(h: f32, w: f32, steps: u32) -> Vec3 {
     let steps = steps.max(1);
     let (lo, hi) = (h - w, h + w);
@@ -186,6 +187,15 @@ fn ramp_integral(h: f32) -> Vec3 {
     }
 }
 
+/// The mean checker colour over the box `q` ± `w` (in cells): the checker is the product of three
+/// square waves, and a box average of a product of functions of one axis each is the product of
+/// their averages. Out of line, so the point-sampled textures' code stays small.
+#[inline(never)]
+fn filtered_checker(q: DVec3, w: DVec3, even: Vec3, odd: Vec3) -> Vec3 {
+    let sign = square_wave_mean(q.x, w.x) * square_wave_mean(q.y, w.y) * square_wave_mean(q.z, w.z);
+    even.lerp(odd, (0.5 - 0.5 * sign) as f32)
+}
+
 /// The mean over [x − w, x + w] of the square wave that is +1 on even cells [2k, 2k + 1) and −1 on
 /// odd ones: the change of its integral, a triangle wave, over the interval's width.
 fn square_wave_mean(x: f64, w: f64) -> f64 {
@@ -223,14 +233,7 @@ impl Texture {
             }
             Texture::Bands { steps } => band_colour(band_of(p.height, *steps), *steps),
             Texture::Checker { size, even, odd } if extent.local != DVec3::ZERO => {
-                // The checker is the product of three square waves, and a box average of a
-                // product of functions of one axis each is the product of their averages.
-                let q = p.local / *size;
-                let w = extent.local / *size;
-                let sign = square_wave_mean(q.x, w.x)
-                    * square_wave_mean(q.y, w.y)
-                    * square_wave_mean(q.z, w.z);
-                even.lerp(*odd, (0.5 - 0.5 * sign) as f32)
+                filtered_checker(p.local / *size, extent.local / *size, *even, *odd)
             }
             Texture::Checker { size, even, odd } => {
                 // Integer parity of the cell (the float fmod of rem_euclid showed up in profiles).
@@ -254,18 +257,15 @@ impl Texture {
         point: impl FnOnce(bool) -> (TexturePoint, TextureExtent),
         attributes: &VertexAttributes,
     ) -> Vec3 {
-        let (p, extent) = if self.reads_point() {
-            point(self.is_filtered())
-        } else {
-            (
-                TexturePoint {
-                    local: glam::DVec3::ZERO,
-                    height: 0.0,
-                },
-                TextureExtent::POINT,
-            )
-        };
-        self.eval(&p, &extent, attributes)
+        match self {
+            Texture::Constant(c) => *c,
+            Texture::Image(t) => t.map.sample(attributes).truncate() * t.factor,
+            Texture::HeightRamp => height_ramp(point(false).0.height),
+            Texture::Bands { .. } | Texture::Checker { .. } => {
+                let (p, extent) = point(true);
+                self.eval(&p, &extent, attributes)
+            }
+        }
     }
 
     /// Whether the texture averages over a footprint (the ones with hard edges: bands and

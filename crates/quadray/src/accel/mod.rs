@@ -212,7 +212,7 @@ impl Accel {
     }
 
     /// Whether anything blocks the ray in (0, `t_max`): the any-hit query for shadow rays.
-    #[inline]
+    #[inline(always)]
     pub fn occluded(&self, g: &Geometry, ray: &Ray, t_max: f64, from: Option<PrimRef>) -> bool {
         for i in 0..self.planes {
             let prim = PrimRef::world(LocalPrim::Plane(i));
