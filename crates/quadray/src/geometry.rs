@@ -252,6 +252,26 @@ impl Geometry {
         })
     }
 
+    /// How `prim`'s texture coordinates change along the world-space vector `v` (every texture
+    /// map is affine in the point, so this holds anywhere on it): `v` is carried through the
+    /// instances' linear maps into the primitive's own space.
+    pub fn texture_offset(&self, prim: PrimRef, path: &InstancePath, v: DVec3) -> TexturePoint {
+        let (level, v) = match path.is_empty() {
+            true => (self.level(0), v),
+            false => (
+                self.level(path.level(self)),
+                path.instances(self)
+                    .fold(v, |v, inst| inst.transform.from_world.transform_vector3(v)),
+            ),
+        };
+        match prim.local {
+            LocalPrim::Sphere(i) => level.spheres[i as usize].texture_offset(v),
+            LocalPrim::Quadric(i) => level.quadrics[i as usize].texture_offset(v),
+            LocalPrim::Triangle { mesh, .. } => level.meshes[mesh as usize].texture_offset(v),
+            LocalPrim::Plane(i) => self.planes[i as usize].texture_offset(v),
+        }
+    }
+
     /// Interpolated vertex attributes at world-space `point` on `prim` (texture coordinates and
     /// colours exist only on meshes; other primitives get the defaults).
     #[inline]

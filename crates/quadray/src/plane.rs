@@ -54,6 +54,15 @@ impl Plane {
             height: 0.0,
         }
     }
+
+    /// How the texture coordinates change along the vector `v` (they are linear in the point).
+    pub fn texture_offset(&self, v: DVec3) -> TexturePoint {
+        let (u, w) = orthonormal_basis(self.normal);
+        TexturePoint {
+            local: DVec3::new(v.dot(u), v.dot(w), 0.0),
+            height: 0.0,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use crate::material::Material;
 use crate::math::{Ray, offset_origin};
 use crate::mesh::Mesh;
 use crate::shape::{PrimRef, SurfaceHit};
-use crate::texture::{Texture, TextureExtent, TexturePoint};
+use crate::texture::{Texture, TextureExtent};
 use glam::Vec3;
 
 pub use crate::math::MAX_COORDINATE;
@@ -252,6 +252,13 @@ impl Scene {
     /// The larger principal curvature of `hit`'s surface at its point (inverse world units; 0 for
     /// planes and triangles), which widens the cones of mirror reflections.
     pub fn curvature(&self, hit: &SurfaceHit) -> f64 {
+        if hit.prim.placement == 0 {
+            return self.geometry.curvature(
+                hit.prim,
+                &crate::instance::WORLD_PATH,
+                hit.geometry.point,
+            );
+        }
         let path = self.path(hit.prim);
         self.geometry.curvature(hit.prim, &path, hit.geometry.point)
     }
@@ -274,7 +281,7 @@ impl Scene {
         let texture_point = |filtered: bool| {
             let centre = self.geometry.texture_point(hit.prim, path, point);
             if filtered && !footprint.is_point() {
-                let extent = self.texture_extent(hit, path, &centre, footprint);
+                let extent = self.texture_extent(hit, path, footprint);
                 (centre, extent)
             } else {
                 (centre, TextureExtent::POINT)
@@ -286,21 +293,21 @@ impl Scene {
         }
     }
 
-    /// The extent in texture space of `footprint` around `hit`, whose texture point is `centre`.
-    /// The texture maps are affine (or nearly so over a footprint), so the texture points at the
-    /// ends of the footprint's axes give it. Out of line: only filtered textures ask for it.
+    /// The extent in texture space of `footprint` around `hit`: the texture maps are affine, so
+    /// the footprint's axes carried into texture space span it. Out of line: only filtered
+    /// textures ask for it.
     #[inline(never)]
     fn texture_extent(
         &self,
         hit: &SurfaceHit,
         path: &InstancePath,
-        centre: &TexturePoint,
         footprint: &HitFootprint,
     ) -> TextureExtent {
-        let point = hit.geometry.point;
-        let at = |p| self.geometry.texture_point(hit.prim, path, p);
         let (ax, ay) = footprint.axes(hit.geometry.geometric_normal);
-        TextureExtent::spanned(centre, &at(point + ax), &at(point + ay))
+        TextureExtent::spanned(
+            &self.geometry.texture_offset(hit.prim, path, ax),
+            &self.geometry.texture_offset(hit.prim, path, ay),
+        )
     }
 
     /// The instances leading from the world to `prim`'s placement.

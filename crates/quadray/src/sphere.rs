@@ -82,6 +82,14 @@ impl Sphere {
         1.0 / self.radius
     }
 
+    /// How the texture coordinates change along the vector `v` (they are affine in the point).
+    pub fn texture_offset(&self, v: DVec3) -> TexturePoint {
+        TexturePoint {
+            local: v,
+            height: (v.z / self.radius * 0.5) as f32,
+        }
+    }
+
     /// Axis-aligned bounds, world space.
     pub fn bounds(&self) -> (DVec3, DVec3) {
         (

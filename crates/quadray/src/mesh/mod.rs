@@ -392,6 +392,19 @@ impl Mesh {
             height,
         }
     }
+
+    /// How the texture coordinates change along the vector `v` (they are affine in the point).
+    pub fn texture_offset(&self, v: DVec3) -> TexturePoint {
+        let (lo, hi) = self.z_range;
+        TexturePoint {
+            local: v,
+            height: if hi > lo {
+                (v.z / (hi - lo)) as f32
+            } else {
+                0.0
+            },
+        }
+    }
 }
 
 /// Barycentric coordinates (clamped into the triangle) of `p` (relative to `v0`) in the triangle

@@ -394,6 +394,20 @@ impl Quadric {
         }
     }
 
+    /// How the texture coordinates change along the vector `v` (they are affine in the point).
+    pub fn texture_offset(&self, v: DVec3) -> TexturePoint {
+        let (lo, hi) = self.height;
+        let height = if hi > lo {
+            ((self.local.from_world.matrix3 * v).z / (hi - lo)) as f32
+        } else {
+            0.0
+        };
+        TexturePoint {
+            local: self.transform.from_world.matrix3 * v,
+            height,
+        }
+    }
+
     /// The larger principal curvature, in magnitude, at a surface point (world units of the
     /// quadric's own space; 0 where the gradient vanishes, at a cone's apex).
     ///
