@@ -443,3 +443,41 @@ fn verbose_logs_each_phase_and_every_file_read() {
         "{vv}"
     );
 }
+
+#[test]
+fn texture_filter_none_point_samples_and_bad_values_are_usage_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |name: &str, extra: &[&str]| {
+        let out = tmp(&dir, name);
+        let mut args = vec![
+            "render",
+            &scene("defense.toml")[..],
+            "--res",
+            "160x90",
+            "-q",
+        ]
+        .into_iter()
+        .map(str::to_owned)
+        .collect::<Vec<_>>();
+        args.extend(["-o".to_owned(), out.to_str().unwrap().to_owned()]);
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        (quadray(&args), out)
+    };
+    let (filtered, filtered_png) = render("filtered.png", &[]);
+    let (point, point_png) = render("point.png", &["--texture-filter", "none"]);
+    assert!(filtered.status.success() && point.status.success());
+    // The checkered floor and saddle differ; everything else is the same image.
+    assert_ne!(
+        std::fs::read(&filtered_png).unwrap(),
+        std::fs::read(&point_png).unwrap()
+    );
+    let (bad, bad_png) = render("bad.png", &["--texture-filter", "mipmap"]);
+    assert_eq!(bad.status.code(), Some(2));
+    let message = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        message.contains("--texture-filter") && message.contains("box"),
+        "{message}"
+    );
+    assert!(!bad_png.exists());
+}
