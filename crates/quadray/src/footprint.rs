@@ -66,7 +66,7 @@ impl RayCone {
 }
 
 /// The footprint scale of a pixel's samples when it takes `samples` of them: each sample stands
-/// for a 1/√n-wide share of the pixel, down to [`MIN_SCALE`].
+/// for a 1/√n-wide share of the pixel, down to 1/8 (pbrt-v4's clamp).
 pub fn footprint_scale(samples: u32) -> f64 {
     (1.0 / (samples.max(1) as f64).sqrt()).max(MIN_SCALE)
 }

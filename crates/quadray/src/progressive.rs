@@ -3,7 +3,10 @@
 //!
 //! Every pixel continues its own progressive sequence ([`crate::sampler::progressive_2d`], the one
 //! adaptive sampling uses), so a step keeps the stratification of the samples before it, and the
-//! image after n samples is the same whatever steps brought it there and for any thread count.
+//! image after n samples is the same for any thread count, and whatever steps brought it there
+//! except in one way: filtered textures give a step's samples the footprint of the count the step
+//! reaches ([`crate::footprint::footprint_scale`]), so a 1-spp preview is filtered over the whole
+//! pixel and later steps over smaller shares.
 
 use crate::adaptive::sample_row;
 use crate::aov::AovSelection;

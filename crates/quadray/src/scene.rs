@@ -223,7 +223,7 @@ impl Scene {
     }
 
     /// Whether any material's texture is filtered over the samples' footprints (a checker or
-    /// contour bands): only then do rays carry [`RayCone`]s.
+    /// contour bands): only then do rays carry [`crate::footprint::RayCone`]s.
     pub fn filters_textures(&self) -> bool {
         self.filters_textures
     }
