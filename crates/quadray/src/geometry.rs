@@ -112,6 +112,16 @@ impl Geometry {
         }
     }
 
+    /// The level `path` ends in: the world for an empty path.
+    #[inline]
+    fn level_of(&self, path: &InstancePath) -> Level<'_> {
+        if path.is_empty() {
+            self.level(0)
+        } else {
+            self.level(path.level(self))
+        }
+    }
+
     /// Number of levels: the world and every prototype.
     pub fn level_count(&self) -> usize {
         1 + self.prototypes.len()
@@ -157,12 +167,7 @@ impl Geometry {
         let LocalPrim::Triangle { mesh, tri } = prim.local else {
             return false;
         };
-        let level = if path.is_empty() {
-            self.level(0)
-        } else {
-            self.level(path.level(self))
-        };
-        let mesh = &level.meshes[mesh as usize];
+        let mesh = &self.level_of(path).meshes[mesh as usize];
         if !mesh.single_sided() {
             return false;
         }
@@ -218,13 +223,13 @@ impl Geometry {
     /// Texture coordinates at a world-space surface point of `prim`, computed in the primitive's
     /// own space (textures move with an instance); only textured materials ask for them.
     pub fn texture_point(&self, prim: PrimRef, path: &InstancePath, point: DVec3) -> TexturePoint {
-        let (level, p) = match path.is_empty() {
-            true => (self.level(0), point),
-            false => (
-                self.level(path.level(self)),
-                self.point_to_level(path, point),
-            ),
+        // The world's primitives (most hits) skip the empty instance walk.
+        let p = if path.is_empty() {
+            point
+        } else {
+            self.point_to_level(path, point)
         };
+        let level = self.level_of(path);
         match prim.local {
             LocalPrim::Sphere(i) => level.spheres[i as usize].texture_point(p),
             LocalPrim::Quadric(i) => level.quadrics[i as usize].texture_point(p),
@@ -237,10 +242,7 @@ impl Geometry {
     /// computed in the primitive's own space, then divided by the instances' mean scales
     /// (exact for similarity transforms; 0 for planes and triangles, which are flat).
     pub fn curvature(&self, prim: PrimRef, path: &InstancePath, point: DVec3) -> f64 {
-        let level = match path.is_empty() {
-            true => self.level(0),
-            false => self.level(path.level(self)),
-        };
+        let level = self.level_of(path);
         let local = || self.point_to_level(path, point);
         let curvature = match prim.local {
             LocalPrim::Sphere(i) => level.spheres[i as usize].curvature(),
@@ -256,14 +258,10 @@ impl Geometry {
     /// map is affine in the point, so this holds anywhere on it): `v` is carried through the
     /// instances' linear maps into the primitive's own space.
     pub fn texture_offset(&self, prim: PrimRef, path: &InstancePath, v: DVec3) -> TexturePoint {
-        let (level, v) = match path.is_empty() {
-            true => (self.level(0), v),
-            false => (
-                self.level(path.level(self)),
-                path.instances(self)
-                    .fold(v, |v, inst| inst.transform.from_world.transform_vector3(v)),
-            ),
-        };
+        let level = self.level_of(path);
+        let v = path
+            .instances(self)
+            .fold(v, |v, inst| inst.transform.from_world.transform_vector3(v));
         match prim.local {
             LocalPrim::Sphere(i) => level.spheres[i as usize].texture_offset(v),
             LocalPrim::Quadric(i) => level.quadrics[i as usize].texture_offset(v),

@@ -115,8 +115,8 @@ impl Whitted {
     }
 
     /// Radiance leaving `hit` back along `ray` (with its `cone` when `CONES`): local shading plus
-    /// the mirror reflection. Without cones (scenes with no filtered texture) the cone is a
-    /// compile-time point, and the shading compiles as if cones did not exist.
+    /// the mirror reflection. Without cones (scenes with no filtered texture) `cone` is ignored,
+    /// and the shading compiles as if cones did not exist.
     #[allow(clippy::too_many_arguments)]
     fn shade<const CONES: bool>(
         &self,
@@ -131,13 +131,13 @@ impl Whitted {
         let m = &scene.materials()[hit.material as usize];
         let g = &hit.geometry;
         let incoming = ray.dir.normalize();
-        let cone = if CONES { cone } else { RayCone::POINT };
-        let distance = if cone.is_point() {
-            0.0
+        // Without cones the footprint is a compile-time point, and so is everything cut from it.
+        let distance = if CONES { hit.t * ray.dir.length() } else { 0.0 };
+        let footprint = if CONES {
+            HitFootprint::new(&cone, incoming, distance)
         } else {
-            hit.t * ray.dir.length()
+            HitFootprint::POINT
         };
-        let footprint = HitFootprint::new(&cone, incoming, distance);
         let base = scene.albedo(hit, &footprint);
         let view = -incoming;
         // Two-sided shading: face both normals towards the viewer.
@@ -197,10 +197,10 @@ impl Whitted {
             }
             counts.reflection += 1;
             let reflected = Ray::new(offset_origin(g.point, ng, g.error, dir), dir);
-            let reflected_cone = if cone.is_point() {
-                cone
-            } else {
+            let reflected_cone = if CONES {
                 cone.reflected(distance, scene.curvature(hit))
+            } else {
+                RayCone::POINT
             };
             color += self.radiance::<CONES>(
                 scene,

@@ -272,15 +272,6 @@ impl Texture {
         matches!(self, Texture::Bands { .. } | Texture::Checker { .. })
     }
 
-    /// Whether the colour depends on the hit's [`TexturePoint`] (the procedural textures do;
-    /// constants and images do not).
-    pub fn reads_point(&self) -> bool {
-        matches!(
-            self,
-            Texture::HeightRamp | Texture::Bands { .. } | Texture::Checker { .. }
-        )
-    }
-
     /// Whether the colour varies over the surface (a constant needs no texture point).
     pub fn is_constant(&self) -> bool {
         matches!(self, Texture::Constant(_))

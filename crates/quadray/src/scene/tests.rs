@@ -1,0 +1,96 @@
+//! Unit tests of scenes: single-sided meshes, plain, instanced and mirrored.
+
+use super::*;
+use crate::geometry::Prototype;
+use crate::instance::Instance;
+use crate::math::Transform;
+use crate::{Projection, Sphere};
+use glam::{DAffine3, DVec3};
+
+/// The unit square at z = 0, counter-clockwise seen from +z: its front faces +z.
+fn square(single_sided: bool) -> Mesh {
+    let p = vec![
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(-1.0, 1.0, 0.0),
+    ];
+    Mesh::new(p, vec![[0, 1, 2], [0, 2, 3]], None, 0)
+        .unwrap()
+        .with_single_sided(single_sided)
+}
+
+/// A square at z = 0 (world, or placed by `placement` as an instance) and a sphere of radius
+/// 0.5 at z = 2, above it.
+fn scene(single_sided: bool, placement: Option<DAffine3>) -> Scene {
+    let mut geometry = Geometry {
+        spheres: vec![Sphere {
+            center: DVec3::new(0.0, 0.0, 2.0),
+            radius: 0.5,
+            material: 0,
+        }],
+        ..Geometry::default()
+    };
+    match placement {
+        None => geometry.meshes.push(square(single_sided)),
+        Some(m) => {
+            geometry
+                .prototypes
+                .push(Prototype::mesh(square(single_sided)));
+            geometry
+                .instances
+                .push(Instance::new(0, Transform::new(m).unwrap()));
+        }
+    }
+    Scene::new(SceneDescription {
+        camera: Camera {
+            from: DVec3::new(0.0, 0.0, 10.0),
+            to: DVec3::ZERO,
+            up: DVec3::Y,
+            projection: Projection::Perspective { vfov_deg: 40.0 },
+        },
+        background: Vec3::ZERO,
+        environment: None,
+        materials: vec![Material::default()],
+        lights: vec![],
+        geometry,
+    })
+    .unwrap()
+}
+
+/// A single-sided square hides what lies behind its front and lets rays through its back,
+/// for closest hits only: it still blocks shadow rays. Through a mirroring instance the same
+/// faces stay in front, which the mirror turns to face −z.
+#[test]
+fn single_sided_meshes_are_seen_from_the_front_only() {
+    let up = Ray::new(DVec3::new(0.1, 0.2, -5.0), DVec3::Z);
+    let down = Ray::new(DVec3::new(0.1, 0.2, 5.0), -DVec3::Z);
+    let hit_t = |s: &Scene, ray: &Ray| s.intersect(ray).map(|h| h.t);
+
+    let two_sided = scene(false, None);
+    assert_eq!(hit_t(&two_sided, &up), Some(5.0));
+    let one_sided = scene(true, None);
+    // From below, the square's back: the ray goes on to the sphere's bottom, where
+    // x² + y² + (z − 2)² = 0.25 with x² + y² = 0.05.
+    let bottom = 2.0 - 0.2f64.sqrt();
+    let t = hit_t(&one_sided, &up).unwrap();
+    assert!((t - (5.0 + bottom)).abs() < 1e-9, "{t}");
+    assert!(one_sided.occluded(&up, 6.0), "the back still casts shadows");
+    // From above, its front: the sphere's top, then nothing behind it.
+    assert!((hit_t(&one_sided, &down).unwrap() - (5.0 - (4.0 - bottom))).abs() < 1e-9);
+    let beside = Ray::new(DVec3::new(0.9, 0.9, 5.0), -DVec3::Z);
+    assert_eq!(hit_t(&one_sided, &beside), Some(5.0));
+
+    // Moved up by 1 as an instance: the same, with the mirror swapping the seen side.
+    let lift = DAffine3::from_translation(DVec3::Z);
+    let placed = scene(true, Some(lift));
+    assert!((hit_t(&placed, &up).unwrap() - (5.0 + bottom)).abs() < 1e-9);
+    assert_eq!(hit_t(&placed, &beside), Some(4.0));
+    let mirrored = scene(
+        true,
+        Some(lift * DAffine3::from_scale(DVec3::new(1.0, 1.0, -1.0))),
+    );
+    // Its front now faces −z: rays from below stop at it, rays from above pass.
+    assert_eq!(hit_t(&mirrored, &up), Some(6.0));
+    assert_eq!(hit_t(&mirrored, &beside), None);
+}
