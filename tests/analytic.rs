@@ -412,15 +412,15 @@ fn odd_share(x0: f64, y0: f64, side: f64, cell: f64) -> f64 {
     odd / (side * side)
 }
 
-/// A checkerboard seen head-on through an orthographic camera: every pixel's exact value is the
-/// share of its square on odd cells. One filtered sample a pixel averages the texture over
-/// exactly that square, so it gives the pixel integral; point samples alias.
-#[test]
-fn one_filtered_sample_gives_a_checkered_pixel_its_exact_integral() {
-    const SIDE: u32 = 64;
+/// Pixels a side of the head-on checkerboard images.
+const CHECKER_SIDE: u32 = 64;
+
+/// A glowing checkerboard seen head-on through an orthographic camera, and every pixel's exact
+/// value: the share of its square on odd cells.
+fn head_on_checker() -> (Scene, Vec<f64>) {
     const HEIGHT: f64 = 8.0;
     const CELL: f64 = 0.3;
-    let pixel = HEIGHT / SIDE as f64;
+    let pixel = HEIGHT / CHECKER_SIDE as f64;
     let centre = DVec3::new(0.013, 0.021, 10.0);
     let glowing_checker = Material {
         texture: Texture::Constant(Vec3::ZERO),
@@ -452,29 +452,42 @@ fn one_filtered_sample_gives_a_checkered_pixel_its_exact_integral() {
         },
     })
     .unwrap();
-    let exact: Vec<f64> = (0..SIDE * SIDE)
+    let exact = (0..CHECKER_SIDE * CHECKER_SIDE)
         .map(|k| {
-            let (i, j) = ((k % SIDE) as f64, (k / SIDE) as f64);
+            let (i, j) = ((k % CHECKER_SIDE) as f64, (k / CHECKER_SIDE) as f64);
             // +x to the right, +y up the image: row j's top edge is HEIGHT/2 − j·pixel.
             let x0 = centre.x - HEIGHT / 2.0 + i * pixel;
             let y0 = centre.y + HEIGHT / 2.0 - (j + 1.0) * pixel;
             odd_share(x0, y0, pixel, CELL)
         })
         .collect();
+    (scene, exact)
+}
+
+/// The RMSE of the head-on checker rendered with `settings` against its exact pixel values.
+fn checker_rmse(scene: &Scene, exact: &[f64], settings: &RenderSettings) -> f64 {
+    let film = render(scene, settings, &NoProgress).unwrap().film;
+    let squares: f64 = film
+        .pixels()
+        .iter()
+        .zip(exact)
+        .map(|(p, e)| (p.x as f64 - e).powi(2))
+        .sum();
+    (squares / exact.len() as f64).sqrt()
+}
+
+/// The head-on checker: one filtered sample a pixel averages the texture over exactly the
+/// pixel's square, so it gives the pixel integral; point samples alias.
+#[test]
+fn one_filtered_sample_gives_a_checkered_pixel_its_exact_integral() {
+    let (scene, exact) = head_on_checker();
     let rmse = |spp: u32, texture_filter: bool| {
         let settings = RenderSettings {
             spp,
             texture_filter,
-            ..settings(SIDE, SIDE)
+            ..settings(CHECKER_SIDE, CHECKER_SIDE)
         };
-        let film = render(&scene, &settings, &NoProgress).unwrap().film;
-        let squares: f64 = film
-            .pixels()
-            .iter()
-            .zip(&exact)
-            .map(|(p, e)| (p.x as f64 - e).powi(2))
-            .sum();
-        (squares / exact.len() as f64).sqrt()
+        checker_rmse(&scene, &exact, &settings)
     };
     let filtered = rmse(1, true);
     assert!(filtered < 1e-5, "one filtered sample: RMSE {filtered:e}");
@@ -487,4 +500,30 @@ fn one_filtered_sample_gives_a_checkered_pixel_its_exact_integral() {
         filtered < point / 1.5,
         "16 spp: {filtered:e} against {point:e}"
     );
+}
+
+/// The head-on checker, adaptively: every round's samples stand for their share of the pixel
+/// at the most samples a pixel may take, so the samples of all rounds estimate one filtered
+/// image. Pixels brought to 64 samples over four rounds (8, 16, 32, 64) are then exactly those
+/// given 64 in one round: the same points of the same sequence, filtered alike. (When each round
+/// used the footprint of the count it reached, they differed, and the rounds' render was further
+/// from the exact integrals: RMSE 5.5e-3 against 3.9e-3 now, measured.)
+#[test]
+fn adaptive_rounds_filter_textures_as_the_final_count_does() {
+    let (scene, exact) = head_on_checker();
+    let every_pixel_to_64 = |min_spp: u32| RenderSettings {
+        adaptive: Some(Adaptive {
+            target_error: 0.0,
+            min_spp,
+            max_spp: 64,
+            time_limit: None,
+        }),
+        ..settings(CHECKER_SIDE, CHECKER_SIDE)
+    };
+    let in_rounds = render(&scene, &every_pixel_to_64(8), &NoProgress).unwrap();
+    let at_once = render(&scene, &every_pixel_to_64(64), &NoProgress).unwrap();
+    assert_eq!(in_rounds.sampling.error.map(|e| e.rounds), Some(4));
+    assert_eq!(in_rounds.film, at_once.film);
+    let rounds = checker_rmse(&scene, &exact, &every_pixel_to_64(8));
+    assert!(rounds < 4.5e-3, "RMSE {rounds:e}");
 }

@@ -62,7 +62,7 @@ impl ProgressiveFilm {
                     return;
                 }
                 let y = window.y0 + row_index as u32;
-                let counts = sample_row(&context, y, row, &refine_all, None, count);
+                let counts = sample_row(&context, y, row, &refine_all, None, (count, count));
                 *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
                 progress.row_done();
             });

@@ -246,9 +246,17 @@ pub(crate) fn render_adaptive(
                     row_done();
                     return;
                 }
-                let target = adaptive.round_count(round);
-                let counts =
-                    sample_row(context, y, row, row_refine, aov_row.as_deref_mut(), target);
+                // Every round's samples stand for their share of the pixel at `max_spp`, so all
+                // of a pixel's samples estimate one filtered image (the uniform render's at
+                // `max_spp`) and the batch means see no difference between rounds' footprints.
+                let counts = sample_row(
+                    context,
+                    y,
+                    row,
+                    row_refine,
+                    aov_row.as_deref_mut(),
+                    (adaptive.round_count(round), adaptive.max_spp),
+                );
                 *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
                 row_done();
             });
@@ -283,19 +291,19 @@ pub(crate) fn render_adaptive(
     Ok(sampled.finish(&context.with_window(inner), adaptive, window))
 }
 
-/// Brings the pixels of one row of the window that `refine` marks to `count` samples, taking each
-/// pixel's surface passes from its first sample; returns the rays traced.
+/// Brings the pixels of one row of the window that `refine` marks to `count` samples, each
+/// standing for its share of the pixel at `footprint_spp` samples (filtered textures), taking
+/// each pixel's surface passes from its first sample; returns the rays traced.
 pub(crate) fn sample_row(
     context: &SampleContext<'_>,
     y: u32,
     row: &mut [PixelEstimate],
     refine: &[bool],
     mut aovs: Option<&mut [AovSample]>,
-    count: u32,
+    (count, footprint_spp): (u32, u32),
 ) -> RayCounts {
     let mut counts = RayCounts::default();
-    // The samples a round adds stand for their share of the pixel at the round's count.
-    let cone = context.sample_cone(count);
+    let cone = context.sample_cone(footprint_spp);
     for (column, estimate) in row.iter_mut().enumerate() {
         if !refine[column] {
             continue;
