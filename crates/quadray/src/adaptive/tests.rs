@@ -238,6 +238,17 @@ fn a_round_samples_pixels_above_the_target_and_their_neighbours() {
         &mut refine,
     );
     assert_eq!(selected(&refine), [".....", "..x..", ".....", "....."]);
+    // Below the target but not below the first round's margin: refined (with its neighbours)
+    // after the first round only.
+    errors[width + 2] = 0.1 * (1.0 + FIRST_ROUND_MARGIN) / 2.0;
+    adaptive.select(1, &estimates, &errors, width, &mut refine);
+    assert_eq!(selected(&refine), [".xxx.", ".xxx.", ".xxx.", "....."]);
+    adaptive.select(2, &estimates, &errors, width, &mut refine);
+    assert!(!refine.contains(&true));
+    errors[width + 2] = 0.1 * FIRST_ROUND_MARGIN * 0.9;
+    adaptive.select(1, &estimates, &errors, width, &mut refine);
+    assert!(!refine.contains(&true));
+    errors[width + 2] = 0.5;
     // A pixel at the maximum is not sampled again, nor are its neighbours for its sake.
     let at_max = Adaptive {
         max_spp: 8,
