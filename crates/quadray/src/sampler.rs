@@ -34,7 +34,28 @@ fn permute(mut i: u32, len: u32, pattern: u32) -> u32 {
             break;
         }
     }
-    (i.wrapping_add(p)) % len
+    remainder(i.wrapping_add(p), len)
+}
+
+/// `value % divisor` (`divisor` > 0), with a mask where `divisor` is a power of two: sample counts
+/// usually are, and an integer division costs tens of cycles (measured on defense at 64 spp,
+/// [`sample_2d`] went from 8.4% to 7.5% of the render's time).
+fn remainder(value: u32, divisor: u32) -> u32 {
+    if divisor.is_power_of_two() {
+        value & (divisor - 1)
+    } else {
+        value % divisor
+    }
+}
+
+/// `value / divisor` (`divisor` > 0), with a shift where `divisor` is a power of two (see
+/// [`remainder`]).
+fn quotient(value: u32, divisor: u32) -> u32 {
+    if divisor.is_power_of_two() {
+        value >> divisor.trailing_zeros()
+    } else {
+        value / divisor
+    }
 }
 
 /// A hashed float in [0, 1) from `i` keyed by `pattern` (Kensler's `randfloat`).
@@ -75,8 +96,8 @@ pub fn sample_2d(s: u32, count: u32, pattern: u32) -> (f64, f64) {
     let m = ((count as f64).sqrt() as u32).max(1);
     let n = count.div_ceil(m);
     let s = permute(s, count, pattern.wrapping_mul(0x51633e2d));
-    let sx = permute(s % m, m, pattern.wrapping_mul(0x68bc21eb));
-    let sy = permute(s / m, n, pattern.wrapping_mul(0x02e5be93));
+    let sx = permute(remainder(s, m), m, pattern.wrapping_mul(0x68bc21eb));
+    let sy = permute(quotient(s, m), n, pattern.wrapping_mul(0x02e5be93));
     let jx = rand_float(s, pattern.wrapping_mul(0x967a889b));
     let jy = rand_float(s, pattern.wrapping_mul(0x368cc8b7));
     (
@@ -174,6 +195,24 @@ mod tests {
             assert_ne!(pixel_pattern(x, y, 0), pixel_pattern(x, y, 1));
             let other = points(1024, 1);
             assert!(reference.iter().all(|p| !other.contains(p)));
+        }
+    }
+
+    #[test]
+    fn remainders_and_quotients_match_the_division() {
+        for divisor in [1, 2, 3, 7, 8, 64, 100, 1 << 20] {
+            for value in [0, 1, 5, 63, 64, 65, 1000, u32::MAX] {
+                assert_eq!(
+                    remainder(value, divisor),
+                    value % divisor,
+                    "{value} % {divisor}"
+                );
+                assert_eq!(
+                    quotient(value, divisor),
+                    value / divisor,
+                    "{value} / {divisor}"
+                );
+            }
         }
     }
 
