@@ -6,9 +6,10 @@
 //! - **Rounds**: round 0 takes [`Adaptive::min_spp`] samples in every pixel. Round k brings the
 //!   pixels it samples to `min_spp`·2^k samples (at most [`Adaptive::max_spp`]): every pixel still
 //!   above [`Adaptive::target_error`] (after the first round, above [`FIRST_ROUND_MARGIN`] × the
-//!   target) and, in the first [`NEIGHBOUR_ROUNDS`] rounds, its eight neighbours. A pixel's samples are the prefix of its own progressive sequence
-//!   ([`crate::sampler::progressive_2d`]), so samples added later keep the stratification of the
-//!   earlier ones, and a power-of-two count is a (0, k, 2)-net in the pixel.
+//!   target) and, in the first [`NEIGHBOUR_ROUNDS`] rounds, its eight neighbours. A pixel's
+//!   samples are the prefix of its own progressive sequence ([`crate::sampler::progressive_2d`]),
+//!   so samples added later keep the stratification of the earlier ones, and a power-of-two count
+//!   is a (0, k, 2)-net in the pixel.
 //! - **Determinism**: a pixel's samples depend only on its position and the seed, and whether it
 //!   gets more depends only on its own and its neighbours' samples of earlier rounds; the image is
 //!   bit-identical for any thread count. A crop window or a tile is sampled with a border one pixel

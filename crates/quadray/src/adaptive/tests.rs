@@ -248,8 +248,9 @@ fn a_round_samples_pixels_above_the_target_and_their_neighbours() {
     errors[width + 2] = 0.1 * FIRST_ROUND_MARGIN * 0.9;
     adaptive.select(1, &estimates, &errors, width, &mut refine);
     assert!(!refine.contains(&true));
+    // A pixel at the maximum, above the target again, is not sampled again, nor are its
+    // neighbours for its sake.
     errors[width + 2] = 0.5;
-    // A pixel at the maximum is not sampled again, nor are its neighbours for its sake.
     let at_max = Adaptive {
         max_spp: 8,
         ..adaptive
