@@ -19,8 +19,9 @@ pub struct SamplingArgs {
     /// every pixel until then or --max-spp).
     #[arg(long, value_name = "SECONDS", value_parser = parse_positive, conflicts_with = "spp")]
     pub time_limit: Option<f64>,
-    /// Samples every pixel takes in the first adaptive round: a power of two, at least 8
-    /// (default 8).
+    /// Samples every pixel takes in the first adaptive round: a power of two, at least 2
+    /// (default 8; 2 or 4 make a quick preview, cheaper where the image is flat but able to miss
+    /// small features).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=MAX_SPP as i64), conflicts_with = "spp")]
     pub min_spp: Option<u32>,
     /// The most samples an adaptive render puts in a pixel (default 1024).

@@ -75,6 +75,42 @@ fn adaptive_renders_report_their_samples_and_are_deterministic() {
     );
 }
 
+/// `--min-spp 2` makes a preview: flat pixels stop at 2 samples, so the same target costs fewer
+/// samples than from the default 8, and the stats line says where sampling started.
+#[test]
+fn a_preview_from_two_samples_takes_fewer_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let defense = scene("defense.toml");
+    let mean_spp = |extra: &[&str]| -> (f64, String) {
+        let out = tmp(&dir, "p.exr");
+        let mut args = vec![
+            "render",
+            &defense,
+            "--res",
+            "96x54",
+            "--target-error",
+            "0.04",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = quadray(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let line = stderr(&o);
+        let mean = line
+            .split(" spp mean")
+            .next()
+            .and_then(|head| head.rsplit(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no mean spp in {line}"));
+        (mean, line)
+    };
+    let (preview, line) = mean_spp(&["--min-spp", "2"]);
+    let (default, _) = mean_spp(&[]);
+    assert!(line.contains("spp mean (2.."), "{line}");
+    assert!(preview < 0.6 * default, "{preview} against {default}");
+}
+
 /// An impossible target runs every pixel to `--max-spp` and says so; bad values are usage errors.
 #[test]
 fn impossible_targets_stop_at_the_maximum_and_bad_values_are_refused() {

@@ -82,7 +82,8 @@ pub const ERROR_BATCHES: u32 = 8;
 ///
 /// The standard error is estimated by **batch means**: the n samples (n = 2^k, n >= 8) are split
 /// into [`ERROR_BATCHES`] aligned runs of n/8, and SE² = Σ(bᵢ − b̄)² / (8 · 7) over the runs'
-/// means bᵢ. With [`crate::sampler::progressive_2d`] each aligned run is itself a stratified net,
+/// means bᵢ. Below 8 samples every sample is a run of its own: the plain standard error, with
+/// n − 1 degrees of freedom (a coarse estimate, for previews that start at 2 or 4 samples). With [`crate::sampler::progressive_2d`] each aligned run is itself a stratified net,
 /// so its mean has the stratified error: the estimate follows the error stratification leaves
 /// (for an edge it falls about as n^-3/4, not n^-1/2 as the samples' plain variance would say),
 /// and with 7 degrees of freedom it is rarely fooled by two halves agreeing by chance.
@@ -142,10 +143,10 @@ impl PixelEstimate {
     }
 
     /// The relative standard error of the mean display value (see the type's documentation):
-    /// infinite below [`ERROR_BATCHES`] samples, where it is unknown. At a count that is not a
-    /// power of two only the complete runs count.
+    /// infinite below 2 samples, where it is unknown. At a count that is not a power of two only
+    /// the complete runs count.
     pub fn relative_error(&self) -> f64 {
-        if self.count < ERROR_BATCHES {
+        if self.count < 2 {
             return f64::INFINITY;
         }
         let size = Self::batch_size(self.count);
@@ -252,7 +253,8 @@ mod tests {
     }
 
     /// Welford's estimates match the two-pass formulas; the error is the batch-means standard
-    /// error over 8 aligned runs, whatever order the runs merged in.
+    /// error over 8 aligned runs, whatever order the runs merged in, and below 8 samples the
+    /// plain standard error of the samples (unknown at one).
     #[test]
     fn estimates_match_the_direct_formulas() {
         let samples: Vec<f32> = (0..64)
@@ -262,23 +264,25 @@ mod tests {
         for (k, &v) in samples.iter().enumerate() {
             e.add(Vec3::splat(v));
             let n = k + 1;
-            if n < 8 {
+            if n == 1 {
                 assert!(e.relative_error().is_infinite());
                 continue;
             }
-            if !n.is_power_of_two() {
+            if n > 8 && !n.is_power_of_two() {
                 continue;
             }
             let ys: Vec<f64> = samples[..n]
                 .iter()
                 .map(|&v| display_value(Vec3::splat(v)) as f64)
                 .collect();
+            let runs = n.min(8);
             let batches: Vec<f64> = ys
-                .chunks(n / 8)
+                .chunks(n / runs)
                 .map(|c| c.iter().sum::<f64>() / c.len() as f64)
                 .collect();
-            let m = batches.iter().sum::<f64>() / 8.0;
-            let se = (batches.iter().map(|b| (b - m).powi(2)).sum::<f64>() / 56.0).sqrt();
+            let m = batches.iter().sum::<f64>() / runs as f64;
+            let spread = batches.iter().map(|b| (b - m).powi(2)).sum::<f64>();
+            let se = (spread / (runs * (runs - 1)) as f64).sqrt();
             let expected = se / m.max(ERROR_FLOOR);
             assert!(
                 (e.relative_error() - expected).abs() < 1e-6 * expected.max(1e-3),

@@ -92,7 +92,8 @@ impl ProgressiveFilm {
     }
 
     /// The mean over pixels of the relative standard error adaptive sampling uses
-    /// ([`PixelEstimate::relative_error`]); `None` below the 8 samples it needs.
+    /// ([`PixelEstimate::relative_error`]); `None` below 8 samples, where it is too coarse to
+    /// report.
     pub fn mean_relative_error(&self) -> Option<f64> {
         if self.samples < crate::film::ERROR_BATCHES || self.estimates.is_empty() {
             return None;

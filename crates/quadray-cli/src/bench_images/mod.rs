@@ -1,6 +1,6 @@
 //! `quadray bench images`: render time against image error. A scene (by default
-//! `scenes/defense.toml`) is rendered at several uniform sample counts and adaptive error targets
-//! and compared with a high-sample reference by [`crate::compare`] (RMSE in linear space and of
+//! `scenes/defense.toml`) is rendered at several uniform sample counts, adaptive error targets and
+//! adaptive previews (a first round of [`PREVIEW_MIN_SPP`] samples) and compared with a high-sample reference by [`crate::compare`] (RMSE in linear space and of
 //! the 8-bit display image, FLIP on the display images); with `--povray`, the same scene's POV-Ray
 //! file is rendered at several anti-aliasing settings and compared with POV-Ray's own converged
 //! image, each renderer against its own reference since their shading differs slightly. The
@@ -25,6 +25,9 @@ use std::time::Instant;
 
 mod povray;
 mod report;
+
+/// First-round samples of the preview rows.
+pub const PREVIEW_MIN_SPP: u32 = 2;
 
 /// Sample set of the test renders: the renderer's default.
 pub const TEST_SEED: u32 = 0;
@@ -62,10 +65,19 @@ pub struct ImagesArgs {
         default_value = "0.04,0.02,0.01,0.005"
     )]
     pub adaptive: Vec<f64>,
+    /// Adaptive error targets rendered as previews, from a first round of 2 samples
+    /// (`--min-spp 2`), comma-separated (none: `--preview ""`).
+    #[arg(
+        long,
+        value_name = "E,E,...",
+        value_delimiter = ',',
+        default_value = "0.08,0.04,0.02"
+    )]
+    pub preview: Vec<f64>,
     /// Largest samples per pixel of the adaptive renders.
     #[arg(long, value_name = "N", default_value_t = quadray::adaptive::DEFAULT_MAX_SPP)]
     pub max_spp: u32,
-    /// First-round samples per pixel of the adaptive renders (a power of two, at least 8;
+    /// First-round samples per pixel of the adaptive renders (a power of two, at least 2;
     /// default: the renderer's, lowered to `--max-spp`).
     #[arg(long, value_name = "N")]
     pub min_spp: Option<u32>,
@@ -110,16 +122,24 @@ pub enum Method {
     Uniform(u32),
     /// quadray, adaptive sampling to this target error.
     Adaptive(f64),
+    /// quadray, adaptive sampling to this target error from [`PREVIEW_MIN_SPP`] samples.
+    Preview(f64),
     /// POV-Ray with these anti-aliasing options.
     PovRay(String),
 }
 
 impl Method {
+    /// Whether quadray sampled adaptively (to a target or as a preview).
+    pub fn is_adaptive(&self) -> bool {
+        matches!(self, Method::Adaptive(_) | Method::Preview(_))
+    }
+
     /// A short label for tables and plots.
     pub fn label(&self) -> String {
         match self {
             Method::Uniform(spp) => format!("{spp} spp"),
             Method::Adaptive(e) => format!("target {e}"),
+            Method::Preview(e) => format!("preview {e}"),
             Method::PovRay(o) => o.clone(),
         }
     }
@@ -191,7 +211,8 @@ pub struct ImageReport {
     pub threads: usize,
     /// Timed runs per test render.
     pub runs: usize,
-    /// One row per uniform sample count, increasing, then one per adaptive target.
+    /// One row per uniform sample count, increasing, then one per adaptive target, then one per
+    /// preview target.
     pub rows: Vec<Row>,
     /// POV-Ray's renders, when asked for.
     pub povray: Option<PovReport>,
@@ -233,11 +254,13 @@ fn validate(a: &ImagesArgs) -> Result<()> {
         "--spp must be increasing, got {:?}",
         a.spp
     );
-    for &target in &a.adaptive {
-        ensure!(
-            target.is_finite() && target > 0.0,
-            "--adaptive targets must be numbers above 0, got {target}"
-        );
+    for (flag, targets) in [("--adaptive", &a.adaptive), ("--preview", &a.preview)] {
+        for &target in targets {
+            ensure!(
+                target.is_finite() && target > 0.0,
+                "{flag} targets must be numbers above 0, got {target}"
+            );
+        }
     }
     if let Some(pov) = &a.povray {
         ensure!(pov.is_file(), "POV-Ray scene {} not found", pov.display());
@@ -264,6 +287,11 @@ fn validate(a: &ImagesArgs) -> Result<()> {
     }
     if !a.adaptive.is_empty() {
         adaptive(a, a.adaptive[0]).validate()?;
+    }
+    if !a.preview.is_empty() {
+        adaptive(a, a.preview[0])
+            .with_min_spp(PREVIEW_MIN_SPP)
+            .validate()?;
     }
     Ok(())
 }
@@ -405,6 +433,20 @@ pub fn measure(a: &ImagesArgs, progress: &mut dyn FnMut(&str)) -> Result<ImageRe
             &reference,
         )?);
     }
+    for &target in &a.preview {
+        progress(&format!("preview, target {target}, {} runs", a.runs));
+        let s = RenderSettings {
+            adaptive: Some(adaptive(a, target).with_min_spp(PREVIEW_MIN_SPP)),
+            ..settings(1, TEST_SEED)
+        };
+        rows.push(test_row(
+            &scene,
+            &s,
+            Method::Preview(target),
+            a.runs,
+            &reference,
+        )?);
+    }
     let povray = match &a.povray {
         Some(pov) => Some(measure_povray(a, pov, progress)?),
         None => None,
@@ -534,8 +576,14 @@ mod tests {
         assert_eq!(adaptive.len(), 4, "{md}");
         let display_rmse: Vec<f64> = adaptive.iter().map(|r| r[7].parse().unwrap()).collect();
         assert!(display_rmse[3] < display_rmse[0], "{display_rmse:?}");
+        // The previews: from 2 samples, fewer samples at the same target.
+        let preview = table("| preview ");
+        assert_eq!(preview.len(), 3, "{md}");
+        let mean_spp = |r: &Vec<String>| -> f64 { r[2].split(' ').next().unwrap().parse().unwrap() };
+        assert!(mean_spp(&preview[1]) < mean_spp(&adaptive[0]), "{md}");
         let svg = std::fs::read_to_string(dir.path().join("image-error.svg")).unwrap();
         assert!(svg.starts_with("<svg") && svg.contains("64 spp") && svg.contains("adaptive"));
+        assert!(svg.contains("preview 0.04"), "{svg}");
         let png = image::open(dir.path().join("image-error-reference.png")).unwrap();
         assert_eq!((png.width(), png.height()), (64, 36));
         // Nothing but the three outputs (no temporary files left behind).

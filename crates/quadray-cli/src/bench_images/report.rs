@@ -59,6 +59,19 @@ pub fn time_to_reach(points: &[(f64, f64)], error: f64) -> Reach {
     Reach::At((t0.ln() + f * (t1.ln() - t0.ln())).exp())
 }
 
+/// The `(time, error)` points that no other point beats in both (at most the time and less
+/// error), by increasing time: the best a set of settings offers at each time.
+pub fn front(mut points: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+    points.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let mut best = f64::INFINITY;
+    points.retain(|&(_, error)| {
+        let kept = error < best;
+        best = best.min(error);
+        kept
+    });
+    points
+}
+
 /// A curve's error at `time`, interpolated log–log; `None` outside the measured times.
 pub fn error_at(points: &[(f64, f64)], time: f64) -> Option<f64> {
     let mut p = points.to_vec();
@@ -81,13 +94,16 @@ impl ImageReport {
             .map(|c| c.rmse_linear / std::f64::consts::SQRT_2)
     }
 
-    /// quadray's (CPU time, display RMSE) points of one kind of method.
+    /// quadray's (CPU time, display RMSE) points of one kind of method (adaptive: targets and
+    /// previews together), without the points a cheaper one beats.
     fn curve(&self, adaptive: bool) -> Vec<(f64, f64)> {
-        self.rows
-            .iter()
-            .filter(|r| matches!(r.method, Method::Adaptive(_)) == adaptive)
-            .map(|r| (r.cpu_median(), r.error.rmse_display))
-            .collect()
+        front(
+            self.rows
+                .iter()
+                .filter(|r| r.method.is_adaptive() == adaptive)
+                .map(|r| (r.cpu_median(), r.error.rmse_display))
+                .collect(),
+        )
     }
 
     /// The report as markdown: what was run, quadray's rows, POV-Ray's rows and the race.
@@ -198,9 +214,9 @@ impl ImageReport {
     /// The log–log plot of CPU time against display RMSE, one mark per test image.
     pub fn svg(&self) -> Result<String> {
         use plotters::prelude::*;
-        let points = |rows: &[Row], adaptive: Option<bool>| -> Vec<(f64, f64, String)> {
+        let points = |rows: &[Row], kind: &dyn Fn(&Method) -> bool| -> Vec<(f64, f64, String)> {
             rows.iter()
-                .filter(|r| adaptive.is_none_or(|a| matches!(r.method, Method::Adaptive(_)) == a))
+                .filter(|r| kind(&r.method))
                 .map(|r| (r.cpu_median(), r.error.rmse_display, r.method.label()))
                 .collect()
         };
@@ -208,19 +224,24 @@ impl ImageReport {
             (
                 "quadray, uniform spp",
                 RGBColor(31, 119, 180).to_rgba(),
-                points(&self.rows, Some(false)),
+                points(&self.rows, &|m| matches!(m, Method::Uniform(_))),
             ),
             (
                 "quadray, adaptive",
                 RGBColor(44, 160, 44).to_rgba(),
-                points(&self.rows, Some(true)),
+                points(&self.rows, &|m| matches!(m, Method::Adaptive(_))),
+            ),
+            (
+                "quadray, adaptive preview (from 2 spp)",
+                RGBColor(148, 103, 189).to_rgba(),
+                points(&self.rows, &|m| matches!(m, Method::Preview(_))),
             ),
         ];
         if let Some(pov) = &self.povray {
             series.push((
                 "POV-Ray 3.7 (own reference)",
                 RGBColor(214, 39, 40).to_rgba(),
-                points(&pov.rows, None),
+                points(&pov.rows, &|_| true),
             ));
         }
         series.retain(|(_, _, p)| !p.is_empty());
@@ -295,5 +316,12 @@ mod tests {
         assert_eq!(error_at(&curve, 32.0), None);
         assert_eq!(error_at(&curve, 0.5), None);
         assert_eq!(error_at(&curve, 1.0), Some(0.1));
+    }
+
+    #[test]
+    fn the_front_drops_points_a_cheaper_one_beats() {
+        let points = vec![(4.0, 0.02), (1.0, 0.1), (2.0, 0.01), (3.0, 0.03), (2.0, 0.05)];
+        assert_eq!(front(points), [(1.0, 0.1), (2.0, 0.01)]);
+        assert_eq!(front(vec![]), []);
     }
 }

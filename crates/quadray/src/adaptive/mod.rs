@@ -35,8 +35,10 @@ pub struct Adaptive {
     /// The relative error every pixel should reach (0: none; every pixel refines to
     /// [`Adaptive::max_spp`] or until the time limit).
     pub target_error: f64,
-    /// Samples every pixel takes in the first round: a power of two, at least
-    /// [`ERROR_BATCHES`] (the error estimate needs that many).
+    /// Samples every pixel takes in the first round: a power of two, at least 2 (the error
+    /// estimate needs two). Below [`ERROR_BATCHES`] the first estimate is coarse (n − 1 degrees of
+    /// freedom) and a feature can slip past a pixel and its neighbours: a preview setting that
+    /// costs less where most of the image is flat.
     pub min_spp: u32,
     /// Samples no pixel exceeds.
     pub max_spp: u32,
@@ -47,6 +49,8 @@ pub struct Adaptive {
 
 /// Samples every pixel takes in the first round unless told otherwise.
 pub const DEFAULT_MIN_SPP: u32 = 8;
+/// The fewest samples a first round may take: the error estimate needs two.
+pub const MIN_FIRST_ROUND: u32 = 2;
 /// The most samples a pixel takes unless told otherwise.
 pub const DEFAULT_MAX_SPP: u32 = 1024;
 /// The first refinement rounds in which the neighbours of a pixel above the target are sampled
@@ -83,9 +87,9 @@ pub enum AdaptiveError {
     /// A maximum sample count outside 1..=MAX_SPP.
     #[error("the maximum samples per pixel must be in 1..={MAX_SPP}, got {0}")]
     MaxSpp(u32),
-    /// A first-round count that is not a power of two from 8 to the maximum.
+    /// A first-round count that is not a power of two from 2 to the maximum.
     #[error(
-        "the minimum samples per pixel must be a power of two from {ERROR_BATCHES} to the maximum ({max}), got {min}"
+        "the minimum samples per pixel must be a power of two from {MIN_FIRST_ROUND} to the maximum ({max}), got {min}"
     )]
     MinSpp {
         /// The minimum asked for.
@@ -107,7 +111,7 @@ impl Adaptive {
         if !(1..=MAX_SPP).contains(&self.max_spp) {
             return Err(AdaptiveError::MaxSpp(self.max_spp));
         }
-        if !(ERROR_BATCHES..=self.max_spp).contains(&self.min_spp)
+        if !(MIN_FIRST_ROUND..=self.max_spp).contains(&self.min_spp)
             || !self.min_spp.is_power_of_two()
         {
             return Err(AdaptiveError::MinSpp {
