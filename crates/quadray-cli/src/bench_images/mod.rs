@@ -579,7 +579,8 @@ mod tests {
         // The previews: from 2 samples, fewer samples at the same target.
         let preview = table("| preview ");
         assert_eq!(preview.len(), 3, "{md}");
-        let mean_spp = |r: &Vec<String>| -> f64 { r[2].split(' ').next().unwrap().parse().unwrap() };
+        let mean_spp =
+            |r: &Vec<String>| -> f64 { r[2].split(' ').next().unwrap().parse().unwrap() };
         assert!(mean_spp(&preview[1]) < mean_spp(&adaptive[0]), "{md}");
         let svg = std::fs::read_to_string(dir.path().join("image-error.svg")).unwrap();
         assert!(svg.starts_with("<svg") && svg.contains("64 spp") && svg.contains("adaptive"));

@@ -320,7 +320,13 @@ mod tests {
 
     #[test]
     fn the_front_drops_points_a_cheaper_one_beats() {
-        let points = vec![(4.0, 0.02), (1.0, 0.1), (2.0, 0.01), (3.0, 0.03), (2.0, 0.05)];
+        let points = vec![
+            (4.0, 0.02),
+            (1.0, 0.1),
+            (2.0, 0.01),
+            (3.0, 0.03),
+            (2.0, 0.05),
+        ];
         assert_eq!(front(points), [(1.0, 0.1), (2.0, 0.01)]);
         assert_eq!(front(vec![]), []);
     }

@@ -18,7 +18,7 @@
 //!   rows got their last round then depends on timing.
 
 use crate::aov::{AovSample, Aovs};
-use crate::film::{ERROR_BATCHES, Film, PixelEstimate};
+use crate::film::{Film, PixelEstimate};
 use crate::integrator::RayCounts;
 use crate::render::{MAX_SPP, PixelWindow, Progress, RenderError, Rendered, SampleContext};
 use crate::sampler::{pixel_pattern, progressive_2d};
@@ -36,9 +36,9 @@ pub struct Adaptive {
     /// [`Adaptive::max_spp`] or until the time limit).
     pub target_error: f64,
     /// Samples every pixel takes in the first round: a power of two, at least 2 (the error
-    /// estimate needs two). Below [`ERROR_BATCHES`] the first estimate is coarse (n − 1 degrees of
-    /// freedom) and a feature can slip past a pixel and its neighbours: a preview setting that
-    /// costs less where most of the image is flat.
+    /// estimate needs two). Below [`crate::film::ERROR_BATCHES`] the first estimate is coarse
+    /// (n − 1 degrees of freedom) and a feature can slip past a pixel and its neighbours: a
+    /// preview setting that costs less where most of the image is flat.
     pub min_spp: u32,
     /// Samples no pixel exceeds.
     pub max_spp: u32,
