@@ -190,18 +190,28 @@ impl Adaptive {
             1 => self.target_error * FIRST_ROUND_MARGIN,
             _ => self.target_error,
         };
-        let above = |i: usize| self.above(estimates[i].count(), errors[i], threshold);
+        // Each pixel's own verdict once, in a dense mask: the neighbour test reads it nine times.
+        refine
+            .par_iter_mut()
+            .zip(estimates.par_iter().zip(errors))
+            .for_each(|(above, (estimate, &error))| {
+                *above = self.above(estimate.count(), error, threshold);
+            });
+        if !follows_neighbours {
+            return;
+        }
+        let above = refine.to_vec();
         refine
             .par_chunks_mut(width)
             .enumerate()
             .for_each(|(y, row)| {
+                let (y0, y1) = (y.saturating_sub(1), (y + 1).min(height - 1));
                 for (x, wanted) in row.iter_mut().enumerate() {
-                    let i = y * width + x;
-                    *wanted = above(i)
-                        || (follows_neighbours && estimates[i].count() < count && {
-                            let (y0, y1) = (y.saturating_sub(1), (y + 1).min(height - 1));
+                    *wanted = *wanted
+                        || (estimates[y * width + x].count() < count && {
                             let (x0, x1) = (x.saturating_sub(1), (x + 1).min(width - 1));
-                            (y0..=y1).any(|ny| (x0..=x1).any(|nx| above(ny * width + nx)))
+                            (y0..=y1)
+                                .any(|ny| above[ny * width + x0..=ny * width + x1].contains(&true))
                         });
                 }
             });
@@ -287,10 +297,15 @@ pub(crate) fn render_adaptive(
         if progress.cancelled() {
             return Err(RenderError::Cancelled);
         }
+        // Only the pixels this round sampled have new estimates.
         errors
             .par_iter_mut()
-            .zip(&estimates)
-            .for_each(|(error, estimate)| *error = estimate.relative_error());
+            .zip(estimates.par_iter().zip(&refine))
+            .for_each(|(error, (estimate, &sampled))| {
+                if sampled {
+                    *error = estimate.relative_error();
+                }
+            });
         adaptive.select(round + 1, &estimates, &errors, ww, &mut refine);
         progress.round_done(&RoundSummary::of_window(
             round,
