@@ -6,7 +6,7 @@ use crate::camera::CameraFrame;
 use crate::film::{Film, PixelEstimate};
 use crate::footprint::{HitFootprint, RayCone, footprint_scale};
 use crate::integrator::{RayCounts, Whitted};
-use crate::sampler::{pixel_pattern, sample_2d};
+use crate::sampler::{PixelSampler, pixel_pattern};
 use crate::scene::Scene;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -433,15 +433,16 @@ fn render_uniform(
             // the whole render's.
             let y = window.y0 + row_index as u32;
             let mut counts = RayCounts::default();
+            let mut sampler = PixelSampler::new(spp);
             for (column, pixel) in row.iter_mut().enumerate() {
                 let x = window.x0 + column as u32;
-                let pattern = pixel_pattern(x, y, settings.seed);
+                sampler.start_pixel(pixel_pattern(x, y, settings.seed));
                 let mut aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
                 // The variance pass needs the running estimate; the image keeps its f32 sum.
                 let mut estimate = selection.variance.then(PixelEstimate::default);
                 let mut sum = Vec3::ZERO;
                 for s in 0..spp {
-                    let offset = sample_2d(s, spp, pattern);
+                    let offset = sampler.sample(s);
                     let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
                     let radiance = context.trace((x, y), offset, cone, first_hit, &mut counts);
                     if let Some(e) = &mut estimate {

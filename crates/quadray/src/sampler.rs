@@ -106,6 +106,72 @@ pub fn sample_2d(s: u32, count: u32, pattern: u32) -> (f64, f64) {
     )
 }
 
+/// [`sample_2d`] for every sample of one pixel at a time: the permutations of the pixel's columns
+/// and rows of strata are keyed by the pixel alone, so they are computed once per pixel (m + n
+/// hashes) instead of once per sample (2 · count). The points are bit-identical to
+/// [`sample_2d`]'s. Measured on defense at 64 spp, `sample_2d` alone took 7.5% of the render.
+#[derive(Clone, Debug)]
+pub struct PixelSampler {
+    count: u32,
+    columns: u32,
+    rows: u32,
+    pattern: u32,
+    /// The permuted column of each column index, then the permuted row of each row index.
+    strata: Vec<u32>,
+}
+
+impl PixelSampler {
+    /// A sampler for `count` samples a pixel, ready for [`PixelSampler::start_pixel`].
+    pub fn new(count: u32) -> PixelSampler {
+        let columns = ((count as f64).sqrt() as u32).max(1);
+        let rows = count.div_ceil(columns);
+        PixelSampler {
+            count,
+            columns,
+            rows,
+            pattern: 0,
+            strata: vec![0; (columns + rows) as usize],
+        }
+    }
+
+    /// Starts the pixel whose pattern key is `pattern` ([`pixel_pattern`]).
+    pub fn start_pixel(&mut self, pattern: u32) {
+        self.pattern = pattern;
+        if self.count <= 1 {
+            return;
+        }
+        let (m, n) = (self.columns, self.rows);
+        let (column_key, row_key) = (
+            pattern.wrapping_mul(0x68bc21eb),
+            pattern.wrapping_mul(0x02e5be93),
+        );
+        let (columns, rows) = self.strata.split_at_mut(m as usize);
+        for (i, column) in columns.iter_mut().enumerate() {
+            *column = permute(i as u32, m, column_key);
+        }
+        for (i, row) in rows.iter_mut().enumerate() {
+            *row = permute(i as u32, n, row_key);
+        }
+    }
+
+    /// Sample `s` of the current pixel: [`sample_2d`]`(s, count, pattern)`.
+    pub fn sample(&self, s: u32) -> (f64, f64) {
+        let (count, m, n, pattern) = (self.count, self.columns, self.rows, self.pattern);
+        if count <= 1 {
+            return (0.5, 0.5);
+        }
+        let s = permute(s, count, pattern.wrapping_mul(0x51633e2d));
+        let sx = self.strata[remainder(s, m) as usize];
+        let sy = self.strata[(m + quotient(s, m)) as usize];
+        let jx = rand_float(s, pattern.wrapping_mul(0x967a889b));
+        let jy = rand_float(s, pattern.wrapping_mul(0x368cc8b7));
+        (
+            (sx as f64 + (sy as f64 + jx) / n as f64) / m as f64,
+            (s as f64 + jy) / count as f64,
+        )
+    }
+}
+
 /// Point `index` of pixel `pattern`'s progressive sequence in the unit pixel: the first two
 /// dimensions of the Sobol sequence, Owen-scrambled per pixel (hash-based nested uniform
 /// scrambling, Burley, "Practical Hash-based Owen Scrambling", JCGT 9(4), 2020).
@@ -212,6 +278,23 @@ mod tests {
                     value / divisor,
                     "{value} / {divisor}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn the_pixel_sampler_gives_sample_2d_s_points() {
+        for count in [1u32, 2, 3, 4, 7, 16, 17, 64, 100, 255, 1024] {
+            let mut sampler = PixelSampler::new(count);
+            for pattern in [0u32, 1, 0x9e37_79b9, u32::MAX] {
+                sampler.start_pixel(pattern);
+                for s in 0..count {
+                    assert_eq!(
+                        sampler.sample(s),
+                        sample_2d(s, count, pattern),
+                        "count {count}, pattern {pattern}, sample {s}"
+                    );
+                }
             }
         }
     }
