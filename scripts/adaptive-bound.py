@@ -2,13 +2,14 @@
 """How far adaptive sampling could go on one scene: bounds from per-pixel errors measured on
 independent renders, against what `quadray render --target-error` reaches.
 
-Every pixel of a render with `--target-error 1e-9 --min-spp n --max-spp n` takes exactly the first
-n samples of its own progressive sequence, the samples an adaptive render would give it at count
+Every pixel of a render with `--target-error 1e9 --min-spp n` takes exactly the first n samples of
+its own progressive sequence, each filtered at the footprint of the default `--max-spp` (1024), and
+no pixel refines (no relative error is above 1e9): the samples an adaptive render gives it at count
 n. From S such renders with independent sample sets (`--seed`) at n = 8..512, the squared error of
 each pixel at each n against a 1024-spp reference is known S times over. Choosing each pixel's n
 from the first S-2 renders and scoring the choice on the last 2 (so that luck in the choice is not
 counted as skill) gives the sample budget, as a fraction of uniform 64 spp, at which each rule
-matches uniform 64's linear RMSE:
+matches the linear RMSE of uniform 64-spp renders (`--spp 64`) with the scoring sample sets:
 
 - oracle: each pixel's n minimises n + mu * error(n), the allocation that minimises the total
   squared error for its total samples (the best any rule can do with that knowledge);
@@ -16,6 +17,8 @@ matches uniform 64's linear RMSE:
   squared display error over max(display value, 0.1), the quantity the sampler compares with
   its target) is below one threshold for all pixels: the sampler's own stopping rule, with the
   pixel's error known instead of estimated from its samples;
+Counts start at 8, the default first round: previews from 2 or 4 are not in the bound.
+
 - the sampler itself, at a few targets (mean spp and linear RMSE; its CPU time is another matter:
   the pixels it refines cost more rays per sample than the average pixel).
 
@@ -58,29 +61,35 @@ def display(rgb):
 
 def threshold_counts(errors, kept_error, target_mse):
     """Per pixel, the index of the smallest count whose `errors` are at most a threshold, with the
-    threshold that makes the mean of `kept_error` at the chosen counts `target_mse`."""
+    largest threshold that keeps the mean of `kept_error` at the chosen counts at `target_mse`."""
     low, high = 1e-16, 1e2
+    feasible = np.full(errors.shape[1:], len(COUNTS) - 1)
     for _ in range(200):
         threshold = np.sqrt(low * high)
         below = errors <= threshold
         below[-1] = True
         choice = np.argmax(below, 0)
-        mse = np.take_along_axis(kept_error, choice[None], 0)[0].mean()
-        low, high = (low, threshold) if mse > target_mse else (threshold, high)
-    return choice
+        if np.take_along_axis(kept_error, choice[None], 0)[0].mean() > target_mse:
+            high = threshold
+        else:
+            low, feasible = threshold, choice
+    return feasible
 
 
 def oracle_counts(errors, kept_error, target_mse):
-    """Per pixel, the index of the count minimising n + mu * error(n), with the mu that makes the
-    mean of `kept_error` at the chosen counts `target_mse`."""
+    """Per pixel, the index of the count minimising n + mu * error(n), with the smallest mu that
+    keeps the mean of `kept_error` at the chosen counts at `target_mse`."""
     n = np.array(COUNTS, float)[:, None, None]
     low, high = 1e-3, 1e16
+    feasible = np.full(errors.shape[1:], len(COUNTS) - 1)
     for _ in range(200):
         mu = np.sqrt(low * high)
         choice = np.argmin(n + mu * errors, 0)
-        mse = np.take_along_axis(kept_error, choice[None], 0)[0].mean()
-        low, high = (mu, high) if mse > target_mse else (low, mu)
-    return choice
+        if np.take_along_axis(kept_error, choice[None], 0)[0].mean() > target_mse:
+            low = mu
+        else:
+            high, feasible = mu, choice
+    return feasible
 
 
 def main():
@@ -95,7 +104,9 @@ def main():
     if args.seeds < 3:
         sys.exit("--seeds must be at least 3: the choice needs one set, the score two")
     os.makedirs(args.work, exist_ok=True)
-    work = lambda name: os.path.join(args.work, name)
+    # Renders are cached under names that say the scene and resolution they are of.
+    stem = f"{os.path.splitext(os.path.basename(args.scene))[0]}-{args.res}"
+    work = lambda name: os.path.join(args.work, f"{stem}-{name}")
 
     render(args, work("reference.exr"), "--spp", "1024", "--seed", "1")
     reference = linear(work("reference.exr"))
@@ -106,8 +117,7 @@ def main():
         per_count, per_count_display = [], []
         for n in COUNTS:
             out = work(f"prefix-{seed}-{n}.exr")
-            render(args, out, "--target-error", "1e-9", "--min-spp", str(n), "--max-spp",
-                   str(n), "--seed", str(seed))
+            render(args, out, "--target-error", "1e9", "--min-spp", str(n), "--seed", str(seed))
             image = linear(out)
             per_count.append(((image - reference) ** 2).mean(-1))
             per_count_display.append((display(image) - reference_display) ** 2)
@@ -120,8 +130,14 @@ def main():
     choose = squared[chosen].mean(0)
     score = squared[scored].mean(0)
     relative = np.sqrt(squared_display[chosen].mean(0)) / np.maximum(reference_display, 0.1)
-    uniform_mse = score[UNIFORM].mean()
-    print(f"{args.scene} at {args.res}: uniform 64 spp, linear RMSE {np.sqrt(uniform_mse):.3e}")
+    uniform = []
+    for seed in list(seeds)[scored]:
+        out = work(f"uniform-{seed}-64.exr")
+        render(args, out, "--spp", "64", "--seed", str(seed))
+        uniform.append(((linear(out) - reference) ** 2).mean())
+    uniform_mse = np.mean(uniform)
+    print(f"{args.scene} at {args.res}: uniform 64 spp, linear RMSE {np.sqrt(uniform_mse):.3e} "
+          f"(prefixes of 64: {np.sqrt(score[UNIFORM].mean()):.3e})")
     print(f"choice from {args.seeds - 2} sample sets, scored on 2; samples as a fraction of 64 spp "
           "at uniform 64's linear RMSE:")
     for name, choice in [
@@ -148,10 +164,14 @@ def main():
         curve.append((share, ratio))
         print(f"  target {target}: {share:.3f} of the samples, RMSE {ratio:.3f}x")
     # Log-log interpolation between the two targets around uniform 64's error.
-    for (s0, r0), (s1, r1) in zip(curve, curve[1:]):
-        if r0 >= 1.0 >= r1:
-            f = np.log(r0) / np.log(r0 / r1)
-            print(f"  at uniform 64's RMSE (interpolated): {s0 * (s1 / s0) ** f:.3f} of the samples")
+    curve.sort()
+    brackets = [(a, b) for a, b in zip(curve, curve[1:]) if a[1] >= 1.0 >= b[1]]
+    if not brackets:
+        print("  no two targets bracket uniform 64's RMSE: widen --targets")
+    for (s0, r0), (s1, r1) in brackets[:1]:
+        f = np.log(r0) / np.log(r0 / r1)
+        share = s0 * (s1 / s0) ** f
+        print(f"  at uniform 64's RMSE (interpolated): {share:.3f} of the samples")
 
 
 if __name__ == "__main__":

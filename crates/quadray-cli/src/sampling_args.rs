@@ -25,7 +25,7 @@ pub struct SamplingArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=MAX_SPP as i64), conflicts_with = "spp")]
     pub min_spp: Option<u32>,
     /// The most samples an adaptive render puts in a pixel (default 1024).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64), conflicts_with = "spp")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=MAX_SPP as i64), conflicts_with = "spp")]
     pub max_spp: Option<u32>,
 }
 

@@ -82,11 +82,12 @@ pub const ERROR_BATCHES: u32 = 8;
 ///
 /// The standard error is estimated by **batch means**: the n samples (n = 2^k, n >= 8) are split
 /// into [`ERROR_BATCHES`] aligned runs of n/8, and SE² = Σ(bᵢ − b̄)² / (8 · 7) over the runs'
-/// means bᵢ. Below 8 samples every sample is a run of its own: the plain standard error, with
-/// n − 1 degrees of freedom (a coarse estimate, for previews that start at 2 or 4 samples). With [`crate::sampler::progressive_2d`] each aligned run is itself a stratified net,
+/// means bᵢ. With [`crate::sampler::progressive_2d`] each aligned run is itself a stratified net,
 /// so its mean has the stratified error: the estimate follows the error stratification leaves
 /// (for an edge it falls about as n^-3/4, not n^-1/2 as the samples' plain variance would say),
-/// and with 7 degrees of freedom it is rarely fooled by two halves agreeing by chance.
+/// and with 7 degrees of freedom it is rarely fooled by two halves agreeing by chance. Below 8
+/// samples every sample is a run of its own: the plain standard error, with n − 1 degrees of
+/// freedom (a coarse estimate, for previews that start at 2 or 4 samples).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PixelEstimate {
     count: u32,

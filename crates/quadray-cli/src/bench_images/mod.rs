@@ -1,7 +1,8 @@
 //! `quadray bench images`: render time against image error. A scene (by default
 //! `scenes/defense.toml`) is rendered at several uniform sample counts, adaptive error targets and
-//! adaptive previews (a first round of [`PREVIEW_MIN_SPP`] samples) and compared with a high-sample reference by [`crate::compare`] (RMSE in linear space and of
-//! the 8-bit display image, FLIP on the display images); with `--povray`, the same scene's POV-Ray
+//! adaptive previews (a first round of [`PREVIEW_MIN_SPP`] samples) and compared with a
+//! high-sample reference by [`crate::compare`] (RMSE in linear space and of the 8-bit display
+//! image, FLIP on the display images); with `--povray`, the same scene's POV-Ray
 //! file is rendered at several anti-aliasing settings and compared with POV-Ray's own converged
 //! image, each renderer against its own reference since their shading differs slightly. The
 //! report is a markdown table and a log–log SVG plot of CPU time against display RMSE.
@@ -407,45 +408,30 @@ pub fn measure(a: &ImagesArgs, progress: &mut dyn FnMut(&str)) -> Result<ImageRe
             &Thresholds::default(),
         )?)
     };
+    // The test renders: uniform counts, then adaptive targets, then previews.
+    let uniform = a
+        .spp
+        .iter()
+        .map(|&spp| (Method::Uniform(spp), settings(spp, TEST_SEED)));
+    let targets = a
+        .adaptive
+        .iter()
+        .map(|&t| (Method::Adaptive(t), adaptive(a, t)));
+    let previews = a.preview.iter().map(|&t| {
+        let preview = adaptive(a, t).with_min_spp(PREVIEW_MIN_SPP);
+        (Method::Preview(t), preview)
+    });
+    let adaptive_renders = targets.chain(previews).map(|(method, adaptive)| {
+        let s = RenderSettings {
+            adaptive: Some(adaptive),
+            ..settings(1, TEST_SEED)
+        };
+        (method, s)
+    });
     let mut rows = Vec::new();
-    for &spp in &a.spp {
-        progress(&format!("{spp} spp, {} runs", a.runs));
-        let s = settings(spp, TEST_SEED);
-        rows.push(test_row(
-            &scene,
-            &s,
-            Method::Uniform(spp),
-            a.runs,
-            &reference,
-        )?);
-    }
-    for &target in &a.adaptive {
-        progress(&format!("adaptive, target {target}, {} runs", a.runs));
-        let s = RenderSettings {
-            adaptive: Some(adaptive(a, target)),
-            ..settings(1, TEST_SEED)
-        };
-        rows.push(test_row(
-            &scene,
-            &s,
-            Method::Adaptive(target),
-            a.runs,
-            &reference,
-        )?);
-    }
-    for &target in &a.preview {
-        progress(&format!("preview, target {target}, {} runs", a.runs));
-        let s = RenderSettings {
-            adaptive: Some(adaptive(a, target).with_min_spp(PREVIEW_MIN_SPP)),
-            ..settings(1, TEST_SEED)
-        };
-        rows.push(test_row(
-            &scene,
-            &s,
-            Method::Preview(target),
-            a.runs,
-            &reference,
-        )?);
+    for (method, s) in uniform.chain(adaptive_renders) {
+        progress(&format!("{}, {} runs", method.label(), a.runs));
+        rows.push(test_row(&scene, &s, method, a.runs, &reference)?);
     }
     let povray = match &a.povray {
         Some(pov) => Some(measure_povray(a, pov, progress)?),

@@ -59,9 +59,11 @@ pub const DEFAULT_MAX_SPP: u32 = 1024;
 /// RMSE; following neighbours in every round cost 1.2–1.4× the CPU time of this at equal RMSE.
 pub const NEIGHBOUR_ROUNDS: u32 = 3;
 /// After the first round a pixel stops, and leaves its neighbours be, only when its error is below
-/// this fraction of the target. The first estimate has 7 degrees of freedom and no neighbour
-/// rounds before it: an estimate at 0.3× its true value has a chance near 1 in 800 (χ²₇ < 0.63),
-/// where stopping below 1× stops about half the pixels whose true error is the target. Measured
+/// this fraction of the target. With the default first round of 8, the first estimate has 7
+/// degrees of freedom and no neighbour rounds before it: an estimate at 0.3× its true value has a
+/// chance near 1 in 800 (χ²₇ < 0.63), where stopping below 1× stops about half the pixels whose
+/// true error is the target (a preview's first round of 2 has one degree of freedom, and a chance
+/// near 1 in 4: the neighbour rounds carry more of its load). Measured
 /// (480x270, one thread, targets 0.005 to 0.02, linear RMSE): for 1–4% more rays the image error
 /// fell 6–7% on defense, 3–6% on reflective and 4–10% on grid. Applied in the later neighbour
 /// rounds as well (0.3 or 0.5), it took 8–21% more samples for the same error on defense.
@@ -84,8 +86,8 @@ pub enum AdaptiveError {
     /// A target error that is negative or not a number.
     #[error("the target error must be a finite number >= 0, got {0}")]
     TargetError(f64),
-    /// A maximum sample count outside 1..=MAX_SPP.
-    #[error("the maximum samples per pixel must be in 1..={MAX_SPP}, got {0}")]
+    /// A maximum sample count outside MIN_FIRST_ROUND..=MAX_SPP.
+    #[error("the maximum samples per pixel must be in {MIN_FIRST_ROUND}..={MAX_SPP}, got {0}")]
     MaxSpp(u32),
     /// A first-round count that is not a power of two from 2 to the maximum.
     #[error(
@@ -108,7 +110,7 @@ impl Adaptive {
         if !(self.target_error.is_finite() && self.target_error >= 0.0) {
             return Err(AdaptiveError::TargetError(self.target_error));
         }
-        if !(1..=MAX_SPP).contains(&self.max_spp) {
+        if !(MIN_FIRST_ROUND..=MAX_SPP).contains(&self.max_spp) {
             return Err(AdaptiveError::MaxSpp(self.max_spp));
         }
         if !(MIN_FIRST_ROUND..=self.max_spp).contains(&self.min_spp)
@@ -240,7 +242,7 @@ pub(crate) fn render_adaptive(
     let ww = window.width() as usize;
     let pixels = ww * window.height() as usize;
     let mut estimates = vec![PixelEstimate::default(); pixels];
-    // Each pixel's relative error after the last round, computed once per round.
+    // Each pixel's relative error after the last round, recomputed for the pixels a round samples.
     let mut errors = vec![f64::INFINITY; pixels];
     // Which pixels the next round samples.
     let mut refine = vec![true; pixels];
@@ -297,15 +299,7 @@ pub(crate) fn render_adaptive(
         if progress.cancelled() {
             return Err(RenderError::Cancelled);
         }
-        // Only the pixels this round sampled have new estimates.
-        errors
-            .par_iter_mut()
-            .zip(estimates.par_iter().zip(&refine))
-            .for_each(|(error, (estimate, &sampled))| {
-                if sampled {
-                    *error = estimate.relative_error();
-                }
-            });
+        update_errors(&mut errors, &estimates, &refine);
         adaptive.select(round + 1, &estimates, &errors, ww, &mut refine);
         progress.round_done(&RoundSummary::of_window(
             round,
@@ -328,6 +322,18 @@ pub(crate) fn render_adaptive(
         counts: totals.into_inner().unwrap_or_else(|e| e.into_inner()),
     };
     Ok(sampled.finish(&context.with_window(inner), adaptive, window))
+}
+
+/// Recomputes the relative error of the pixels `sampled` marks: only they have new estimates.
+fn update_errors(errors: &mut [f64], estimates: &[PixelEstimate], sampled: &[bool]) {
+    errors
+        .par_iter_mut()
+        .zip(estimates.par_iter().zip(sampled))
+        .for_each(|(error, (estimate, &sampled))| {
+            if sampled {
+                *error = estimate.relative_error();
+            }
+        });
 }
 
 /// Brings the pixels of one row of the window that `refine` marks to `count` samples, each

@@ -418,6 +418,11 @@ fn bad_settings_are_refused() {
         ..ok
     });
     bad(Adaptive { max_spp: 0, ..ok });
+    // One sample a pixel leaves no error to estimate: not an adaptive render.
+    assert!(matches!(
+        ok.with_max_spp(1).validate(),
+        Err(AdaptiveError::MaxSpp(1))
+    ));
     bad(Adaptive {
         max_spp: MAX_SPP + 1,
         ..ok
