@@ -100,30 +100,7 @@ fn edges_get_more_samples_than_flat_regions() {
     };
     let (rendered, aovs) =
         render_with_aovs(&disc(), &settings(adaptive), counts_pass(), &NoProgress).unwrap();
-    let aovs = aovs.unwrap();
-    // Pixel centres in world units: 4/48 per pixel, the image centre at (24, 24).
-    let radius_at = |x: u32, y: u32| {
-        let (u, v) = (
-            (x as f64 + 0.5 - 24.0) / 12.0,
-            (y as f64 + 0.5 - 24.0) / 12.0,
-        );
-        (u * u + v * v).sqrt()
-    };
-    let pixel_diagonal = 2f64.sqrt() / 12.0;
-    let half_diagonal = 0.5 * pixel_diagonal;
-    let (mut edge, mut flat) = (Vec::new(), Vec::new());
-    for y in 0..48 {
-        for x in 0..48 {
-            let r = radius_at(x, y);
-            let count = aovs.get(x, y).sample_count;
-            if (r - 1.0).abs() < half_diagonal * 0.5 {
-                edge.push(count);
-            } else if (r - 1.0).abs() > half_diagonal + 2.0 * pixel_diagonal {
-                // Beyond the pixels the edge cuts and their neighbours.
-                flat.push(count);
-            }
-        }
-    }
+    let (edge, flat) = edge_and_flat_counts(&aovs.unwrap());
     // Flat pixels away from the edge stop after the first round; pixels the edge cuts refine.
     assert!(flat.iter().all(|&c| c == 8), "{flat:?}");
     let edge_mean = edge.iter().sum::<u32>() as f64 / edge.len() as f64;
@@ -138,15 +115,43 @@ fn edges_get_more_samples_than_flat_regions() {
     let error = sampling.error.unwrap();
     assert_eq!(error.stop, Stop::Converged);
     assert!(error.worst <= 0.05);
-    // The disc's area: π of the 16 square units in view.
-    let covered = rendered
-        .film
-        .pixels()
-        .iter()
-        .map(|p| p.x as f64)
-        .sum::<f64>();
-    let area = covered * 16.0 / (48.0 * 48.0);
+    let area = disc_area(&rendered.film);
     assert!((area - std::f64::consts::PI).abs() < 0.01, "{area}");
+}
+
+/// The sample counts of the disc's pixels that its edge cuts (centres within a quarter of a
+/// pixel's diagonal of it), and of those beyond the pixels it cuts and their neighbours.
+fn edge_and_flat_counts(aovs: &Aovs) -> (Vec<u32>, Vec<u32>) {
+    // Pixel centres in world units: 4/48 per pixel, the image centre at (24, 24).
+    let radius_at = |x: u32, y: u32| {
+        let (u, v) = (
+            (x as f64 + 0.5 - 24.0) / 12.0,
+            (y as f64 + 0.5 - 24.0) / 12.0,
+        );
+        (u * u + v * v).sqrt()
+    };
+    let pixel_diagonal = 2f64.sqrt() / 12.0;
+    let half_diagonal = 0.5 * pixel_diagonal;
+    let (mut edge, mut flat) = (Vec::new(), Vec::new());
+    for y in 0..48 {
+        for x in 0..48 {
+            let distance = (radius_at(x, y) - 1.0).abs();
+            let count = aovs.get(x, y).sample_count;
+            if distance < half_diagonal * 0.5 {
+                edge.push(count);
+            } else if distance > half_diagonal + 2.0 * pixel_diagonal {
+                flat.push(count);
+            }
+        }
+    }
+    (edge, flat)
+}
+
+/// The disc's area measured on the image: its coverage times the 16 square units in view (π when
+/// the edge pixels are right).
+fn disc_area(film: &Film) -> f64 {
+    let covered = film.pixels().iter().map(|p| p.x as f64).sum::<f64>();
+    covered * 16.0 / (48.0 * 48.0)
 }
 
 /// A preview that starts at 2 samples leaves the flat pixels at 2 and still finds the edge from
@@ -162,23 +167,7 @@ fn a_preview_from_two_samples_stops_flat_pixels_at_two_and_refines_the_edge() {
     };
     let (rendered, aovs) =
         render_with_aovs(&disc(), &settings(adaptive), counts_pass(), &NoProgress).unwrap();
-    let aovs = aovs.unwrap();
-    let (mut edge, mut flat) = (Vec::new(), Vec::new());
-    for y in 0..48 {
-        for x in 0..48 {
-            let (u, v) = (
-                (x as f64 + 0.5 - 24.0) / 12.0,
-                (y as f64 + 0.5 - 24.0) / 12.0,
-            );
-            let r = (u * u + v * v).sqrt();
-            let count = aovs.get(x, y).sample_count;
-            if (r - 1.0).abs() < 0.03 {
-                edge.push(count);
-            } else if (r - 1.0).abs() > 0.3 {
-                flat.push(count);
-            }
-        }
-    }
+    let (edge, flat) = edge_and_flat_counts(&aovs.unwrap());
     assert!(flat.iter().all(|&c| c == 2), "{flat:?}");
     let refined = edge.iter().filter(|&&c| c >= 16).count();
     assert!(
@@ -187,13 +176,7 @@ fn a_preview_from_two_samples_stops_flat_pixels_at_two_and_refines_the_edge() {
         edge.len()
     );
     assert_eq!(rendered.sampling.min_spp, 2);
-    let covered = rendered
-        .film
-        .pixels()
-        .iter()
-        .map(|p| p.x as f64)
-        .sum::<f64>();
-    let area = covered * 16.0 / (48.0 * 48.0);
+    let area = disc_area(&rendered.film);
     assert!((area - std::f64::consts::PI).abs() < 0.02, "{area}");
 }
 
