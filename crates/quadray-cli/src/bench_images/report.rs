@@ -232,7 +232,7 @@ impl ImageReport {
                 points(&self.rows, &|m| matches!(m, Method::Adaptive(_))),
             ),
             (
-                "quadray, adaptive preview (from 2 spp)",
+                "quadray, preview (from 2 spp)",
                 RGBColor(148, 103, 189).to_rgba(),
                 points(&self.rows, &|m| matches!(m, Method::Preview(_))),
             ),
