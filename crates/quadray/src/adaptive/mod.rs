@@ -226,7 +226,6 @@ pub(crate) fn render_adaptive(
     adaptive: &Adaptive,
     progress: &dyn Progress,
 ) -> Result<(Rendered, Option<Aovs>), RenderError> {
-    let started = Instant::now();
     let settings = context.settings;
     let inner = context.window;
     // A pixel's decisions depend on its neighbours', which depend on theirs one round earlier:
@@ -238,7 +237,15 @@ pub(crate) fn render_adaptive(
         settings.width,
         settings.height,
     );
-    let context = &context.with_window(window);
+    let rounds = Rounds {
+        context: &context.with_window(window),
+        adaptive,
+        inner,
+        progress,
+        started: Instant::now(),
+        totals: Mutex::new(RayCounts::default()),
+        timed_out: AtomicBool::new(false),
+    };
     let ww = window.width() as usize;
     let pixels = ww * window.height() as usize;
     let mut estimates = vec![PixelEstimate::default(); pixels];
@@ -246,56 +253,16 @@ pub(crate) fn render_adaptive(
     let mut errors = vec![f64::INFINITY; pixels];
     // Which pixels the next round samples.
     let mut refine = vec![true; pixels];
-    let mut aov_samples = context.aov_buffer();
-    let totals = Mutex::new(RayCounts::default());
-    let timed_out = AtomicBool::new(false);
-    let out_of_time = || {
-        adaptive
-            .time_limit
-            .is_some_and(|limit| started.elapsed() >= limit)
-    };
+    let mut aov_samples = rounds.context.aov_buffer();
     let mut round = 0u32;
     loop {
         // Surface passes come from each pixel's first sample, taken in round 0.
-        let aov_rows = context.aov_rows(if round == 0 {
-            &mut aov_samples
+        let aovs = if round == 0 {
+            &mut aov_samples[..]
         } else {
             &mut []
-        });
-        estimates
-            .par_chunks_mut(ww)
-            .zip(refine.par_chunks(ww))
-            .zip(aov_rows)
-            .enumerate()
-            .for_each(|(row_index, ((row, row_refine), mut aov_row))| {
-                let y = window.y0 + row_index as u32;
-                let row_done = || {
-                    if (inner.y0..inner.y1).contains(&y) {
-                        progress.row_done();
-                    }
-                };
-                if progress.cancelled() {
-                    return;
-                }
-                if round > 0 && out_of_time() {
-                    timed_out.store(true, Ordering::Relaxed);
-                    row_done();
-                    return;
-                }
-                // Every round's samples stand for their share of the pixel at `max_spp`, so all
-                // of a pixel's samples estimate one filtered image (the uniform render's at
-                // `max_spp`) and the batch means see no difference between rounds' footprints.
-                let counts = sample_row(
-                    context,
-                    y,
-                    row,
-                    row_refine,
-                    aov_row.as_deref_mut(),
-                    (adaptive.round_count(round), adaptive.max_spp),
-                );
-                *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
-                row_done();
-            });
+        };
+        rounds.sample(round, &mut estimates, &refine, aovs);
         if progress.cancelled() {
             return Err(RenderError::Cancelled);
         }
@@ -308,7 +275,10 @@ pub(crate) fn render_adaptive(
             adaptive.target_error,
         ));
         round += 1;
-        if !refine.contains(&true) || timed_out.load(Ordering::Relaxed) || out_of_time() {
+        if !refine.contains(&true)
+            || rounds.timed_out.load(Ordering::Relaxed)
+            || rounds.out_of_time()
+        {
             break;
         }
     }
@@ -318,10 +288,84 @@ pub(crate) fn render_adaptive(
         errors,
         aov_samples,
         rounds: round,
-        timed_out: timed_out.into_inner(),
-        counts: totals.into_inner().unwrap_or_else(|e| e.into_inner()),
+        timed_out: rounds.timed_out.into_inner(),
+        counts: rounds
+            .totals
+            .into_inner()
+            .unwrap_or_else(|e| e.into_inner()),
     };
     Ok(sampled.finish(&context.with_window(inner), adaptive, window))
+}
+
+/// What the rounds of one adaptive render share: the bordered window's context, the settings,
+/// the window the caller asked for, and the running totals.
+struct Rounds<'a> {
+    /// The context over the bordered window.
+    context: &'a SampleContext<'a>,
+    adaptive: &'a Adaptive,
+    /// The window the caller asked for (progress counts only its rows).
+    inner: PixelWindow,
+    progress: &'a dyn Progress,
+    started: Instant,
+    totals: Mutex<RayCounts>,
+    timed_out: AtomicBool,
+}
+
+impl Rounds<'_> {
+    /// Whether the time limit, if any, has passed.
+    fn out_of_time(&self) -> bool {
+        self.adaptive
+            .time_limit
+            .is_some_and(|limit| self.started.elapsed() >= limit)
+    }
+
+    /// Takes `round`'s samples in the pixels `refine` marks, row by row in parallel, filling
+    /// `aov_samples` (empty after round 0) from each pixel's first sample. After round 0 a row
+    /// started past the time limit is skipped and the render marked timed out.
+    fn sample(
+        &self,
+        round: u32,
+        estimates: &mut [PixelEstimate],
+        refine: &[bool],
+        aov_samples: &mut [AovSample],
+    ) {
+        let window = self.context.window;
+        let ww = window.width() as usize;
+        estimates
+            .par_chunks_mut(ww)
+            .zip(refine.par_chunks(ww))
+            .zip(self.context.aov_rows(aov_samples))
+            .enumerate()
+            .for_each(|(row_index, ((row, row_refine), mut aov_row))| {
+                let y = window.y0 + row_index as u32;
+                let row_done = || {
+                    if (self.inner.y0..self.inner.y1).contains(&y) {
+                        self.progress.row_done();
+                    }
+                };
+                if self.progress.cancelled() {
+                    return;
+                }
+                if round > 0 && self.out_of_time() {
+                    self.timed_out.store(true, Ordering::Relaxed);
+                    row_done();
+                    return;
+                }
+                // Every round's samples stand for their share of the pixel at `max_spp`, so all
+                // of a pixel's samples estimate one filtered image (the uniform render's at
+                // `max_spp`) and the batch means see no difference between rounds' footprints.
+                let counts = sample_row(
+                    self.context,
+                    y,
+                    row,
+                    row_refine,
+                    aov_row.as_deref_mut(),
+                    (self.adaptive.round_count(round), self.adaptive.max_spp),
+                );
+                *self.totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
+                row_done();
+            });
+    }
 }
 
 /// Recomputes the relative error of the pixels `sampled` marks: only they have new estimates.
