@@ -88,21 +88,60 @@ pub fn pixel_pattern(x: u32, y: u32, seed: u32) -> u32 {
     (h ^ (h >> 31)) as u32
 }
 
+// Multipliers that key each of the pattern's hashes (Kensler's constants).
+/// Keys the order in which the strata are visited.
+const ORDER_KEY: u32 = 0x51633e2d;
+/// Keys the permutation of the columns.
+const COLUMN_KEY: u32 = 0x68bc21eb;
+/// Keys the permutation of the rows.
+const ROW_KEY: u32 = 0x02e5be93;
+/// Keys the jitter within a stratum in x.
+const JITTER_X_KEY: u32 = 0x967a889b;
+/// Keys the jitter within a stratum in y.
+const JITTER_Y_KEY: u32 = 0x368cc8b7;
+
+/// The grid of strata `count` samples are jittered in: ⌊√count⌋ columns and enough rows for all.
+fn strata(count: u32) -> (u32, u32) {
+    let columns = ((count as f64).sqrt() as u32).max(1);
+    (columns, count.div_ceil(columns))
+}
+
+/// Sample `s` of `count` (more than one) in the `(m, n)` grid of [`strata`], given the pixel's
+/// permutations of the columns and rows (Kensler's correlated multi-jitter).
+#[inline]
+fn multi_jittered(
+    s: u32,
+    count: u32,
+    (m, n): (u32, u32),
+    pattern: u32,
+    permuted_column: impl Fn(u32) -> u32,
+    permuted_row: impl Fn(u32) -> u32,
+) -> (f64, f64) {
+    let s = permute(s, count, pattern.wrapping_mul(ORDER_KEY));
+    let sx = permuted_column(remainder(s, m));
+    let sy = permuted_row(quotient(s, m));
+    let jx = rand_float(s, pattern.wrapping_mul(JITTER_X_KEY));
+    let jy = rand_float(s, pattern.wrapping_mul(JITTER_Y_KEY));
+    (
+        (sx as f64 + (sy as f64 + jx) / n as f64) / m as f64,
+        (s as f64 + jy) / count as f64,
+    )
+}
+
 /// Sample `s` of `count` within the unit pixel: the centre for one sample, else stratified jitter.
+/// ([`PixelSampler`] gives the same points for a whole pixel at less cost.)
 pub fn sample_2d(s: u32, count: u32, pattern: u32) -> (f64, f64) {
     if count <= 1 {
         return (0.5, 0.5);
     }
-    let m = ((count as f64).sqrt() as u32).max(1);
-    let n = count.div_ceil(m);
-    let s = permute(s, count, pattern.wrapping_mul(0x51633e2d));
-    let sx = permute(remainder(s, m), m, pattern.wrapping_mul(0x68bc21eb));
-    let sy = permute(quotient(s, m), n, pattern.wrapping_mul(0x02e5be93));
-    let jx = rand_float(s, pattern.wrapping_mul(0x967a889b));
-    let jy = rand_float(s, pattern.wrapping_mul(0x368cc8b7));
-    (
-        (sx as f64 + (sy as f64 + jx) / n as f64) / m as f64,
-        (s as f64 + jy) / count as f64,
+    let (m, n) = strata(count);
+    multi_jittered(
+        s,
+        count,
+        (m, n),
+        pattern,
+        |column| permute(column, m, pattern.wrapping_mul(COLUMN_KEY)),
+        |row| permute(row, n, pattern.wrapping_mul(ROW_KEY)),
     )
 }
 
@@ -123,8 +162,7 @@ pub struct PixelSampler {
 impl PixelSampler {
     /// A sampler for `count` samples a pixel, ready for [`PixelSampler::start_pixel`].
     pub fn new(count: u32) -> PixelSampler {
-        let columns = ((count as f64).sqrt() as u32).max(1);
-        let rows = count.div_ceil(columns);
+        let (columns, rows) = strata(count);
         PixelSampler {
             count,
             columns,
@@ -142,8 +180,8 @@ impl PixelSampler {
         }
         let (m, n) = (self.columns, self.rows);
         let (column_key, row_key) = (
-            pattern.wrapping_mul(0x68bc21eb),
-            pattern.wrapping_mul(0x02e5be93),
+            pattern.wrapping_mul(COLUMN_KEY),
+            pattern.wrapping_mul(ROW_KEY),
         );
         let (columns, rows) = self.strata.split_at_mut(m as usize);
         for (i, column) in columns.iter_mut().enumerate() {
@@ -156,18 +194,17 @@ impl PixelSampler {
 
     /// Sample `s` of the current pixel: [`sample_2d`]`(s, count, pattern)`.
     pub fn sample(&self, s: u32) -> (f64, f64) {
-        let (count, m, n, pattern) = (self.count, self.columns, self.rows, self.pattern);
-        if count <= 1 {
+        if self.count <= 1 {
             return (0.5, 0.5);
         }
-        let s = permute(s, count, pattern.wrapping_mul(0x51633e2d));
-        let sx = self.strata[remainder(s, m) as usize];
-        let sy = self.strata[(m + quotient(s, m)) as usize];
-        let jx = rand_float(s, pattern.wrapping_mul(0x967a889b));
-        let jy = rand_float(s, pattern.wrapping_mul(0x368cc8b7));
-        (
-            (sx as f64 + (sy as f64 + jx) / n as f64) / m as f64,
-            (s as f64 + jy) / count as f64,
+        let m = self.columns;
+        multi_jittered(
+            s,
+            self.count,
+            (m, self.rows),
+            self.pattern,
+            |column| self.strata[column as usize],
+            |row| self.strata[(m + row) as usize],
         )
     }
 }
