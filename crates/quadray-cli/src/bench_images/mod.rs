@@ -344,42 +344,6 @@ fn test_row(
     })
 }
 
-/// POV-Ray's converged image, then each anti-aliasing setting `runs` times against it.
-fn measure_povray(a: &ImagesArgs, pov: &Path, progress: &mut dyn FnMut(&str)) -> Result<PovReport> {
-    let scratch = a
-        .out
-        .join(format!(".{}-povray-{}.png", a.name, std::process::id()));
-    progress(&format!("POV-Ray reference: {}", a.pov_reference));
-    let reference = povray::render(pov, a.res, &a.pov_reference, &scratch)?;
-    let mut rows = Vec::new();
-    for options in &a.pov_aa {
-        progress(&format!("POV-Ray {options}, {} runs", a.runs));
-        let (mut wall, mut cpu, mut last) = (Vec::new(), Vec::new(), None);
-        for _ in 0..a.runs {
-            let start = Instant::now();
-            let run = povray::render(pov, a.res, options, &scratch)?;
-            wall.push(start.elapsed().as_secs_f64());
-            cpu.push(run.trace_cpu);
-            last = Some(run.image);
-        }
-        let image = last.context("no POV-Ray run")?;
-        rows.push(Row {
-            method: Method::PovRay(options.clone()),
-            wall,
-            cpu,
-            rays: None,
-            sampling: None,
-            error: compare(&reference.image, &image, &Thresholds::default())?,
-        });
-    }
-    Ok(PovReport {
-        file: pov.to_path_buf(),
-        reference_options: a.pov_reference.clone(),
-        reference_cpu: reference.trace_cpu,
-        rows,
-    })
-}
-
 /// Renders the reference(s) and every test sample count, and compares them.
 pub fn measure(a: &ImagesArgs, progress: &mut dyn FnMut(&str)) -> Result<ImageReport> {
     validate(a)?;
@@ -434,7 +398,7 @@ pub fn measure(a: &ImagesArgs, progress: &mut dyn FnMut(&str)) -> Result<ImageRe
         rows.push(test_row(&scene, &s, method, a.runs, &reference)?);
     }
     let povray = match &a.povray {
-        Some(pov) => Some(measure_povray(a, pov, progress)?),
+        Some(pov) => Some(povray::measure(a, pov, progress)?),
         None => None,
     };
     Ok(ImageReport {
@@ -501,103 +465,4 @@ fn write_outputs(report: &ImageReport, out: &Path, name: &str, table: &str) -> R
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn scene_path() -> String {
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/defense.toml").to_string()
-    }
-
-    /// On a tiny render of the defense scene, error against the reference falls with every step
-    /// of 4x the samples (stratified sampling: RMSE at least halves per step here) and all files
-    /// are written; the reference check is far below the 64-spp error.
-    #[test]
-    fn error_falls_with_samples_and_the_files_are_written() {
-        let dir = tempfile::tempdir().unwrap();
-        let out = dir.path().to_str().unwrap();
-        crate::run_args([
-            "bench",
-            "images",
-            "--scene",
-            &scene_path(),
-            "--out",
-            out,
-            "--res",
-            "64x36",
-            "--reference-spp",
-            "256",
-            "--runs",
-            "1",
-            "--quiet",
-        ])
-        .unwrap();
-        let md = std::fs::read_to_string(dir.path().join("image-error.md")).unwrap();
-        let table = |prefix: &str| -> Vec<Vec<String>> {
-            md.lines()
-                .filter(|l| l.starts_with(prefix))
-                .map(|l| l.split('|').map(|c| c.trim().to_string()).collect())
-                .collect()
-        };
-        let rows: Vec<Vec<String>> = table("| ")
-            .into_iter()
-            .filter(|r| r[1].ends_with(" spp"))
-            .collect();
-        let spp: Vec<&str> = rows.iter().map(|r| r[2].as_str()).collect();
-        assert_eq!(spp, ["1", "4", "16", "64"], "{md}");
-        let rmse: Vec<f64> = rows.iter().map(|r| r[6].parse().unwrap()).collect();
-        for w in rmse.windows(2) {
-            assert!(
-                w[1] < 0.75 * w[0],
-                "RMSE must fall with samples: {rmse:?}\n{md}"
-            );
-        }
-        let flip: Vec<f64> = rows.iter().map(|r| r[8].parse().unwrap()).collect();
-        assert!(
-            flip[3] < flip[0],
-            "FLIP must fall from 1 to 64 spp: {flip:?}"
-        );
-        assert!(md.contains("reference's own error"), "{md}");
-        // The adaptive rows: more samples and less error as the target tightens.
-        let adaptive = table("| target ");
-        assert_eq!(adaptive.len(), 4, "{md}");
-        let display_rmse: Vec<f64> = adaptive.iter().map(|r| r[7].parse().unwrap()).collect();
-        assert!(display_rmse[3] < display_rmse[0], "{display_rmse:?}");
-        // The previews: from 2 samples, fewer samples at the same target.
-        let preview = table("| preview ");
-        assert_eq!(preview.len(), 3, "{md}");
-        let mean_spp =
-            |r: &Vec<String>| -> f64 { r[2].split(' ').next().unwrap().parse().unwrap() };
-        assert!(mean_spp(&preview[1]) < mean_spp(&adaptive[0]), "{md}");
-        let svg = std::fs::read_to_string(dir.path().join("image-error.svg")).unwrap();
-        assert!(svg.starts_with("<svg") && svg.contains("64 spp") && svg.contains("adaptive"));
-        assert!(svg.contains("preview 0.04"), "{svg}");
-        let png = image::open(dir.path().join("image-error-reference.png")).unwrap();
-        assert_eq!((png.width(), png.height()), (64, 36));
-        // Nothing but the three outputs (no temporary files left behind).
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
-    }
-
-    #[test]
-    fn bad_arguments_are_refused_before_rendering() {
-        let scene = scene_path();
-        for bad in [
-            vec!["--reference-spp", "64"],
-            vec!["--spp", "4,1"],
-            vec!["--spp", "0,4"],
-            vec!["--runs", "0"],
-            vec!["--res", "0x10"],
-        ] {
-            let mut args = vec!["bench", "images", "--scene", &scene, "--quiet"];
-            args.extend(bad.iter().copied());
-            let err = crate::run_args(args).unwrap_err();
-            assert!(!format!("{err:#}").is_empty());
-        }
-        let err =
-            crate::run_args(["bench", "images", "--scene", "/no/such/scene.toml"]).unwrap_err();
-        assert!(
-            format!("{err:#}").contains("/no/such/scene.toml"),
-            "{err:#}"
-        );
-        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
-    }
-}
+mod tests;

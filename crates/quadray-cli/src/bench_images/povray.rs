@@ -1,10 +1,13 @@
 //! POV-Ray 3.7 as the peer of `quadray bench images`: one render of a `.pov` file with given
-//! anti-aliasing options, its image and the CPU time of its trace phase.
+//! anti-aliasing options, its image and the CPU time of its trace phase, and the measurement of
+//! every anti-aliasing setting against POV-Ray's own converged image.
 
-use crate::compare::{LinearImage, read_image};
+use super::{ImagesArgs, Method, PovReport, Row};
+use crate::compare::{LinearImage, Thresholds, compare, read_image};
 use anyhow::{Context, Result, bail};
 use std::path::Path;
 use std::process::Command;
+use std::time::Instant;
 
 /// One POV-Ray render.
 pub struct PovRender {
@@ -12,6 +15,42 @@ pub struct PovRender {
     pub image: LinearImage,
     /// CPU seconds of its "Trace Time" (parsing and bounding excluded, like quadray's BVH build).
     pub trace_cpu: f64,
+}
+
+/// POV-Ray's converged image, then each anti-aliasing setting `runs` times against it.
+pub fn measure(a: &ImagesArgs, pov: &Path, progress: &mut dyn FnMut(&str)) -> Result<PovReport> {
+    let scratch = a
+        .out
+        .join(format!(".{}-povray-{}.png", a.name, std::process::id()));
+    progress(&format!("POV-Ray reference: {}", a.pov_reference));
+    let reference = render(pov, a.res, &a.pov_reference, &scratch)?;
+    let mut rows = Vec::new();
+    for options in &a.pov_aa {
+        progress(&format!("POV-Ray {options}, {} runs", a.runs));
+        let (mut wall, mut cpu, mut last) = (Vec::new(), Vec::new(), None);
+        for _ in 0..a.runs {
+            let start = Instant::now();
+            let run = render(pov, a.res, options, &scratch)?;
+            wall.push(start.elapsed().as_secs_f64());
+            cpu.push(run.trace_cpu);
+            last = Some(run.image);
+        }
+        let image = last.context("no POV-Ray run")?;
+        rows.push(Row {
+            method: Method::PovRay(options.clone()),
+            wall,
+            cpu,
+            rays: None,
+            sampling: None,
+            error: compare(&reference.image, &image, &Thresholds::default())?,
+        });
+    }
+    Ok(PovReport {
+        file: pov.to_path_buf(),
+        reference_options: a.pov_reference.clone(),
+        reference_cpu: reference.trace_cpu,
+        rows,
+    })
 }
 
 /// Renders `pov` at `width` × `height` on one thread with `options` (e.g. `+A0.1 +AM2 +R3`, or
