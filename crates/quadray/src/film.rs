@@ -68,6 +68,9 @@ impl Film {
 /// judged by their absolute error, so noise a viewer cannot see does not draw samples.
 pub const ERROR_FLOOR: f64 = 0.1;
 
+/// The fewest samples a pixel's error can be estimated from.
+pub const MIN_ERROR_SAMPLES: u32 = 2;
+
 /// The number of aligned runs of samples ("batches") a pixel's error is estimated from.
 pub const ERROR_BATCHES: u32 = 8;
 
@@ -144,10 +147,10 @@ impl PixelEstimate {
     }
 
     /// The relative standard error of the mean display value (see the type's documentation):
-    /// infinite below 2 samples, where it is unknown. At a count that is not a power of two only
-    /// the complete runs count.
+    /// infinite below [`MIN_ERROR_SAMPLES`], where it is unknown. At a count that is not a power
+    /// of two only the complete runs count.
     pub fn relative_error(&self) -> f64 {
-        if self.count < 2 {
+        if self.count < MIN_ERROR_SAMPLES {
             return f64::INFINITY;
         }
         let size = Self::batch_size(self.count);

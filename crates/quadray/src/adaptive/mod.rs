@@ -18,7 +18,7 @@
 //!   rows got their last round then depends on timing.
 
 use crate::aov::{AovSample, Aovs};
-use crate::film::{Film, PixelEstimate};
+use crate::film::{Film, MIN_ERROR_SAMPLES, PixelEstimate};
 use crate::integrator::RayCounts;
 use crate::render::{MAX_SPP, PixelWindow, Progress, RenderError, Rendered, SampleContext};
 use crate::sampler::{pixel_pattern, progressive_2d};
@@ -49,8 +49,8 @@ pub struct Adaptive {
 
 /// Samples every pixel takes in the first round unless told otherwise.
 pub const DEFAULT_MIN_SPP: u32 = 8;
-/// The fewest samples a first round may take: the error estimate needs two.
-pub const MIN_FIRST_ROUND: u32 = 2;
+/// The fewest samples a first round may take: those the error estimate needs.
+pub const MIN_FIRST_ROUND: u32 = MIN_ERROR_SAMPLES;
 /// The most samples a pixel takes unless told otherwise.
 pub const DEFAULT_MAX_SPP: u32 = 1024;
 /// The first refinement rounds in which the neighbours of a pixel above the target are sampled
