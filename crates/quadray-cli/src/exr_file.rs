@@ -55,9 +55,11 @@ pub fn beauty_channels(present: impl Fn(&str) -> bool) -> Option<[&'static str; 
 
 /// Writes an EXR image to `path` through a temporary file beside it, renamed once complete
 /// ([`quadray_loader::atomic_file`]): a failed write leaves an older `path` as it was.
-fn write_image(path: &Path, write: impl FnOnce(&Path) -> exr::error::UnitResult) -> Result<()> {
-    quadray_loader::atomic_file::replace_with(path, write)
-        .with_context(|| format!("writing {}", path.display()))
+fn write_image(
+    path: &Path,
+    write: impl FnOnce(&mut quadray_loader::atomic_file::Writer<'_>) -> exr::error::UnitResult,
+) -> Result<()> {
+    crate::output::write_atomically(path, |out| Ok(write(out)?))
 }
 
 /// Name of the attribute holding the camera's position in world space (a v3f).
@@ -205,7 +207,7 @@ pub fn write_exr(
     };
     let layer = layer(&part, half, frame, None)?;
     let image = Image::new(display_attributes(frame, &[]), layer);
-    write_image(path, |tmp| image.write().to_file(tmp))
+    write_image(path, |out| image.write().to_buffered(out))
 }
 
 /// Writes rectangles of one `width` × `height` frame as the parts of one multi-part EXR (named
@@ -232,7 +234,7 @@ pub fn write_exr_parts(
         layers.push(layer(part, half, &frame(part), Some(&name(part)))?);
     }
     let image = Image::new(display_attributes(&frame(first), attributes), layers);
-    write_image(path, |tmp| image.write().to_file(tmp))
+    write_image(path, |out| image.write().to_buffered(out))
 }
 
 /// The attributes every part shares: the display window and `attributes` as text.

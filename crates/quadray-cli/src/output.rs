@@ -49,7 +49,7 @@ fn parent_dir(path: &Path) -> PathBuf {
 /// Writes `film` to `path`; an existing file is replaced only once the new one is complete.
 pub fn write_film(film: &Film, path: &Path) -> Result<()> {
     match Format::from_path(path)? {
-        Format::Png => write_atomically(path, |tmp| write_png(film, tmp)),
+        Format::Png => write_rgb8_png(film.width(), film.height(), &film.to_srgb8(), path),
         Format::Exr => {
             let frame = crate::exr_file::ExrFrame::full(film.width(), film.height());
             crate::exr_file::write_exr(film, None, false, &frame, path)
@@ -57,11 +57,13 @@ pub fn write_film(film: &Film, path: &Path) -> Result<()> {
     }
 }
 
-/// Writes through `write` into a temporary file beside `path` (keeping the image extension, which
-/// image writers pick their format from), then renames it to `path`; on any failure the temporary
-/// file is removed and an older `path` survives ([`quadray_loader::atomic_file`]).
-pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    Format::from_path(path)?;
+/// Writes through `write` into a temporary file beside `path`, then flushes, syncs and renames it
+/// to `path`; on any failure the temporary file is removed and an older `path` survives
+/// ([`quadray_loader::atomic_file`]).
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut quadray_loader::atomic_file::Writer<'_>) -> Result<()>,
+) -> Result<()> {
     quadray_loader::atomic_file::replace_with(path, write)
         .with_context(|| format!("writing {}", path.display()))
 }
@@ -75,9 +77,10 @@ pub fn write_bytes_atomically(path: &Path, contents: &[u8]) -> Result<()> {
 
 /// Writes 8-bit RGB bytes (row-major) as a PNG, atomically.
 pub fn write_rgb8_png(width: u32, height: u32, bytes: &[u8], path: &Path) -> Result<()> {
-    write_atomically(path, |tmp| {
-        image::save_buffer_with_format(
-            tmp,
+    Format::from_path(path)?;
+    write_atomically(path, |out| {
+        image::write_buffer_with_format(
+            out,
             bytes,
             width,
             height,
@@ -86,19 +89,6 @@ pub fn write_rgb8_png(width: u32, height: u32, bytes: &[u8], path: &Path) -> Res
         )?;
         Ok(())
     })
-}
-
-fn write_png(film: &Film, path: &Path) -> Result<()> {
-    let bytes = film.to_srgb8();
-    image::save_buffer_with_format(
-        path,
-        &bytes,
-        film.width(),
-        film.height(),
-        image::ColorType::Rgb8,
-        image::ImageFormat::Png,
-    )?;
-    Ok(())
 }
 
 #[cfg(test)]

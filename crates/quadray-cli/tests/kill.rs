@@ -1,4 +1,5 @@
-//! Outputs survive a killed render: SIGKILL, which no handler sees, at many moments.
+//! Outputs survive a killed render (SIGKILL, which no handler sees, at many moments) and a full
+//! disk, and keep the permissions a user expects.
 
 mod common;
 use common::{quadray, scene, tmp};
@@ -88,4 +89,222 @@ fn killed_renders_leave_the_previous_output_intact() {
             "the next render replaced it"
         );
     }
+}
+
+/// A 64 KiB tmpfs mounted on a temporary folder, unmounted when dropped: a disk that fills up.
+struct SmallDisk {
+    dir: tempfile::TempDir,
+}
+
+impl SmallDisk {
+    /// Mounts the disk (root on Linux only). Where that is impossible the reason is returned;
+    /// under CI (`CI` set), where `.ci/run` runs as root, that fails the test instead.
+    fn mount() -> Result<SmallDisk, String> {
+        let dir = tempfile::tempdir().unwrap();
+        let mounted = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", "size=64k", "tmpfs"])
+            .arg(dir.path())
+            .output();
+        match mounted {
+            Ok(o) if o.status.success() => Ok(SmallDisk { dir }),
+            Ok(o) => Err(format!(
+                "mount -t tmpfs failed: {}",
+                String::from_utf8_lossy(&o.stderr).trim()
+            )),
+            Err(e) => Err(format!("no mount command: {e}")),
+        }
+    }
+
+    fn path(&self, name: &str) -> std::path::PathBuf {
+        self.dir.path().join(name)
+    }
+
+    /// Fills what is left of the disk with one file.
+    fn fill(&self) {
+        use std::io::Write;
+        let mut filler = std::fs::File::create(self.path("filler")).unwrap();
+        let block = [0u8; 1024];
+        while filler.write_all(&block).is_ok() {}
+        let _ = filler.write_all(&[0]);
+    }
+}
+
+impl Drop for SmallDisk {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(self.dir.path()).status();
+    }
+}
+
+/// With the output's disk full, every command that writes an image fails with a located error
+/// (exit 1, naming the file and the cause), keeps the old file byte for byte and leaves no
+/// temporary file. Small images fit a writer's buffer, so this is where a lost flush error used
+/// to rename an empty file over the old one.
+#[test]
+fn a_full_disk_keeps_the_old_outputs() {
+    let disk = match SmallDisk::mount() {
+        Ok(disk) => disk,
+        Err(why) if std::env::var_os("CI").is_some() => panic!("CI must run this test: {why}"),
+        Err(why) => {
+            eprintln!("skipped: {why} (run as root on Linux, as .ci/run does)");
+            return;
+        }
+    };
+    let work = tempfile::tempdir().unwrap();
+    let w = |name: &str| tmp(&work, name).to_string_lossy().into_owned();
+    let ok = |args: &[&str]| {
+        let o = quadray(args);
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    };
+    // Inputs on a roomy disk: two images to compare and the two pieces of a tiled render.
+    ok(&[
+        "render",
+        &scene("quadrics.toml"),
+        "-o",
+        &w("a.png"),
+        "--res",
+        "16x12",
+    ]);
+    ok(&[
+        "render",
+        &scene("defense.toml"),
+        "-o",
+        &w("b.png"),
+        "--res",
+        "16x12",
+    ]);
+    for i in 0..2 {
+        let piece = w(&format!("piece{i}.exr"));
+        let tile = format!("{i}/2");
+        ok(&[
+            "render",
+            &scene("quadrics.toml"),
+            "-o",
+            &piece,
+            "--res",
+            "16x12",
+            "--tile",
+            &tile,
+        ]);
+    }
+    let names = ["o.png", "big.png", "o.exr", "m.png", "h.png", "q.png"];
+    for name in names {
+        std::fs::write(disk.path(name), format!("old {name}")).unwrap();
+    }
+    disk.fill();
+    let d = |name: &str| disk.path(name).to_string_lossy().into_owned();
+    let runs: [Vec<String>; 6] = [
+        vec![
+            "render".into(),
+            scene("quadrics.toml"),
+            "-o".into(),
+            d("o.png"),
+            "--res".into(),
+            "16x12".into(),
+        ],
+        vec![
+            "render".into(),
+            scene("quadrics.toml"),
+            "-o".into(),
+            d("big.png"),
+            "--res".into(),
+            "320x240".into(),
+        ],
+        vec![
+            "render".into(),
+            scene("quadrics.toml"),
+            "-o".into(),
+            d("o.exr"),
+            "--res".into(),
+            "16x12".into(),
+        ],
+        vec![
+            "merge".into(),
+            w("piece0.exr"),
+            w("piece1.exr"),
+            "-o".into(),
+            d("m.png"),
+        ],
+        vec![
+            "compare".into(),
+            w("a.png"),
+            w("b.png"),
+            "--diff".into(),
+            d("h.png"),
+        ],
+        vec![
+            "quadric".into(),
+            "cone".into(),
+            "-o".into(),
+            d("q.png"),
+            "--res".into(),
+            "16x12".into(),
+        ],
+    ];
+    for args in &runs {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = quadray(&args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        // compare exits 1 for "different" and 2 for trouble; every other command 1 for errors.
+        let expected = if args[0] == "compare" { 2 } else { 1 };
+        assert_eq!(o.status.code(), Some(expected), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("No space left on device")
+                && stderr.contains(&disk.path("").to_string_lossy().into_owned()),
+            "{args:?} names the file and the cause: {stderr}"
+        );
+    }
+    for name in names {
+        assert_eq!(
+            std::fs::read_to_string(disk.path(name)).unwrap(),
+            format!("old {name}"),
+            "{name} kept"
+        );
+    }
+    let mut left: Vec<String> = std::fs::read_dir(disk.dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    let mut expected: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+    expected.push("filler".into());
+    expected.sort();
+    assert_eq!(left, expected, "no temporary file is left");
+}
+
+/// Outputs honour the umask (a farm's merge job, a web server or a colleague must read them), and
+/// a replaced output keeps its mode.
+#[cfg(unix)]
+#[test]
+fn outputs_get_the_mode_a_new_file_gets() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let mode = |p: &std::path::Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+    let probe = tmp(&dir, "probe");
+    std::fs::File::create(&probe).unwrap();
+    let out = tmp(&dir, "o.png");
+    let render = || {
+        let o = quadray(&[
+            "render",
+            &scene("quadrics.toml"),
+            "-o",
+            out.to_str().unwrap(),
+            "--res",
+            "16x12",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    render();
+    assert_eq!(
+        mode(&out),
+        mode(&probe),
+        "a new output: 0666 less the umask"
+    );
+    std::fs::set_permissions(&out, std::fs::Permissions::from_mode(0o604)).unwrap();
+    render();
+    assert_eq!(mode(&out), 0o604, "a replaced output keeps its mode");
 }

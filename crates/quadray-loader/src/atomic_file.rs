@@ -1,26 +1,46 @@
-//! Replacing a file only once its new contents are complete: the one temporary-file-and-rename
-//! mechanism behind every output quadray writes (images, reports, glTF).
+//! Replacing a file only once its new contents are complete and on disk: the one
+//! temporary-file-and-rename mechanism behind every output quadray writes (images, reports, glTF).
 //!
 //! The new contents go to a hidden temporary file beside the target, named
-//! `.NAME.pPID.XXXXXX.quadray-tmp.EXT` (recognisable, and keeping the extension, since image
-//! writers pick their format from it), which is renamed over the target when complete. On any
-//! error it is deleted (the `tempfile` crate deletes it when dropped), and an older target
-//! survives untouched. A process killed outright (SIGKILL) cannot delete it; the next write of the
-//! same target removes such leftovers, but only those whose process (the PID in the name) is gone,
-//! so a render still running into the same file is never disturbed.
+//! `.NAME.pPID.XXXXXX.quadray-tmp.EXT` (recognisable, and keeping the extension), where NAME is
+//! the target's name cut short enough that the whole temporary name fits the 255-byte limit of
+//! common file systems, so every legal output name can be written. The writer fills it through a
+//! buffered writer that this module flushes and checks (a buffered writer dropped unflushed loses
+//! its last error: a full disk then left an empty file), then the file is `fsync`ed, renamed over
+//! the target, and the folder is `fsync`ed so the rename itself survives a power cut.
+//!
+//! The file gets the target's permission bits when the target exists (as an editor keeps them),
+//! else `0666` less the process's umask, as `cp` or `touch` would create it.
+//!
+//! On any error the temporary file is deleted (the `tempfile` crate deletes it when dropped), and
+//! an older target survives untouched. A process killed outright (SIGKILL) cannot delete it; the
+//! next write of the same target removes such leftovers, but only those whose process (the PID in
+//! the name) is gone, so a render still running into the same file is never disturbed.
 
+use std::fs::File;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Writes through `write`, which fills the temporary file at the path it is given, then renames
-/// that file to `path`. `write`'s error (or the rename's) is returned; the temporary file is gone.
+/// The buffered writer a [`replace_with`] writer fills; it is flushed, checked and synced after.
+pub type Writer<'a> = BufWriter<&'a mut File>;
+
+/// The longest file name the temporary file may have: the limit of ext4, XFS, btrfs, tmpfs and
+/// NTFS (in bytes, or UTF-16 units on NTFS, which are never more than UTF-8 bytes).
+const NAME_MAX: usize = 255;
+
+/// What a temporary name adds to the cut target name: `.`, `.p`, a PID of up to 10 digits, `.`,
+/// six random characters and the suffix (whose extension is counted separately).
+const NAME_OVERHEAD: usize = 1 + 2 + 10 + 1 + 6;
+
+/// Writes through `write`, which fills the temporary file through the buffered writer it is
+/// given, then flushes, syncs and renames that file to `path`. `write`'s error (or the flush's,
+/// the sync's, the rename's) is returned; the temporary file is then gone and an older `path`
+/// is as it was.
 pub fn replace_with<E: From<std::io::Error>>(
     path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), E>,
+    write: impl FnOnce(&mut Writer<'_>) -> Result<(), E>,
 ) -> Result<(), E> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
+    let dir = parent_dir(path);
     let name = path
         .file_name()
         .and_then(|n| n.to_str())
@@ -29,15 +49,81 @@ pub fn replace_with<E: From<std::io::Error>>(
         Some(ext) => format!(".quadray-tmp.{ext}"),
         None => ".quadray-tmp".to_string(),
     };
-    let prefix = format!(".{name}.p");
+    let prefix = format!(
+        ".{}.p",
+        cut_to(name, NAME_MAX - NAME_OVERHEAD - suffix.len())
+    );
     remove_leftovers(&dir, &prefix, &suffix);
-    let tmp = tempfile::Builder::new()
-        .prefix(&format!("{prefix}{}.", std::process::id()))
-        .suffix(&suffix)
-        .tempfile_in(&dir)?;
-    write(tmp.path())?;
+    let pid_prefix = format!("{prefix}{}.", std::process::id());
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&pid_prefix).suffix(&suffix);
+    ask_for_default_mode(&mut builder);
+    let mut tmp = builder.tempfile_in(&dir)?;
+    {
+        let mut writer = BufWriter::new(tmp.as_file_mut());
+        write(&mut writer)?;
+        writer.flush()?;
+    }
+    keep_existing_mode(path, tmp.as_file())?;
+    tmp.as_file().sync_all()?;
     tmp.persist(path).map_err(|e| e.error)?;
+    sync_dir(&dir);
     Ok(())
+}
+
+/// [`replace_with`] for contents already in memory.
+pub fn replace(path: &Path, contents: &[u8]) -> std::io::Result<()> {
+    replace_with(path, |w| w.write_all(contents))
+}
+
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// The longest start of `name` of at most `max` bytes that ends on a character boundary.
+fn cut_to(name: &str, max: usize) -> &str {
+    if name.len() <= max {
+        return name;
+    }
+    let mut end = max;
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    &name[..end]
+}
+
+/// Asks for mode `0666` on creation, which the kernel narrows by the umask: the mode a new file
+/// of `cp` gets (the `tempfile` crate's default, `0600`, hid renders from a farm's other users).
+/// An existing target's mode is copied after creation by [`keep_existing_mode`], since creation
+/// cannot widen past the umask. Elsewhere than Unix a new file's default permissions are right.
+fn ask_for_default_mode(builder: &mut tempfile::Builder<'_, '_>) {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    #[cfg(not(unix))]
+    let _ = builder;
+}
+
+/// Gives the temporary file the permission bits of the file it replaces, if that is a regular
+/// file: replacing a shared `0644` render must not make it private.
+fn keep_existing_mode(path: &Path, tmp: &File) -> std::io::Result<()> {
+    match std::fs::metadata(path) {
+        Ok(old) if old.is_file() => tmp.set_permissions(old.permissions()),
+        _ => Ok(()),
+    }
+}
+
+/// Makes a rename in `dir` durable. Best effort: a folder cannot be opened for syncing on every
+/// platform (Windows), and the data itself was synced before the rename.
+fn sync_dir(dir: &Path) {
+    if let Ok(handle) = File::open(dir) {
+        let _ = handle.sync_all();
+    }
 }
 
 /// Deletes the temporary files of earlier writes to the same target (`prefix` PID `.` random
@@ -75,11 +161,6 @@ fn remove_leftovers(dir: &Path, prefix: &str, suffix: &str) {
     }
 }
 
-/// [`replace_with`] for contents already in memory.
-pub fn replace(path: &Path, contents: &[u8]) -> std::io::Result<()> {
-    replace_with(path, |tmp| std::fs::write(tmp, contents))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -98,15 +179,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let target = dir.path().join("out.png");
         std::fs::write(&target, b"old").unwrap();
-        let failed: std::io::Result<()> = replace_with(&target, |tmp| {
-            assert!(
-                tmp.file_name()
-                    .unwrap()
-                    .to_str()
-                    .unwrap()
-                    .ends_with(".quadray-tmp.png")
-            );
-            std::fs::write(tmp, b"half")?;
+        let failed: std::io::Result<()> = replace_with(&target, |w| {
+            w.write_all(b"half")?;
             Err(std::io::Error::other("disk full"))
         });
         assert!(failed.is_err());
@@ -115,6 +189,70 @@ mod tests {
         replace(&target, b"new").unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"new");
         assert_eq!(entries(dir.path()), vec!["out.png"]);
+    }
+
+    /// The temporary file sits beside the target, hidden, with the target's extension.
+    #[test]
+    fn the_temporary_name_is_hidden_and_keeps_the_extension() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out.png");
+        let mut seen = Vec::new();
+        replace_with(&target, |_| {
+            seen = entries(dir.path());
+            Ok::<(), std::io::Error>(())
+        })
+        .unwrap();
+        assert_eq!(seen.len(), 1, "{seen:?}");
+        assert!(seen[0].starts_with(".out.png.p"), "{seen:?}");
+        assert!(seen[0].ends_with(".quadray-tmp.png"), "{seen:?}");
+    }
+
+    /// Every name the file system accepts can be written: 255 bytes, also in multi-byte UTF-8.
+    #[test]
+    fn names_up_to_the_file_system_limit_are_written() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in [
+            format!("{}.png", "a".repeat(251)),
+            format!("{}.png", "é".repeat(125)),
+            "b".repeat(255),
+        ] {
+            assert!(name.len() <= 255);
+            let target = dir.path().join(&name);
+            replace(&target, b"x").unwrap_or_else(|e| panic!("{} bytes: {e}", name.len()));
+            assert_eq!(std::fs::read(&target).unwrap(), b"x");
+            std::fs::remove_file(&target).unwrap();
+        }
+        assert!(entries(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn cut_to_ends_on_a_character_boundary() {
+        assert_eq!(cut_to("abc", 5), "abc");
+        assert_eq!(cut_to("abcdef", 3), "abc");
+        assert_eq!(cut_to("éé", 3), "é");
+    }
+
+    /// A new file gets 0666 less the umask; a replaced file keeps its own mode.
+    #[cfg(unix)]
+    #[test]
+    fn modes_follow_the_umask_or_the_replaced_file() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        // What the umask makes of 0666, as plain `File::create` (also 0666) shows it.
+        let probe = dir.path().join("probe");
+        File::create(&probe).unwrap();
+        let fresh = dir.path().join("new.png");
+        replace(&fresh, b"x").unwrap();
+        assert_eq!(mode(&fresh), mode(&probe));
+        let shared = dir.path().join("shared.png");
+        std::fs::write(&shared, b"old").unwrap();
+        std::fs::set_permissions(&shared, std::fs::Permissions::from_mode(0o644)).unwrap();
+        replace(&shared, b"new").unwrap();
+        assert_eq!(mode(&shared), 0o644);
+        std::fs::set_permissions(&shared, std::fs::Permissions::from_mode(0o640)).unwrap();
+        replace(&shared, b"newer").unwrap();
+        assert_eq!(mode(&shared), 0o640);
     }
 
     /// Leftovers of a dead process writing the same target go; those of a live process (PID 1
