@@ -3,7 +3,7 @@
 
 use crate::exr_file::{ExrCamera, ExrFrame, film_and_aovs, read_exr, write_exr};
 use crate::output::{Format, check_writable, write_film};
-use crate::render_cmd::{PIECE_INDEX, PIECE_SCENE, PIECE_SETTINGS};
+use crate::render_cmd::PIECE;
 use crate::tiles::{Piece, parse_piece, piece_bands};
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -28,6 +28,24 @@ pub struct MergeArgs {
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// A usage error if `output` is one of the `pieces` (by its file, whatever the path's spelling):
+/// the merge would replace a piece that a retry still needs.
+fn refuse_overwriting_a_piece(output: &Path, pieces: &[PathBuf]) -> Result<()> {
+    let Ok(out) = std::fs::canonicalize(output) else {
+        return Ok(()); // not there yet, so no piece
+    };
+    for piece in pieces {
+        if std::fs::canonicalize(piece).is_ok_and(|p| p == out) {
+            return Err(crate::StatusError::usage(format!(
+                "-o {} is one of the pieces to merge; name another output",
+                output.display()
+            ))
+            .into());
+        }
+    }
+    Ok(())
 }
 
 /// One piece as read: which it is, what it came from, and its rectangles' channels.
@@ -63,6 +81,9 @@ impl ReadPiece {
 /// Runs the merge subcommand.
 pub fn run(args: &MergeArgs) -> Result<()> {
     let format = args.output.as_deref().map(check_writable).transpose()?;
+    if let Some(output) = &args.output {
+        refuse_overwriting_a_piece(output, &args.pieces)?;
+    }
     let pieces = args
         .pieces
         .iter()
@@ -131,17 +152,15 @@ pub fn run(args: &MergeArgs) -> Result<()> {
 /// Reads a piece and the attributes `render --tile` wrote into it.
 fn read_piece(path: &Path) -> Result<ReadPiece> {
     let read = read_exr(path)?;
-    let attribute = |key: &str| {
-        read.attributes.get(key).cloned().with_context(|| {
-            format!(
-                "{}: not a piece of a quadray render (no {key} attribute; pieces come from \
-                 `quadray render --tile I/N`)",
-                path.display()
-            )
-        })
+    let Some(value) = read.attributes.get(PIECE) else {
+        bail!(
+            "{}: not a piece of a quadray render (no {PIECE} attribute; pieces come from \
+             `quadray render --tile I/N`)",
+            path.display()
+        );
     };
-    let piece = parse_piece(&attribute(PIECE_INDEX)?)
-        .map_err(|e| anyhow::anyhow!("{}: {PIECE_INDEX}: {e}", path.display()))?;
+    let (piece, scene, settings) = parse_piece_attribute(value)
+        .map_err(|e| anyhow::anyhow!("{}: {PIECE}: {e}", path.display()))?;
     if read.parts.is_empty() {
         bail!("{}: the file holds no pixels", path.display());
     }
@@ -150,12 +169,26 @@ fn read_piece(path: &Path) -> Result<ReadPiece> {
     Ok(ReadPiece {
         path: path.to_path_buf(),
         piece,
-        scene: attribute(PIECE_SCENE)?,
-        settings: attribute(PIECE_SETTINGS)?,
+        scene,
+        settings,
         size: read.size,
         parts: read.parts,
         camera: read.camera,
     })
+}
+
+/// The piece, scene hash and settings of a [`PIECE`] attribute.
+fn parse_piece_attribute(value: &str) -> Result<(Piece, String, String)> {
+    let mut lines = value.lines();
+    let piece = parse_piece(lines.next().unwrap_or_default()).map_err(anyhow::Error::msg)?;
+    let mut field = |key: &str| {
+        lines
+            .next()
+            .and_then(|line| line.strip_prefix(key))
+            .map(str::to_string)
+            .with_context(|| format!("no `{key}` line in {value:?}"))
+    };
+    Ok((piece, field("scene: ")?, field("settings: ")?))
 }
 
 /// Checks that every piece comes from the same scene and settings, cuts the frame the same way,

@@ -14,12 +14,16 @@ use quadray::{
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-/// EXR attribute naming the scene a piece was rendered from (a hash of its inputs).
-pub const PIECE_SCENE: &str = "quadray.scene";
-/// EXR attribute with the render settings of a piece, which every piece of a frame shares.
-pub const PIECE_SETTINGS: &str = "quadray.settings";
-/// EXR attribute `I/N`: which piece of how many.
-pub const PIECE_INDEX: &str = "quadray.piece";
+/// EXR attribute describing a piece of a frame in three lines: `I/N` (which piece of how many),
+/// `scene: HASH` (a hash of the scene's inputs) and `settings: TEXT` (the render settings every
+/// piece of a frame shares). One attribute, because the EXR writer stores a header's custom
+/// attributes in hash-map order, which would make two renders of a piece differ in bytes.
+pub const PIECE: &str = "quadray.piece";
+
+/// The [`PIECE`] attribute's value.
+pub fn piece_attribute(piece: Piece, scene: &str, settings: &str) -> String {
+    format!("{piece}\nscene: {scene}\nsettings: {settings}")
+}
 
 /// Everything decided before rendering.
 struct Job {
@@ -256,14 +260,11 @@ fn write_output(
                 window: r.window,
             })
             .collect();
-        let attributes = [
-            (PIECE_SCENE, scene_hash(args)?),
-            (
-                PIECE_SETTINGS,
-                settings_text(settings, job.selection, args.half),
-            ),
-            (PIECE_INDEX, piece.to_string()),
-        ];
+        let settings_text = settings_text(settings, job.selection, args.half);
+        let attributes = [(
+            PIECE,
+            piece_attribute(piece, &scene_hash(args)?, &settings_text),
+        )];
         let camera = ExrCamera::of(scene.camera(), settings.width, settings.height)?;
         let frame = (settings.width, settings.height, Some(camera));
         return write_exr_parts(&exr_parts, args.half, frame, &attributes, output);
