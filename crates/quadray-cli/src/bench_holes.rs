@@ -159,7 +159,7 @@ pub fn run(a: &HolesArgs) -> Result<()> {
     }
     let md = markdown(&mapped);
     if !a.quiet {
-        println!("{}", holes::markdown(&mapped));
+        outln!("{}", holes::markdown(&mapped))?;
     }
     let path = a.out.join("holes.md");
     write_bytes_atomically(&path, md.as_bytes())?;

@@ -122,7 +122,7 @@ pub fn run(a: &RaysArgs) -> Result<()> {
     let triangles: usize = g.meshes.iter().map(|m| m.triangle_count()).sum();
     let mesh_bytes: usize = g.meshes.iter().map(|m| m.memory_bytes()).sum();
     let accel_bytes = scene.accel().memory_bytes();
-    println!(
+    outln!(
         "BUILD mesh={name} impl=quadray threads={} triangles={triangles} ms_median={:.2} cpu_ms={:.2} \
          mesh_bytes_per_tri={:.1} accel_bytes_per_tri={:.1} bytes_per_tri={:.1} simd={}",
         a.threads,
@@ -132,7 +132,7 @@ pub fn run(a: &RaysArgs) -> Result<()> {
         accel_bytes as f64 / triangles.max(1) as f64,
         (mesh_bytes + accel_bytes) as f64 / triangles.max(1) as f64,
         scene.accel().traversal_path(),
-    );
+    )?;
     for path in &a.rays {
         let rays = read_rays(path)?;
         let set = path
@@ -154,7 +154,7 @@ pub fn run(a: &RaysArgs) -> Result<()> {
                 wall.push(rays.len() as f64 / secs / 1e6);
                 cpu_rates.push(rays.len() as f64 / cpu.elapsed().as_secs_f64() / 1e6);
             }
-            println!(
+            outln!(
                 "RESULT mesh={name} impl=quadray rays={set} api={api} threads={} mrays_median={:.3} \
                  cpu_mrays={:.3} hits={} tsum={:.6e}",
                 a.threads,
@@ -162,7 +162,7 @@ pub fn run(a: &RaysArgs) -> Result<()> {
                 median(cpu_rates),
                 checksum.0,
                 checksum.1
-            );
+            )?;
         }
     }
     Ok(())

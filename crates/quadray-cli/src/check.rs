@@ -30,7 +30,7 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         settings.width,
         settings.height,
     );
-    println!(
+    outln!(
         "{}: ok: {}; {}x{}, {} spp, max depth {}",
         args.scene.display(),
         contents_line(&scene),
@@ -38,8 +38,8 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         settings.height,
         settings.spp,
         settings.max_depth
-    );
-    println!("{}", structure_line(&scene));
+    )?;
+    outln!("{}", structure_line(&scene))?;
     Ok(())
 }
 

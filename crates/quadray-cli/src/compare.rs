@@ -75,8 +75,17 @@ pub fn read_image(path: &Path) -> Result<LinearImage> {
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("png") => {
+            use quadray_loader::read_limited::{MAX_IMAGE_BYTES, read};
+            let bytes = read(path, MAX_IMAGE_BYTES)
+                .with_context(|| format!("reading {}", path.display()))?;
+            let mut reader = image::ImageReader::with_format(
+                std::io::Cursor::new(bytes),
+                image::ImageFormat::Png,
+            );
+            reader.limits(quadray_loader::image_file::decode_limits());
             // The image crate's errors repeat their cause in their own message: keep one.
-            let img = image::open(path)
+            let img = reader
+                .decode()
                 .map_err(|e| anyhow::anyhow!("reading {}: {e}", path.display()))?
                 .to_rgb8();
             Ok(LinearImage::from_srgb8(
@@ -92,6 +101,7 @@ pub fn read_image(path: &Path) -> Result<LinearImage> {
 
 fn read_exr(path: &Path) -> Result<LinearImage> {
     use exr::prelude::*;
+    quadray_loader::read_limited::regular_file(path)?;
     let image = read_first_flat_layer_from_file(path)?;
     let layer = &image.layer_data;
     let names: Vec<String> = layer

@@ -55,18 +55,18 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     ] {
         ensure!(
             v.is_finite() && v >= 0.0,
-            "{name} must be a non-negative number of 8-bit steps, got {v}"
+            "{name} must be a non-negative number of 8-bit steps, got {v:?}"
         );
     }
     ensure!(
         (0.0..=100.0).contains(&args.max_percent),
-        "--max-percent must be in [0, 100], got {}",
+        "--max-percent must be in [0, 100], got {:?}",
         args.max_percent
     );
     if let Some(f) = args.max_flip {
         ensure!(
             (0.0..=1.0).contains(&f),
-            "--max-flip must be in [0, 1], got {f}"
+            "--max-flip must be in [0, 1], got {f:?}"
         );
     }
     if let Some(diff) = &args.diff {
@@ -85,7 +85,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let reference = read_image(&args.reference)?;
     let test = read_image(&args.test)?;
     let c = compare(&reference, &test, &thresholds)?;
-    println!("{}", c.summary(&thresholds));
+    outln!("{}", c.summary(&thresholds))?;
     if let Some(diff) = &args.diff {
         write_rgb8_png(c.width, c.height, &c.heat_map(), diff)?;
     }

@@ -370,6 +370,8 @@ pub struct ReadExr {
 
 /// Reads every part of the EXR at `path` (all channels, full resolution).
 pub fn read_exr(path: &Path) -> Result<ReadExr> {
+    quadray_loader::read_limited::regular_file(path)
+        .with_context(|| format!("reading {}", path.display()))?;
     let image = exr::prelude::read_all_flat_layers_from_file(path)
         .with_context(|| format!("reading {}", path.display()))?;
     let display = image.attributes.display_window;

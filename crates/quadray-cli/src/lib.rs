@@ -1,6 +1,16 @@
 //! The quadray command line as a library: `main` parses arguments and calls [`run`]; tests call
 //! [`run_args`] to exercise the same code in process.
 
+/// `println!` that returns the write's error instead of panicking: a reader that closed the pipe
+/// (`quadray check s.toml | head -1`) ends the command quietly, as in ripgrep (see
+/// [`is_broken_pipe`]).
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*)
+    }};
+}
+
 pub mod args;
 pub mod bench;
 pub mod bench_holes;
@@ -85,6 +95,16 @@ pub fn exit_status(err: &anyhow::Error, command_is_compare: bool) -> u8 {
     } else {
         1
     }
+}
+
+/// Whether `err` comes from writing to a pipe whose reader has gone: the command's output is
+/// unwanted, not wrong, so `main` exits quietly with success, as ripgrep does.
+pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// Runs a parsed command line.

@@ -10,6 +10,7 @@ fn main() -> ExitCode {
     let is_compare = matches!(cli.command, quadray_cli::args::Command::Compare(_));
     match quadray_cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(err) if quadray_cli::is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
             // `{:#}` prints the whole context chain on one line.
             eprintln!("error: {err:#}");

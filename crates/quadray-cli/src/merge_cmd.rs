@@ -97,7 +97,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     let missing: Vec<u32> = (0..count).filter(|i| !by_index.contains_key(i)).collect();
     if args.missing {
         for i in missing {
-            println!("{i}");
+            outln!("{i}")?;
         }
         return Ok(());
     }

@@ -96,7 +96,8 @@ pub struct QuadricArgs {
     #[arg(long, value_name = "WxH", value_parser = crate::args::parse_resolution, default_value = "640x480")]
     pub res: (u32, u32),
     /// Samples per pixel.
-    #[arg(long, value_name = "N", default_value_t = 4)]
+    #[arg(long, value_name = "N", default_value_t = 4,
+          value_parser = clap::value_parser!(u32).range(1..=quadray::render::MAX_SPP as i64))]
     pub spp: u32,
     /// Output image (.png or .exr).
     #[arg(
@@ -161,7 +162,7 @@ pub fn showcase(args: &QuadricArgs) -> Result<Showcase> {
             if let Some(v) = value {
                 usage_ensure(
                     v > 0.0 && v.is_finite(),
-                    &format!("{flag} must be a positive number, got {v}"),
+                    &format!("{flag} must be a positive number, got {v:?}"),
                 )?;
             }
         }
@@ -175,7 +176,7 @@ pub fn showcase(args: &QuadricArgs) -> Result<Showcase> {
     };
     usage_ensure(
         args.clip > 0.0 && args.clip.is_finite(),
-        &format!("--clip must be a positive number, got {}", args.clip),
+        &format!("--clip must be a positive number, got {:?}", args.clip),
     )?;
     show.clip = args.clip;
     show.yaw = args.yaw.unwrap_or(show.yaw);
@@ -184,14 +185,18 @@ pub fn showcase(args: &QuadricArgs) -> Result<Showcase> {
     usage_ensure(show.yaw.is_finite(), "--yaw must be a finite angle")?;
     usage_ensure(
         (-90.0..=90.0).contains(&show.pitch),
-        &format!("--pitch must be in [-90, 90] degrees, got {}", show.pitch),
+        &format!("--pitch must be in [-90, 90] degrees, got {:?}", show.pitch),
     )?;
     usage_ensure(
         show.distance > 0.0 && show.distance.is_finite(),
-        &format!(
-            "--distance must be a positive number, got {}",
-            show.distance
-        ),
+        &match args.distance {
+            Some(d) => format!("--distance must be a positive number, got {d:?}"),
+            None => format!(
+                "--clip {:?} puts the default camera (5 x the clip size away) out of range; give \
+                 --distance",
+                args.clip
+            ),
+        },
     )?;
     Ok(show)
 }
@@ -199,7 +204,7 @@ pub fn showcase(args: &QuadricArgs) -> Result<Showcase> {
 /// Runs the explorer.
 pub fn run(args: &QuadricArgs) -> Result<()> {
     if args.list {
-        print!("{}", list());
+        outln!("{}", list().trim_end())?;
         return Ok(());
     }
     let output = args.output.as_ref().context("-o OUT is required")?;

@@ -5,7 +5,6 @@ use crate::StatusError;
 use clap::Args;
 use quadray::Adaptive;
 use quadray::render::MAX_SPP;
-use std::time::Duration;
 
 /// Adaptive sampling on the command line; each option overrides the scene's value.
 #[derive(Args, Debug, Default)]
@@ -71,7 +70,10 @@ impl SamplingArgs {
             a.target_error = e;
         }
         if let Some(t) = self.time_limit {
-            a.time_limit = Some(Duration::from_secs_f64(t));
+            a.time_limit = Some(
+                quadray::adaptive::time_limit_from_secs(t)
+                    .map_err(|e| StatusError::usage(format!("--time-limit: {e}")))?,
+            );
         }
         if let Some(n) = self.max_spp {
             a = a.with_max_spp(n);

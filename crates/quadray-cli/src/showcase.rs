@@ -127,7 +127,7 @@ impl Showcase {
         let r = self.clip;
         anyhow::ensure!(
             r > 0.0 && r.is_finite(),
-            "clip size must be a positive number, got {r}"
+            "clip size must be a positive number, got {r:?}"
         );
         let (clip, shift) = if self.one_sided() {
             (

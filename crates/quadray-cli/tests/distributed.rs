@@ -301,14 +301,23 @@ fn pieces_are_reproducible_and_never_merged_over() {
     let bytes = std::fs::read(&first).unwrap();
     for _ in 0..3 {
         let again = piece(&dir, 1, 3);
-        assert_eq!(std::fs::read(&again).unwrap(), bytes, "the same piece twice");
+        assert_eq!(
+            std::fs::read(&again).unwrap(),
+            bytes,
+            "the same piece twice"
+        );
     }
     let pieces: Vec<PathBuf> = (0..3).map(|i| piece(&dir, i, 3)).collect();
     let round_about = dir.path().join(".").join(pieces[2].file_name().unwrap());
     for output in [&pieces[0], &round_about] {
         let before = std::fs::read(&pieces[2]).unwrap();
         let o = merge(&pieces, &["-o", output.to_str().unwrap()]);
-        assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
         assert!(String::from_utf8_lossy(&o.stderr).contains("is one of the pieces to merge"));
         assert_eq!(std::fs::read(&pieces[2]).unwrap(), before);
     }

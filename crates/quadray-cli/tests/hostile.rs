@@ -134,3 +134,75 @@ fn bad_command_lines_exit_with_their_status_and_leave_nothing_behind() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// A reader that closed the pipe ends the command quietly with success, as in ripgrep: no panic,
+/// no error line.
+#[test]
+fn a_closed_pipe_ends_output_quietly() {
+    use std::process::{Command, Stdio};
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/defense.toml");
+    for args in [
+        vec!["check".to_string(), scene.to_string_lossy().into_owned()],
+        vec!["quadric".to_string(), "--list".to_string()],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_quadray"))
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take()); // the reader goes before anything is written
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
+        assert!(
+            !stderr.contains("panicked") && !stderr.contains("error"),
+            "{args:?}: {stderr}"
+        );
+    }
+}
+
+/// Pipes given where a file is read are refused at once instead of blocking forever (the loaders
+/// refuse them already: these are the merge and compare inputs).
+#[cfg(unix)]
+#[test]
+fn pipes_are_refused_as_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut paths = Vec::new();
+    for name in ["pipe.exr", "pipe.png"] {
+        let path = dir.path().join(name);
+        let made = std::process::Command::new("mkfifo").arg(&path).status();
+        if !made.is_ok_and(|s| s.success()) {
+            eprintln!("skipped: mkfifo is not available");
+            return;
+        }
+        paths.push(path.to_string_lossy().into_owned());
+    }
+    let red = corpus()
+        .join("texture/red.png")
+        .to_string_lossy()
+        .into_owned();
+    let out = dir.path().join("m.png").to_string_lossy().into_owned();
+    for (args, exit) in [
+        (vec!["merge", &paths[0], "-o", &out], 1),
+        (vec!["compare", &paths[1], &red], 2),
+        (vec!["compare", &red, &paths[0]], 2),
+    ] {
+        // A blocked read would hang the test: the binary runs under a watchdog thread instead.
+        let (send, receive) = std::sync::mpsc::channel();
+        let args_owned: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+        std::thread::spawn(move || {
+            let refs: Vec<&str> = args_owned.iter().map(String::as_str).collect();
+            let _ = send.send(common::quadray(&refs));
+        });
+        let o = receive
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .unwrap_or_else(|_| panic!("{args:?} blocked on a pipe"));
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(exit), "{args:?}: {stderr}");
+        assert!(
+            error_line_problem(&stderr, &["not a regular file"]).is_none(),
+            "{stderr}"
+        );
+    }
+}

@@ -32,14 +32,19 @@ impl ImageCache {
     }
 }
 
-/// Decodes an encoded PNG or JPEG image (format guessed from its bytes) into 8-bit RGBA.
-pub fn decode_image(bytes: &[u8], encoding: ColorEncoding) -> Result<Image, String> {
-    // Limits checked from the header before pixels are allocated (a 1 kB PNG can claim to be
-    // 100 000 pixels square).
+/// The limits every image decode runs under, checked from the header before pixels are allocated
+/// (a 1 kB PNG can claim to be 100 000 pixels square).
+pub fn decode_limits() -> image::Limits {
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(crate::read_limited::MAX_IMAGE_SIDE);
     limits.max_image_height = Some(crate::read_limited::MAX_IMAGE_SIDE);
     limits.max_alloc = Some(crate::read_limited::MAX_IMAGE_ALLOC);
+    limits
+}
+
+/// Decodes an encoded PNG or JPEG image (format guessed from its bytes) into 8-bit RGBA.
+pub fn decode_image(bytes: &[u8], encoding: ColorEncoding) -> Result<Image, String> {
+    let limits = decode_limits();
     let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| e.to_string())?;

@@ -18,8 +18,9 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// Most memory one image decode may allocate: 1 GiB.
 pub const MAX_IMAGE_ALLOC: u64 = 1 << 30;
 
-/// The bytes of the regular file at `path`, if it holds at most `limit` of them.
-pub fn read(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+/// The metadata of `path` if it is a regular file (after following links); an error for a
+/// device, a pipe (whose read would block or never end) or a folder.
+pub fn regular_file(path: &Path) -> std::io::Result<std::fs::Metadata> {
     let meta = std::fs::metadata(path)?;
     if !meta.is_file() {
         return Err(Error::new(
@@ -27,6 +28,12 @@ pub fn read(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
             "not a regular file (devices, pipes and folders are not read)",
         ));
     }
+    Ok(meta)
+}
+
+/// The bytes of the regular file at `path`, if it holds at most `limit` of them.
+pub fn read(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    let meta = regular_file(path)?;
     let too_large = |size: u64| {
         Error::new(
             ErrorKind::InvalidData,

@@ -162,15 +162,28 @@ pub enum RenderError {
         /// Image height.
         height: u32,
     },
-    /// Adaptive sampling settings outside their limits.
+    /// Adaptive sampling settings outside their limits. (The message holds the cause's: no
+    /// `#[from]`, which would also make it the source, and error chains would print it twice.)
     #[error("adaptive sampling: {0}")]
-    Adaptive(#[from] AdaptiveError),
+    Adaptive(AdaptiveError),
     /// The camera cannot produce rays at this aspect.
     #[error("camera: {0}")]
-    Camera(#[from] crate::camera::CameraError),
+    Camera(crate::camera::CameraError),
     /// [`Progress::cancelled`] asked to stop before the render finished.
     #[error("the render was cancelled")]
     Cancelled,
+}
+
+impl From<AdaptiveError> for RenderError {
+    fn from(e: AdaptiveError) -> RenderError {
+        RenderError::Adaptive(e)
+    }
+}
+
+impl From<crate::camera::CameraError> for RenderError {
+    fn from(e: crate::camera::CameraError) -> RenderError {
+        RenderError::Camera(e)
+    }
 }
 
 /// Checks an image size against the documented limits: sides, pixel count and aspect ratio.

@@ -438,7 +438,7 @@ pub fn run(a: &ImagesArgs) -> Result<()> {
     })?;
     let table = report.markdown();
     if !quiet {
-        println!("{table}");
+        outln!("{table}")?;
     }
     write_outputs(&report, &a.out, &a.name, &table)?;
     if !quiet {

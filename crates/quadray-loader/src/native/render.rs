@@ -3,7 +3,6 @@
 
 use super::*;
 use quadray::Adaptive;
-use std::time::Duration;
 
 impl Builder<'_> {
     /// The settings, the background and the environment (when set) of `[render]`.
@@ -88,9 +87,11 @@ impl Builder<'_> {
             a.min_spp = self.count(v, "render.min_spp", MAX_SPP)?;
         }
         if let Some(v) = &r.time_limit {
-            a.time_limit = Some(Duration::from_secs_f64(
-                self.positive(v, "render.time_limit")?,
-            ));
+            let secs = self.positive(v, "render.time_limit")?;
+            a.time_limit = Some(
+                quadray::adaptive::time_limit_from_secs(secs)
+                    .map_err(|e| self.err(v.span(), "render.time_limit", e.to_string()))?,
+            );
         }
         // Only the two counts can disagree here (the others were checked above).
         a.validate().map_err(|e| match (&r.min_spp, &r.max_spp) {

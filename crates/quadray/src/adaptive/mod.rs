@@ -102,6 +102,24 @@ pub enum AdaptiveError {
     /// A time limit that is zero.
     #[error("the time limit must be more than 0 seconds")]
     TimeLimit,
+    /// A time limit in seconds that is not a number in `(0, MAX_TIME_LIMIT_SECS]`.
+    #[error(
+        "the time limit must be a number of seconds above 0 and at most {MAX_TIME_LIMIT_SECS:e} (about 11.6 days), got {0:?}"
+    )]
+    TimeLimitSecs(f64),
+}
+
+/// The longest time limit, in seconds (about 11.6 days): far beyond any render's need, and well
+/// inside what a `Duration` holds.
+pub const MAX_TIME_LIMIT_SECS: f64 = 1e6;
+
+/// The time limit of `secs` seconds, if that is a number in `(0, MAX_TIME_LIMIT_SECS]`.
+pub fn time_limit_from_secs(secs: f64) -> Result<Duration, AdaptiveError> {
+    if secs > 0.0 && secs <= MAX_TIME_LIMIT_SECS {
+        Ok(Duration::from_secs_f64(secs))
+    } else {
+        Err(AdaptiveError::TimeLimitSecs(secs))
+    }
 }
 
 impl Adaptive {

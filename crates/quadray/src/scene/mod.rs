@@ -57,12 +57,19 @@ pub enum SceneError {
         /// What is wrong with it.
         problem: String,
     },
-    /// The camera cannot produce rays.
+    /// The camera cannot produce rays. (Its message holds the camera's: no `#[from]`, which
+    /// would also make it the source, and error chains would print it twice.)
     #[error("camera: {0}")]
-    Camera(#[from] CameraError),
+    Camera(CameraError),
     /// The instances cannot be placed: a cycle or an unknown prototype, too deep, too many.
     #[error(transparent)]
     Instances(#[from] PlacementError),
+}
+
+impl From<CameraError> for SceneError {
+    fn from(e: CameraError) -> SceneError {
+        SceneError::Camera(e)
+    }
 }
 
 /// A scene ready to render.
