@@ -81,7 +81,13 @@ pub fn convert(
                     s.name().map(|n| format!(" \"{n}\"")).unwrap_or_default()
                 ));
             }
-            s.nodes().collect()
+            let nodes: Vec<gltf::Node<'_>> = s.nodes().collect();
+            crate::gltf_graph::refuse_repeats(
+                nodes.iter().map(|n| n.index()),
+                || format!("scenes[{}].nodes", s.index()),
+                path,
+            )?;
+            nodes
         }
         None => {
             // No scene at all: show every node that is nobody's child.
@@ -158,6 +164,11 @@ pub fn convert(
     if out.materials.is_empty() && !options.skip_materials {
         out.materials
             .push(("default".into(), quadray::Material::default()));
+    }
+    if let Some(note) =
+        crate::coincident_note(quadray::coincident::merge_coincident(&mut out.geometry))
+    {
+        notes.push(note);
     }
     out.notes = notes;
     // The instance limits (nesting, expanded placements), said here with the file's name rather

@@ -65,6 +65,29 @@ fn node_shape(node: &gltf::Node<'_>, path: &Path) -> Result<Option<NodeExtension
         .transpose()
 }
 
+/// An error at the JSON path `at()` if `indices` names a node twice: glTF's schema makes a node's
+/// `children` and a scene's `nodes` `uniqueItems`, and a repeat would place the same subtree twice
+/// at the same transform (repeated at every level, 2^levels times: a 62-node file rendered for
+/// hours).
+pub(crate) fn refuse_repeats(
+    indices: impl Iterator<Item = usize>,
+    at: impl Fn() -> String,
+    path: &Path,
+) -> Result<(), LoadError> {
+    let mut seen = std::collections::HashSet::new();
+    for (k, index) in indices.enumerate() {
+        if !seen.insert(index) {
+            return Err(LoadError::invalid(
+                path,
+                None,
+                format!("{}[{k}]", at()),
+                format!("node {index} is listed twice; glTF requires these indices to be unique"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 impl NodeGraph {
     /// Walks the graph from `roots` once per node (not per path), rejecting cycles and depth
     /// beyond [`MAX_DEPTH`].
@@ -134,6 +157,11 @@ impl NodeGraph {
                 }
                 g.has_camera_or_light[i] =
                     node.camera().is_some() || node.light().is_some() || has_plane;
+                refuse_repeats(
+                    node.children().map(|c| c.index()),
+                    || format!("nodes[{i}].children"),
+                    path,
+                )?;
                 for child in node.children() {
                     let c = child.index();
                     g.refs[c] += 1;

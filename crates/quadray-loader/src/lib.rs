@@ -44,6 +44,16 @@ pub use native::{LoadedScene, SceneSettings, load_scene, load_scene_with, parse_
 
 use std::path::Path;
 
+/// The note for `merged` coincident placements dropped at load, if any.
+pub(crate) fn coincident_note(merged: usize) -> Option<String> {
+    (merged > 0).then(|| {
+        format!(
+            "merged {merged} coincident placements (the same group, shape or mesh placed again at \
+             the same transform with the same material draws the same surface)"
+        )
+    })
+}
+
 /// Loads any scene file quadray reads, chosen by its extension: `.toml` (the native format),
 /// `.obj`, `.gltf` or `.glb` (rendered on their own: see [`standalone`]).
 pub fn load_any(path: &Path) -> Result<LoadedScene, LoadError> {

@@ -51,6 +51,7 @@ pub mod accel;
 pub mod adaptive;
 pub mod aov;
 pub mod camera;
+pub mod coincident;
 pub mod film;
 pub mod footprint;
 pub mod geometry;

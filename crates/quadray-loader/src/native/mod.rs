@@ -327,6 +327,7 @@ impl Builder<'_> {
             prototypes: graph.prototypes,
             instances: top.instances,
         };
+        let mut merged_placements = quadray::coincident::merge_coincident(&mut geometry);
         // Nesting and expansion limits over groups and imported files together; each group's
         // own depth was checked where it is defined.
         quadray::Placements::new(&geometry).map_err(|e| {
@@ -382,6 +383,12 @@ impl Builder<'_> {
                 None => merged.cameras,
             };
             included_cameras.extend(chosen);
+        }
+        if !file.includes.is_empty() {
+            merged_placements += quadray::coincident::merge_coincident(&mut geometry);
+        }
+        if let Some(note) = crate::coincident_note(merged_placements) {
+            notes.push(note);
         }
         let camera = match &file.camera {
             Some(c) => self.camera(c)?,
