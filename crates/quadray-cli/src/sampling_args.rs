@@ -119,7 +119,7 @@ mod tests {
         };
         let a = timed.resolve(None, None).unwrap().unwrap();
         assert_eq!(a.target_error, 0.0);
-        assert_eq!(a.time_limit, Some(Duration::from_millis(1500)));
+        assert_eq!(a.time_limit, Some(std::time::Duration::from_millis(1500)));
         // A maximum below the scene's first round lowers the first round.
         let small = SamplingArgs {
             max_spp: Some(16),

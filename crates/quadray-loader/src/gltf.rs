@@ -114,7 +114,7 @@ pub fn convert(
     };
 
     let mut out = Imported::default();
-    let mut build = GraphBuild::new(file, path, &roots, &shapes, options.skip_materials)?;
+    let mut build = GraphBuild::new(file, path, &roots, &shapes, options)?;
     build.place_roots(&roots, options.root(UpAxis::Y), &mut out)?;
     out.degenerate = build.degenerate;
     notes.append(&mut build.notes);

@@ -13,6 +13,11 @@ use gltf::buffer::View;
 /// 3 GiB of floats).
 pub const MAX_ELEMENTS: usize = 1 << 28;
 
+/// Most bytes an accessor without a buffer view may decode to (256 MiB). Such an accessor is all
+/// zeros but for its sparse values, so its size is not backed by bytes of the file: without this
+/// bound a 1 kB file could ask for 2²⁸ VEC3 elements, 3 GiB.
+pub const MAX_UNBACKED_BYTES: usize = 256 << 20;
+
 /// What an accessor must look like to be read for some purpose.
 pub struct Expect<'a> {
     /// Allowed shapes (SCALAR, VEC2, …).
@@ -83,8 +88,18 @@ pub fn check(
         ));
     }
     let element = accessor.size();
-    if let Some(view) = accessor.view() {
-        check_range(&name, &view, accessor.offset(), count, element, buffers)?;
+    match accessor.view() {
+        Some(view) => check_range(&name, &view, accessor.offset(), count, element, buffers)?,
+        None => {
+            if count.saturating_mul(element) > MAX_UNBACKED_BYTES {
+                return Err(format!(
+                    "{name} has no buffer view, and its {count} elements of {element} bytes would \
+                     take {} MiB (at most {} MiB for an accessor whose data is not in the file)",
+                    count.saturating_mul(element) >> 20,
+                    MAX_UNBACKED_BYTES >> 20
+                ));
+            }
+        }
     }
     if let Some(sparse) = accessor.sparse() {
         let n = sparse.count();

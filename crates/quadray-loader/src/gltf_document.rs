@@ -397,7 +397,11 @@ pub fn read_uri(base: &Path, uri: &str) -> Result<Vec<u8>, UriError> {
 }
 
 /// Decodes image `image` of the document as sRGB, or says why it cannot be.
-pub fn read_image(file: &GltfFile, image: &gltf::Image<'_>) -> Result<Image, String> {
+pub fn read_image(
+    file: &GltfFile,
+    image: &gltf::Image<'_>,
+    budget: &crate::image_file::TextureBudget,
+) -> Result<Image, String> {
     // The gltf crate's `source` unwraps: an image with a bufferView needs a mimeType, and one
     // without needs a uri (the spec says so; hostile files do not). Checked here first.
     let json = file.document.as_json();
@@ -433,7 +437,7 @@ pub fn read_image(file: &GltfFile, image: &gltf::Image<'_>) -> Result<Image, Str
             } else {
                 uri
             };
-            return decode_image(&bytes, ColorEncoding::Srgb)
+            return decode_image(&bytes, ColorEncoding::Srgb, budget)
                 .map_err(|e| format!("cannot decode `{shown}`: {e}"));
         }
         gltf::image::Source::View { view, .. } => {
@@ -448,7 +452,7 @@ pub fn read_image(file: &GltfFile, image: &gltf::Image<'_>) -> Result<Image, Str
                 .to_vec()
         }
     };
-    decode_image(&bytes, ColorEncoding::Srgb)
+    decode_image(&bytes, ColorEncoding::Srgb, budget)
 }
 
 #[cfg(test)]

@@ -85,6 +85,7 @@ pub struct Materials<'a> {
     file: &'a GltfFile,
     converted: HashMap<Option<usize>, MaterialUse>,
     images: HashMap<usize, Option<Arc<Image>>>,
+    budget: crate::image_file::TextureBudget,
     /// The converted materials with their names, in first-use order.
     pub list: Vec<(String, Material)>,
     ignored: BTreeSet<&'static str>,
@@ -94,9 +95,10 @@ pub struct Materials<'a> {
 
 impl<'a> Materials<'a> {
     /// An empty table for `file`.
-    pub fn new(file: &'a GltfFile) -> Materials<'a> {
+    pub fn new(file: &'a GltfFile, budget: crate::image_file::TextureBudget) -> Materials<'a> {
         Materials {
             file,
+            budget,
             converted: HashMap::new(),
             images: HashMap::new(),
             list: Vec::new(),
@@ -276,7 +278,7 @@ impl Materials<'_> {
         if let Some(cached) = self.images.get(&image.index()) {
             return cached.clone();
         }
-        let read = match read_image(self.file, &image) {
+        let read = match read_image(self.file, &image, &self.budget) {
             Ok(img) => Some(Arc::new(img)),
             Err(e) => {
                 notes.push(format!(

@@ -57,6 +57,8 @@ pub struct ImportOptions {
     /// The output resolution when the caller already knows it (a command line's `--res`): it
     /// replaces the file's own, and a camera made to frame the file fits its aspect.
     pub resolution: Option<[u32; 2]>,
+    /// The budget the file's textures draw on (shared with the scene that includes the file).
+    pub textures: crate::image_file::TextureBudget,
 }
 
 /// The rotation taking y-up file coordinates to quadray's z-up world: (x, y, z) → (x, −z, y).

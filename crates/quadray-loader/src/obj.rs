@@ -125,7 +125,7 @@ pub fn import_obj_bytes(
     let materials = materials.unwrap_or_default();
 
     let mut out = Imported::default();
-    let mut images = ImageCache::default();
+    let mut images = ImageCache::new(options.textures.clone());
     if !options.skip_materials {
         let libraries = libraries.into_inner();
         let mut library = libraries

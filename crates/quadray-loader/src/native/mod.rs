@@ -160,13 +160,20 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<LoadedScene, LoadError> {
             )),
         )
     })?;
-    Builder { path, text }.build(file)
+    Builder {
+        path,
+        text,
+        textures: Default::default(),
+    }
+    .build(file)
 }
 
 /// Validation context: the file's path and text, to turn spans into locations.
 struct Builder<'a> {
     path: &'a Path,
     text: &'a str,
+    /// The budget every texture of the scene draws on, through all its meshes and includes.
+    textures: crate::image_file::TextureBudget,
 }
 
 impl Builder<'_> {
@@ -356,6 +363,7 @@ impl Builder<'_> {
                 up: self.up_axis(&spec.up, &format!("{key}.up"))?,
                 skip_materials: false,
                 resolution: None,
+                textures: self.textures.clone(),
             };
             let path = include::resolve(self.path, spec.path.get_ref());
             let imported = include::import_file(&path, &options)

@@ -76,6 +76,7 @@ impl Builder<'_> {
             up: self.up_axis(&m.up, &format!("{key}.up"))?,
             skip_materials: replace.is_some(),
             resolution: None,
+            textures: self.textures.clone(),
         };
         let path = include::resolve(self.path, path_spec.get_ref());
         let imported = include::import_file(&path, &options)
