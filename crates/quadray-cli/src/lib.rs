@@ -90,11 +90,23 @@ pub fn usage_ensure(condition: bool, message: &str) -> Result<(), StatusError> {
 pub fn exit_status(err: &anyhow::Error, command_is_compare: bool) -> u8 {
     if let Some(e) = err.downcast_ref::<StatusError>() {
         e.status
-    } else if err.downcast_ref::<clap::Error>().is_some() || command_is_compare {
+    } else if err.downcast_ref::<clap::Error>().is_some()
+        || command_is_compare
+        || is_override_error(err)
+    {
         2
     } else {
         1
     }
+}
+
+/// Whether `err` is a `--set` override that names no place of its scene: a usage error.
+fn is_override_error(err: &anyhow::Error) -> bool {
+    err.chain().any(|cause| {
+        cause
+            .downcast_ref::<quadray_loader::LoadError>()
+            .is_some_and(|e| matches!(e.kind, quadray_loader::LoadErrorKind::Override { .. }))
+    })
 }
 
 /// Whether `err` comes from writing to a pipe whose reader has gone: the command's output is

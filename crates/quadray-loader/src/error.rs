@@ -55,6 +55,15 @@ pub enum LoadErrorKind {
         #[source]
         source: std::io::Error,
     },
+    /// A command-line override (`--set KEY=VALUE`) names no place the file has: a usage error of
+    /// the command line rather than of the file.
+    #[error("{set}: {message}")]
+    Override {
+        /// The override as given (`--set sphere[9].radius=2`).
+        set: String,
+        /// Why it cannot be applied.
+        message: String,
+    },
     /// A file included by a scene failed to load; `source` names that file and its problem.
     #[error("`{key}`: {source}")]
     Include {

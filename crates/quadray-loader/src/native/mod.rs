@@ -130,7 +130,10 @@ pub fn load_scene_with(
     }
     let text = read_scene_text(path)?;
     let edited = overrides::apply(&text, overrides)
-        .map_err(|(o, m)| LoadError::invalid(path, None, o.to_string(), m))?;
+        .map_err(|(o, message)| {
+            let set = o.to_string();
+            LoadError::new(path, None, LoadErrorKind::Override { set, message })
+        })?;
     parse_scene(&edited, path).map_err(|mut e| {
         // The edited line is not what the file says: name the override instead of a place.
         if let LoadErrorKind::Invalid { key, message } = &mut e.kind

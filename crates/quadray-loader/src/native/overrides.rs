@@ -5,6 +5,12 @@
 use std::str::FromStr;
 use toml_edit::{DocumentMut, Item, Value};
 
+/// The longest key of an override, in bytes.
+pub const MAX_KEY_BYTES: usize = 1024;
+/// The most dotted parts a key may have: the deepest key of a scene is a shape inside groups
+/// nested [`quadray::MAX_NESTING`] deep, plus its value's name.
+pub const MAX_KEY_PARTS: usize = quadray::MAX_NESTING + 2;
+
 /// One override: a dotted key (`render.spp`, `camera.orbit.yaw`, `material[1].color`) and a TOML
 /// value (`64`, `[1, 0, 0]`, `"orthographic"`; a bare word is taken as a string).
 #[derive(Clone, Debug, PartialEq)]
@@ -26,6 +32,14 @@ impl FromStr for Override {
         if key.is_empty() || value.is_empty() {
             return Err(format!(
                 "expected KEY=VALUE (e.g. render.spp=64), got \"{s}\""
+            ));
+        }
+        if key.len() > MAX_KEY_BYTES || key.split('.').count() > MAX_KEY_PARTS {
+            return Err(format!(
+                "the key is {} bytes in {} parts; at most {MAX_KEY_BYTES} bytes in \
+                 {MAX_KEY_PARTS} parts",
+                key.len(),
+                key.split('.').count()
             ));
         }
         Ok(Override {
