@@ -104,6 +104,7 @@ fn bad_command_lines_exit_with_their_status_and_leave_nothing_behind() {
                 a.replace("{scenes}", &scenes.to_string_lossy())
                     .replace("{corpus}", &corpus().to_string_lossy())
                     .replace("{out}", &out_dir.path().to_string_lossy())
+                    .replace("{deep_key}", &vec!["a"; 20_000].join("."))
             })
             .collect();
         let args: Vec<&str> = args.iter().map(String::as_str).collect();

@@ -61,15 +61,17 @@ impl ImageCache {
     pub fn get(&mut self, path: &Path, user: &str, notes: &mut Vec<String>) -> Option<Arc<Image>> {
         self.images
             .entry(path.to_path_buf())
-            .or_insert_with(|| match read_image(path, ColorEncoding::Srgb, &self.budget) {
-                Ok(img) => Some(Arc::new(img)),
-                Err(e) => {
-                    notes.push(format!(
-                        "warning: {user}: texture unavailable ({e}); using the base colour"
-                    ));
-                    None
-                }
-            })
+            .or_insert_with(
+                || match read_image(path, ColorEncoding::Srgb, &self.budget) {
+                    Ok(img) => Some(Arc::new(img)),
+                    Err(e) => {
+                        notes.push(format!(
+                            "warning: {user}: texture unavailable ({e}); using the base colour"
+                        ));
+                        None
+                    }
+                },
+            )
             .clone()
     }
 }

@@ -139,17 +139,45 @@ fn texture_file_name(statement: &str) -> Option<&str> {
     (!rest.is_empty()).then_some(rest)
 }
 
-/// Prepares MTL text for tobj: a colour statement (`Ka`, `Kd`, `Ks`, `Ke`) with a single number
-/// means grey (the MTL spec: "g and b default to r") and is expanded to three numbers, because
-/// tobj 4 panics on fewer than three. A statement with no number or two numbers is an error
-/// naming the line.
-pub fn normalise_colour_statements(text: &str) -> Result<String, (usize, String)> {
+/// Checks MTL text line by line and prepares it for tobj, so every problem is named with its line
+/// (tobj's own errors have none):
+/// - a colour statement (`Ka`, `Kd`, `Ks`, `Ke`, `Tf`) takes one or three finite numbers of at
+///   least 0; a single number means grey (the MTL spec: "g and b default to r") and is expanded
+///   to three, because tobj 4 panics on fewer;
+/// - a scalar statement (`Ns`, `Ni`, `d`, `Tr`, `illum`) takes one finite number.
+pub fn prepare_mtl_text(text: &str) -> Result<String, (usize, String)> {
     let mut out = String::with_capacity(text.len() + 64);
     for (n, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
-        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) = words.next() {
+        let keyword = words.next();
+        if let Some(key @ ("Ns" | "Ni" | "d" | "Tr" | "illum")) = keyword {
+            let values: Vec<&str> = words.clone().collect();
+            if values.len() != 1 || !values[0].parse::<f32>().is_ok_and(f32::is_finite) {
+                return Err((
+                    n + 1,
+                    format!("`{key}` needs one finite number, got {values:?}"),
+                ));
+            }
+        }
+        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke" | "Tf")) = keyword {
             let values: Vec<&str> = words.collect();
+            if let Some(bad) = values
+                .iter()
+                .find(|v| v.parse::<f32>().is_ok_and(|x| !x.is_finite() || x < 0.0))
+            {
+                return Err((
+                    n + 1,
+                    format!("`{key}` {bad}: a colour takes finite numbers of 0 or more"),
+                ));
+            }
             let all_numbers = values.iter().all(|v| v.parse::<f32>().is_ok());
+            if !all_numbers && values.len() != 2 && !values.is_empty() {
+                let bad = values
+                    .iter()
+                    .find(|v| v.parse::<f32>().is_err())
+                    .unwrap_or(&"");
+                return Err((n + 1, format!("`{key}`: `{bad}` is not a number")));
+            }
             match values.len() {
                 1 if all_numbers => {
                     let v = values[0];
@@ -176,7 +204,7 @@ mod tests {
     use super::*;
 
     fn material(text: &str) -> (tobj::Material, Vec<String>, Material) {
-        let text = normalise_colour_statements(text).unwrap();
+        let text = prepare_mtl_text(text).unwrap();
         let (mats, _) = tobj::load_mtl_buf(&mut text.as_bytes()).unwrap();
         let mut notes = Vec::new();
         let m = whitted_material(
@@ -189,10 +217,33 @@ mod tests {
         (mats[0].clone(), notes, m)
     }
 
+    /// Every number a statement needs is checked with its line: tobj's own errors have none.
+    #[test]
+    fn bad_numbers_are_refused_with_their_line() {
+        for (text, line, says) in [
+            (
+                "newmtl a\nKd nan 0.5 0.5\n",
+                2,
+                "finite numbers of 0 or more",
+            ),
+            ("newmtl a\n\nKd -1 -1 -1\n", 3, "`Kd` -1"),
+            ("newmtl a\nKs 0.1 x 0.2\n", 2, "`x` is not a number"),
+            ("newmtl a\nNs inf\n", 2, "`Ns` needs one finite number"),
+            ("newmtl a\nillum\n", 2, "`illum` needs one finite number"),
+            ("newmtl a\nTf 0.5 0.5\n", 2, "one or three numbers"),
+        ] {
+            let (at, message) = prepare_mtl_text(text).unwrap_err();
+            assert_eq!(at, line, "{text:?}");
+            assert!(message.contains(says), "{text:?}: {message}");
+        }
+    }
+
+    /// A material made in code, past the text checks, is still refused by the conversion.
     #[test]
     fn non_finite_colours_are_refused() {
-        let text = normalise_colour_statements("newmtl a\nKd nan 0.5 0.5\n").unwrap();
-        let (mats, _) = tobj::load_mtl_buf(&mut text.as_bytes()).unwrap();
+        let text = "newmtl a\nKd 0.5 0.5 0.5\n";
+        let (mut mats, _) = tobj::load_mtl_buf(&mut text.as_bytes()).unwrap();
+        mats[0].diffuse = Some([f32::NAN, 0.5, 0.5]);
         let e = whitted_material(
             &mats[0],
             Path::new("."),
@@ -225,13 +276,8 @@ mod tests {
         let (raw, _, m) = material("newmtl a\nKd 0.3\n");
         assert_eq!(raw.diffuse, Some([0.3; 3]));
         assert_eq!(m.texture, Texture::Constant(Vec3::splat(0.3)));
-        assert_eq!(
-            normalise_colour_statements("newmtl a\n\nKs 1 2\n")
-                .unwrap_err()
-                .0,
-            3
-        );
-        assert!(normalise_colour_statements("Kd\n").is_err());
+        assert_eq!(prepare_mtl_text("newmtl a\n\nKs 1 2\n").unwrap_err().0, 3);
+        assert!(prepare_mtl_text("Kd\n").is_err());
     }
 
     #[test]

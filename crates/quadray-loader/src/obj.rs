@@ -13,10 +13,10 @@
 use crate::error::{LoadError, LoadErrorKind, Location};
 use crate::image_file::{ImageCache, resolve_reference};
 use crate::import::{ImportOptions, Imported};
-use crate::mtl::{normalise_colour_statements, whitted_material};
+use crate::mtl::{prepare_mtl_text, whitted_material};
 pub use crate::obj_locate::MAX_FACE_VERTICES;
 use crate::obj_locate::{
-    locate_non_finite_vertex, locate_parse_error, oversized_face, undefined_materials,
+    locate_non_finite, locate_parse_error, locate_zero_index, oversized_face, undefined_materials,
 };
 use glam::{DVec3, Vec2, Vec3, Vec4};
 use quadray::{Material, Mesh};
@@ -76,7 +76,7 @@ pub fn import_obj_bytes(
                 return Err(tobj::LoadError::OpenFileFailed);
             }
         };
-        let parsed = normalise_colour_statements(&text)
+        let parsed = prepare_mtl_text(&text)
             .map_err(|(line, message)| {
                 LoadError::new(
                     &mtl_path,
@@ -104,18 +104,40 @@ pub fn import_obj_bytes(
         }
     });
     if let Some(e) = library_error.into_inner() {
-        return Err(e);
+        // Named from the OBJ file, which is what the user gave, and then the library's place.
+        return Err(LoadError::new(
+            path,
+            None,
+            LoadErrorKind::Include {
+                key: "mtllib".into(),
+                source: Box::new(e),
+            },
+        ));
     }
     let (models, materials) = result.map_err(|e| obj_error(bytes, path, e))?;
-    let non_finite = models
+    let non_finite = models.iter().any(|m| {
+        let mesh = &m.mesh;
+        [
+            &mesh.positions,
+            &mesh.normals,
+            &mesh.texcoords,
+            &mesh.vertex_color,
+        ]
         .iter()
-        .any(|m| m.mesh.positions.iter().any(|x| !x.is_finite()));
-    if non_finite && let Some((line, message)) = locate_non_finite_vertex(bytes) {
+        .any(|values| values.iter().any(|x| !x.is_finite()))
+    });
+    let located = match non_finite {
+        true => locate_non_finite(bytes),
+        false => None,
+    };
+    if let Some((key, (line, message))) =
+        located.or_else(|| locate_zero_index(bytes).map(|l| ("f", l)))
+    {
         return Err(LoadError::new(
             path,
             Some(Location { line, column: 1 }),
             LoadErrorKind::Invalid {
-                key: "v".into(),
+                key: key.into(),
                 message,
             },
         ));

@@ -152,22 +152,48 @@ fn locate_bad_index(bytes: &[u8]) -> Option<Located> {
     None
 }
 
-/// The first vertex whose position is not a finite 32-bit number (NaN, infinity, or a value
-/// beyond ±3.4e38 that rounds to infinity), which tobj reads without complaint.
-pub(crate) fn locate_non_finite_vertex(bytes: &[u8]) -> Option<Located> {
+/// The first vertex position or colour (`v`), normal (`vn`) or texture coordinate (`vt`) that is
+/// not a finite 32-bit number (NaN, infinity, or a value beyond ±3.4e38 that rounds to
+/// infinity), which tobj reads without complaint; with the statement's keyword.
+pub(crate) fn locate_non_finite(bytes: &[u8]) -> Option<(&'static str, Located)> {
     let text = String::from_utf8_lossy(bytes);
     statements(&text).find_map(|(line, k, words)| {
-        if k != "v" {
+        let (keyword, what) = match k {
+            "v" => ("v", "vertex coordinate or colour"),
+            "vn" => ("vn", "normal component"),
+            "vt" => ("vt", "texture coordinate"),
+            _ => return None,
+        };
+        let bad = words
+            .iter()
+            .find(|w| w.parse::<f32>().is_ok_and(|x| !x.is_finite()))?;
+        let message = format!(
+            "{what} `{bad}` is not a finite 32-bit number (meshes store f32; |x| must stay below \
+             3.4e38)"
+        );
+        Some((keyword, (line, message)))
+    })
+}
+
+/// The first face corner with an index of 0, which OBJ does not have (indices count from 1, or
+/// back from -1); tobj reads a texture or normal index 0 without complaint.
+pub(crate) fn locate_zero_index(bytes: &[u8]) -> Option<Located> {
+    // Most files have no `/0` at all: scan the bytes before splitting lines.
+    if !bytes.windows(2).any(|w| w == b"/0") {
+        return None;
+    }
+    let text = String::from_utf8_lossy(bytes);
+    statements(&text).find_map(|(line, k, words)| {
+        if k != "f" {
             return None;
         }
         let bad = words
             .iter()
-            .take(3)
-            .find(|w| w.parse::<f32>().is_ok_and(|x| !x.is_finite()))?;
+            .find(|corner| corner.split('/').any(|f| f.parse::<i64>() == Ok(0)))?;
         Some((
             line,
             format!(
-                "vertex coordinate `{bad}` is not a finite 32-bit number (meshes store f32; |x| must stay below 3.4e38)"
+                "face corner `{bad}` has an index 0; OBJ indices count from 1 (or back from -1)"
             ),
         ))
     })
@@ -218,10 +244,22 @@ mod tests {
     }
 
     #[test]
-    fn non_finite_vertices_are_located() {
-        let (line, m) = locate_non_finite_vertex(b"v 0 0 0\nv 1e300 0 0\n").unwrap();
-        assert_eq!(line, 2);
+    fn non_finite_numbers_are_located() {
+        let (keyword, (line, m)) = locate_non_finite(b"v 0 0 0\nv 1e300 0 0\n").unwrap();
+        assert_eq!((keyword, line), ("v", 2));
         assert!(m.contains("`1e300`"), "{m}");
-        assert!(locate_non_finite_vertex(b"v 0 0 0\nv 1e30 0 0\n").is_none());
+        assert!(locate_non_finite(b"v 0 0 0\nv 1e30 0 0\n").is_none());
+        let (keyword, (line, _)) = locate_non_finite(b"v 0 0 0\nvt 0 0\nvn 0 inf 1\n").unwrap();
+        assert_eq!((keyword, line), ("vn", 3));
+        let (keyword, _) = locate_non_finite(b"vt nan 0\n").unwrap();
+        assert_eq!(keyword, "vt");
+    }
+
+    #[test]
+    fn zero_indices_are_located() {
+        let (line, m) = locate_zero_index(b"v 0 0 0\nf 1/1 2/1 3/1\nf 1//0 2//1 3//1\n").unwrap();
+        assert_eq!(line, 3);
+        assert!(m.contains("`1//0`"), "{m}");
+        assert!(locate_zero_index(b"f 1/10 2/20 3/30\n").is_none());
     }
 }

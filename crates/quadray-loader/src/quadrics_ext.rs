@@ -249,6 +249,14 @@ pub fn place(def: &ShapeDef, to_world: DAffine3, material: u32) -> Result<Placed
                 .try_normalize()
                 .filter(|n| n.is_finite())
                 .ok_or("the node's transform is singular")?;
+            let far = to_world.translation.abs().max_element();
+            if far > quadray::MAX_COORDINATE {
+                return Err(format!(
+                    "the node places the plane {far:e} from the origin; quadray supports \
+                     coordinates up to {:e}",
+                    quadray::MAX_COORDINATE
+                ));
+            }
             Ok(PlacedShape::Plane(Plane {
                 point: to_world.translation,
                 normal,

@@ -22,7 +22,7 @@ impl Builder<'_> {
             .map(|p| (p.get_ref().as_str(), p.span()));
         let camera = match (&c.orbit, projection) {
             (Some(orbit), None | Some(("perspective", _))) => {
-                if c.from.is_some() {
+                if c.from.is_some() || c.to.is_some() {
                     return Err(self.err(
                         spec.span(),
                         "camera",

@@ -129,11 +129,10 @@ pub fn load_scene_with(
         return load_scene(path);
     }
     let text = read_scene_text(path)?;
-    let edited = overrides::apply(&text, overrides)
-        .map_err(|(o, message)| {
-            let set = o.to_string();
-            LoadError::new(path, None, LoadErrorKind::Override { set, message })
-        })?;
+    let edited = overrides::apply(&text, overrides).map_err(|(o, message)| {
+        let set = o.to_string();
+        LoadError::new(path, None, LoadErrorKind::Override { set, message })
+    })?;
     parse_scene(&edited, path).map_err(|mut e| {
         // The edited line is not what the file says: name the override instead of a place.
         if let LoadErrorKind::Invalid { key, message } = &mut e.kind
@@ -171,6 +170,16 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<LoadedScene, LoadError> {
     .build(file)
 }
 
+/// The largest magnitude of any number in a scene file: quadray's coordinate limit
+/// ([`quadray::MAX_COORDINATE`], set by its f32 bounding boxes), applied to every number so that
+/// none becomes infinite later (as an f32, or once transformed) far from its line.
+const MAX_NUMBER: f64 = quadray::MAX_COORDINATE;
+
+/// The message for a number beyond [`MAX_NUMBER`].
+fn beyond_limit(x: f64) -> String {
+    format!("{x:e} is beyond the limit of ±{MAX_NUMBER:e} for numbers in a scene")
+}
+
 /// Validation context: the file's path and text, to turn spans into locations.
 struct Builder<'a> {
     path: &'a Path,
@@ -198,6 +207,9 @@ impl Builder<'_> {
         if !d.is_finite() {
             return Err(self.err(v.span(), key, format!("must be finite numbers, got {d}")));
         }
+        if let Some(x) = d.to_array().into_iter().find(|x| x.abs() > MAX_NUMBER) {
+            return Err(self.err(v.span(), key, beyond_limit(x)));
+        }
         Ok(d)
     }
 
@@ -223,6 +235,9 @@ impl Builder<'_> {
         let x = *v.get_ref();
         if !x.is_finite() {
             return Err(self.err(v.span(), key, format!("must be a finite number, got {x}")));
+        }
+        if x.abs() > MAX_NUMBER {
+            return Err(self.err(v.span(), key, beyond_limit(x)));
         }
         Ok(x)
     }

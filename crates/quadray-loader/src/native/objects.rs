@@ -120,6 +120,13 @@ impl Builder<'_> {
                     format!("needs exactly 10 numbers (A..J), got {}", k.get_ref().len()),
                 )
             })?;
+            if let Some(&x) = arr.iter().find(|x| x.abs() > super::MAX_NUMBER) {
+                return Err(self.err(
+                    k.span(),
+                    format!("{key}.coefficients"),
+                    super::beyond_limit(x),
+                ));
+            }
             QuadricSurface::General(Coefficients(arr))
         } else {
             let kind = QuadricKind::from_name(kind).ok_or_else(|| {
@@ -239,6 +246,18 @@ impl Builder<'_> {
             // A mirroring transform would turn the triangle's front face away: keep the winding's meaning.
             let t = tri.map(|i| i as u32);
             indices.push(if flip { [t[0], t[2], t[1]] } else { t });
+        }
+        if let Some(n) = &m.normals
+            && let Some(k) = n
+                .get_ref()
+                .iter()
+                .position(|v| !v.0.iter().all(|x| x.is_finite()))
+        {
+            return Err(self.err(
+                n.span(),
+                format!("{key}.normals[{k}]"),
+                format!("{:?} is not three finite numbers", n.get_ref()[k].0),
+            ));
         }
         let normals = m.normals.as_ref().map(|n| {
             n.get_ref()

@@ -159,6 +159,20 @@ impl Scene {
                 .push(d.camera.from.abs() + glam::DVec3::splat(height * crate::render::MAX_ASPECT));
         }
         let origin_extent = max_abs_coordinate(&origins);
+        // Planes are not in the BVHs' boxes, but their points enter the same f32 arithmetic of
+        // ray offsets and textures: the same limit.
+        for (i, plane) in d.geometry.planes.iter().enumerate() {
+            let far = plane.point.abs().max_element();
+            if !(far <= MAX_COORDINATE) {
+                return Err(invalid(
+                    format!("plane {i}"),
+                    format!(
+                        "its point lies {far:e} from the origin; quadray supports magnitudes up \
+                         to {MAX_COORDINATE:e}"
+                    ),
+                ));
+            }
+        }
         // The BVHs hold f32 boxes: coordinates of shapes (in their level and as placed) and of the
         // camera must stay well inside f32's range, or boxes become infinite.
         let layout = crate::accel::Layout::new(&d.geometry, Some(placements));
