@@ -26,6 +26,10 @@ pub struct Cli {
     /// Log what is loaded and each phase's time on stderr (-v phases, -vv every file read).
     #[arg(short, long, action = clap::ArgAction::Count, global = true)]
     pub verbose: u8,
+    /// Refuse to read or write any file outside DIR (after resolving links): for scenes from
+    /// strangers. Default: the QUADRAY_CONFINE environment variable, else no confinement.
+    #[arg(long, value_name = "DIR", global = true)]
+    pub confine: Option<PathBuf>,
 }
 
 /// The subcommands.

@@ -8,8 +8,10 @@ use std::time::Instant;
 /// Runs the check subcommand: exit status 0 when the scene is valid, with a summary on stdout.
 pub fn run(args: &CheckArgs) -> Result<()> {
     let start = Instant::now();
+    quadray_loader::confine::record_reads();
     let loaded =
         crate::args::load_scene_for(&args.scene, &args.set, &Default::default(), None, None)?;
+    let reads = quadray_loader::confine::take_reads();
     log::info!(
         "loaded {} in {:.3} s",
         args.scene.display(),
@@ -19,6 +21,7 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         eprintln!("{}", crate::warnings::note_line(note));
     }
     let settings = loaded.settings;
+    let loaded_output = loaded.output;
     let built_at = Instant::now();
     let scene = Scene::new(loaded.description)
         .with_context(|| format!("invalid scene {}", args.scene.display()))?;
@@ -40,6 +43,14 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         settings.max_depth
     )?;
     outln!("{}", structure_line(&scene))?;
+    for file in reads {
+        outln!("reads: {}", file.display())?;
+    }
+    let output = loaded_output.unwrap_or_else(|| crate::args::default_output(&args.scene));
+    outln!(
+        "writes: {} (unless -o names another file)",
+        output.display()
+    )?;
     Ok(())
 }
 

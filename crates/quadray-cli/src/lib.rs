@@ -119,6 +119,22 @@ pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
     })
 }
 
+/// Confines the process's file access as `--confine DIR` or, without it, the `QUADRAY_CONFINE`
+/// environment variable asks ([`quadray_loader::confine`]); a folder that does not exist is a
+/// usage error. Called by `main` only: the setting holds for the whole process.
+pub fn apply_confinement(flag: Option<&std::path::Path>) -> anyhow::Result<()> {
+    let from_env = std::env::var_os(quadray_loader::confine::ENV).filter(|v| !v.is_empty());
+    let dir = match (flag, &from_env) {
+        (Some(dir), _) => dir.to_path_buf(),
+        (None, Some(dir)) => std::path::PathBuf::from(dir),
+        (None, None) => return Ok(()),
+    };
+    let root =
+        quadray_loader::confine::confine_to(&dir).map_err(|e| StatusError::usage(e.to_string()))?;
+    log::info!("confined to {}", root.display());
+    Ok(())
+}
+
 /// Runs a parsed command line.
 pub fn run(cli: args::Cli) -> anyhow::Result<()> {
     match cli.command {

@@ -8,7 +8,8 @@ fn main() -> ExitCode {
     let cli = quadray_cli::args::Cli::parse();
     quadray_cli::logging::init(quadray_cli::logging::level(cli.verbose));
     let is_compare = matches!(cli.command, quadray_cli::args::Command::Compare(_));
-    match quadray_cli::run(cli) {
+    let confined = quadray_cli::apply_confinement(cli.confine.as_deref());
+    match confined.and_then(|()| quadray_cli::run(cli)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) if quadray_cli::is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {

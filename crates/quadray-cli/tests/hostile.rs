@@ -207,3 +207,150 @@ fn pipes_are_refused_as_inputs() {
         );
     }
 }
+
+/// `--confine DIR` (or `QUADRAY_CONFINE`): a scene from a stranger reads and writes nothing
+/// outside DIR, however the path is spelt (`../`, absolute, `file:` URI, `%2e%2e`, a link out),
+/// and `check` lists the files a scene reads and the one it would write.
+#[test]
+fn confinement_keeps_reads_and_writes_inside_the_folder() {
+    use std::fs;
+    let base = tempfile::tempdir().unwrap();
+    let jail = base.path().join("jail");
+    fs::create_dir(&jail).unwrap();
+    let outside = base.path().join("secret.obj");
+    fs::copy(corpus().join("obj/triangle.obj"), &outside).unwrap();
+    // The triangle's 44 buffer bytes, outside, for glTF files that reach for them.
+    let gltf: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(corpus().join("gltf/triangle.gltf")).unwrap())
+            .unwrap();
+    let uri = gltf["buffers"][0]["uri"].as_str().unwrap().to_string();
+    let encoded = uri.split_once(',').unwrap().1;
+    let bytes =
+        base64::Engine::decode(&base64::engine::general_purpose::STANDARD, encoded).unwrap();
+    fs::write(base.path().join("secret.bin"), &bytes).unwrap();
+    let header = "version = 1\n[camera]\nfrom = [0, -5, 1]\nto = [0, 0, 0]\n";
+    let secret_bin = base.path().join("secret.bin");
+    let mut cases: Vec<(String, String)> = vec![
+        (
+            "mesh-up.toml".into(),
+            format!("{header}[[mesh]]\npath = \"../secret.obj\"\n"),
+        ),
+        (
+            "mesh-absolute.toml".into(),
+            format!("{header}[[mesh]]\npath = \"{}\"\n", outside.display()),
+        ),
+        (
+            "include-up.toml".into(),
+            format!("{header}[[include]]\npath = \"../secret.obj\"\n"),
+        ),
+        (
+            "output-out.toml".into(),
+            format!(
+                "{header}[[material]]\nname = \"m\"\n[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\n\
+                 material = \"m\"\n[output]\nfile = \"../stolen.png\"\n"
+            ),
+        ),
+    ];
+    for (name, reference) in [
+        ("buffer-up.gltf", "../secret.bin".to_string()),
+        (
+            "buffer-file-uri.gltf",
+            format!("file://{}", secret_bin.display()),
+        ),
+        ("buffer-percent.gltf", "%2e%2e/secret.bin".to_string()),
+    ] {
+        let mut g = gltf.clone();
+        g["buffers"][0]["uri"] = serde_json::Value::String(reference);
+        cases.push((name.into(), g.to_string()));
+    }
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(&outside, jail.join("link.obj")).unwrap();
+        cases.push((
+            "link.toml".into(),
+            format!("{header}[[mesh]]\npath = \"link.obj\"\n"),
+        ));
+    }
+    let jail_arg = jail.to_string_lossy().into_owned();
+    for (name, text) in &cases {
+        let scene = jail.join(name);
+        fs::write(&scene, text).unwrap();
+        let scene = scene.to_string_lossy().into_owned();
+        // Without confinement the outside files load (the cases are real reaches, not typos)...
+        let free = common::quadray(&["check", &scene]);
+        if !name.starts_with("output") {
+            assert!(
+                free.status.success(),
+                "{name}: {}",
+                String::from_utf8_lossy(&free.stderr)
+            );
+        }
+        // ...with it, the read or the write is refused, by flag and by environment variable.
+        let out = jail.join("o.png").to_string_lossy().into_owned();
+        let flagged = common::quadray(&[
+            "--confine",
+            &jail_arg,
+            "render",
+            &scene,
+            "-o",
+            &out,
+            "--res",
+            "8x6",
+        ]);
+        let envd = std::process::Command::new(env!("CARGO_BIN_EXE_quadray"))
+            .env("QUADRAY_CONFINE", &jail)
+            .args(["render", &scene, "--res", "8x6"])
+            .output()
+            .unwrap();
+        for (how, o) in [("--confine", &flagged), ("QUADRAY_CONFINE", &envd)] {
+            let stderr = String::from_utf8_lossy(&o.stderr);
+            if name.starts_with("output") && how == "--confine" {
+                // -o inside the folder replaces the scene's own output: allowed.
+                assert!(o.status.success(), "{name} {how}: {stderr}");
+                continue;
+            }
+            assert_eq!(o.status.code(), Some(1), "{name} {how}: {stderr}");
+            assert!(
+                error_line_problem(&stderr, &["outside the confinement folder"]).is_none(),
+                "{name} {how}: {stderr}"
+            );
+        }
+    }
+    assert!(!base.path().join("stolen.png").exists());
+    // `convert` does not copy outside bytes into its output either.
+    let glb = jail.join("copy.glb").to_string_lossy().into_owned();
+    let scene = jail.join("buffer-up.gltf").to_string_lossy().into_owned();
+    let o = common::quadray(&["--confine", &jail_arg, "convert", &scene, "-o", &glb]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!jail.join("copy.glb").exists());
+    // An output outside, and a folder that does not exist.
+    let inside = jail.join("mesh-up.toml");
+    fs::write(&inside, format!("{header}[[mesh]]\npath = \"link.obj\"\n")).unwrap();
+    let o = common::quadray(&[
+        "--confine",
+        &jail_arg,
+        "quadric",
+        "cone",
+        "-o",
+        &base.path().join("q.png").to_string_lossy(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = common::quadray(&["--confine", "/no/such/folder", "check", &scene]);
+    assert_eq!(o.status.code(), Some(2));
+    // check lists what a scene reads and where it would write.
+    let listed = common::quadray(&["check", &jail.join("buffer-up.gltf").to_string_lossy()]);
+    let stdout = String::from_utf8_lossy(&listed.stdout);
+    assert!(
+        stdout.contains("reads: ") && stdout.contains("secret.bin"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("writes: ") && stdout.contains("buffer-up.png"),
+        "{stdout}"
+    );
+}

@@ -40,6 +40,7 @@ pub fn replace_with<E: From<std::io::Error>>(
     path: &Path,
     write: impl FnOnce(&mut Writer<'_>) -> Result<(), E>,
 ) -> Result<(), E> {
+    crate::confine::check_write(path)?;
     let dir = parent_dir(path);
     let name = path
         .file_name()

@@ -10,6 +10,7 @@
 //! - [`LoadError`]: every error names the file, the line and column where known, and the bad key.
 
 pub mod atomic_file;
+pub mod confine;
 pub mod error;
 pub mod export;
 pub mod export_document;

@@ -20,8 +20,10 @@ pub const MAX_IMAGE_ALLOC: u64 = 1 << 30;
 
 /// The metadata of `path` if it is a regular file (after following links); an error for a
 /// device, a pipe (whose read would block or never end) or a folder.
+/// A file outside the confinement folder ([`crate::confine`]) is refused the same way.
 pub fn regular_file(path: &Path) -> std::io::Result<std::fs::Metadata> {
     let meta = std::fs::metadata(path)?;
+    crate::confine::check_read(path)?;
     if !meta.is_file() {
         return Err(Error::new(
             ErrorKind::InvalidInput,
@@ -52,6 +54,7 @@ pub fn read(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
         return Err(too_large(bytes.len() as u64));
     }
     log::debug!("read {} ({} bytes)", path.display(), bytes.len());
+    crate::confine::note_read(path);
     Ok(bytes)
 }
 
