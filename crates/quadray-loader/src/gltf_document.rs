@@ -104,11 +104,12 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
         .and_then(Value::as_array)
         .cloned()
         .unwrap_or_default();
-    let root: gltf::json::Root = serde_json::from_value(value).map_err(|e| {
-        LoadError::new(
+    let root: gltf::json::Root = serde_path_to_error::deserialize(value).map_err(|e| {
+        LoadError::invalid(
             path,
             None,
-            LoadErrorKind::Syntax(format!("not valid glTF 2.0: {e}")),
+            e.path().to_string(),
+            format!("not valid glTF 2.0: {}", e.inner()),
         )
     })?;
     let document = gltf::Document::from_json(root).map_err(|e| validation_error(path, e))?;
