@@ -2,7 +2,7 @@
 //! one-process render byte for byte, and every way pieces can fail to fit together is refused
 //! with a message that says which.
 
-mod common;
+use crate::common;
 use common::{quadray, scene, tmp};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

@@ -5,7 +5,7 @@
 //! panic, and leave no file behind. `tests/hostile.rs` at the top level checks the same files' error
 //! classes through the library.
 
-mod common;
+use crate::common;
 
 use serde::Deserialize;
 use std::path::{Path, PathBuf};

@@ -1,7 +1,7 @@
 //! Outputs survive a killed render (SIGKILL, which no handler sees, at many moments) and a full
 //! disk, and keep the permissions a user expects.
 
-mod common;
+use crate::common;
 use common::{quadray, scene, tmp};
 use std::process::Command;
 

@@ -3,7 +3,7 @@
 
 use std::process::Command;
 
-mod common;
+use crate::common;
 use common::{pass_scene, quadray, scene, tmp};
 
 /// The depth PNG spans the finite content: the defense scene's floor runs to the horizon, which
@@ -41,13 +41,15 @@ fn the_depth_png_spans_the_scene_not_the_horizon() {
     assert!(levels.len() > 100, "{} grey levels", levels.len());
 }
 
-/// Runs oiiotool, or says why the test cannot use it (it is installed by .ci/run).
+/// Runs oiiotool, or says why the test cannot use it; under CI, where `.ci/run` installs it, its
+/// absence fails the test.
 fn oiiotool(args: &[&str]) -> Option<String> {
     match Command::new("oiiotool").args(args).output() {
         Ok(o) => {
             assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
             Some(String::from_utf8_lossy(&o.stdout).into_owned())
         }
+        Err(e) if std::env::var_os("CI").is_some() => panic!("oiiotool is not available: {e}"),
         Err(e) => {
             println!(
                 "skipped: oiiotool is not available ({e}); `apt-get install openimageio-tools`"

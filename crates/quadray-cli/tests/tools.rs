@@ -1,7 +1,7 @@
 //! The explorer (`quadray quadric`), the contact sheet (`quadray gallery`) and `quadray compare`
 //! through the binary.
 
-mod common;
+use crate::common;
 use common::{pass_scene, quadray, tmp};
 
 #[test]

@@ -1,7 +1,7 @@
 //! Malformed glTF and OBJ files written by the test: each must give a clear error naming the file
 //! and the problem (or, for a missing texture, a warning and the base colour), never a panic.
 
-mod common;
+use crate::common;
 
 use common::{dir, load, triangle};
 use quadray_loader::{LoadErrorKind, load_any};

@@ -1,7 +1,7 @@
 //! glTF material features on a one-triangle file: emission, sides, metals, and the extensions
 //! quadray warns about.
 
-mod common;
+use crate::common;
 
 use common::{load, triangle};
 use glam::Vec3;

@@ -52,13 +52,17 @@ fn render_with_cli(res: (u32, u32), spp: u32, seed: u32, out: &Path) -> LinearIm
     read_image(out).unwrap()
 }
 
+#[cfg_attr(
+    not(quadray_xvfb),
+    ignore = "needs xvfb-run and ImageMagick's import (Debian: xvfb, imagemagick)"
+)]
 #[test]
 fn the_window_shows_what_the_renderer_renders() {
     for tool in ["xvfb-run", "import"] {
-        if !have(tool) {
-            eprintln!("skipped: {tool} is not installed (Debian: xvfb, imagemagick)");
-            return;
-        }
+        assert!(
+            have(tool),
+            "{tool} is not installed (Debian: xvfb, imagemagick)"
+        );
     }
     let dir = tempfile::tempdir().unwrap();
     let (log, shot) = (dir.path().join("view.log"), dir.path().join("shot.png"));

@@ -63,16 +63,14 @@ pub fn load(
     r
 }
 
-/// `<workspace>/../shared/assets`, or `None` (with the reason printed) when it is absent.
-pub fn assets() -> Option<PathBuf> {
+/// `<workspace>/../shared/assets`. Tests that call it are ignored where it is absent (see
+/// `build.rs`); where they run, its absence is a failure.
+pub fn assets() -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets");
-    if dir.join("SOURCES.md").is_file() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "skipping: the shared test assets are not at {} (../shared is absent)",
-            dir.display()
-        );
-        None
-    }
+    assert!(
+        dir.join("SOURCES.md").is_file(),
+        "the shared test assets are not at {} (../shared is absent)",
+        dir.display()
+    );
+    dir
 }

@@ -1,0 +1,11 @@
+//! The command line end to end: every module runs the real `quadray` binary (one test binary for the crate, as ripgrep has: each integration-test binary links the whole workspace).
+
+mod adaptive;
+mod cli;
+mod common;
+mod distributed;
+mod hostile;
+mod import;
+mod kill;
+mod passes;
+mod tools;
