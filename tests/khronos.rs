@@ -10,8 +10,8 @@
 //! say so and pass. `QUADRAY_UPDATE_REFS=1` rewrites the references (check them again first).
 
 use quadray::{Film, Scene};
-use quadray_cli::compare::{LinearImage, Thresholds, compare, read_image};
-use quadray_cli::output::write_rgb8_png;
+use quadray_app::compare::{LinearImage, Thresholds, compare, read_image};
+use quadray_app::output::write_rgb8_png;
 use quadray_loader::{ImportOptions, LoadedScene};
 use quadray_tests::repo_root;
 use std::path::PathBuf;

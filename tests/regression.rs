@@ -13,8 +13,8 @@
 //! anew instead (check them another way before committing them).
 
 use quadray::{RenderSettings, Scene, Whitted};
-use quadray_cli::compare::{LinearImage, Thresholds, compare, read_image};
-use quadray_cli::output::write_rgb8_png;
+use quadray_app::compare::{LinearImage, Thresholds, compare, read_image};
+use quadray_app::output::write_rgb8_png;
 use quadray_tests::repo_root;
 use std::path::{Path, PathBuf};
 

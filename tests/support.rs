@@ -55,7 +55,7 @@ pub fn render_file(path: &Path) -> (Film, AccelStats) {
 /// and the largest difference in 8-bit steps: the measure of `quadray compare`, on both films
 /// quantised as their PNGs would be.
 pub fn display_difference(a: &Film, b: &Film) -> (f64, f32) {
-    use quadray_cli::compare::{LinearImage, Thresholds, compare};
+    use quadray_app::compare::{LinearImage, Thresholds, compare};
     let image = |f: &Film| LinearImage::from_srgb8(f.width(), f.height(), &f.to_srgb8());
     let c = compare(&image(a), &image(b), &Thresholds::default()).expect("same size");
     (c.over_share, c.max_display)

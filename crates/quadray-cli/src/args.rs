@@ -43,6 +43,7 @@ pub enum Command {
     Convert(ConvertArgs),
     /// Benchmarks: speed against error of the quadric intersector.
     #[command(subcommand)]
+    #[cfg(feature = "bench")]
     Bench(crate::bench::BenchCommand),
     /// Render one quadric under the orbit camera (the seed's explorer).
     Quadric(crate::quadric_cmd::QuadricArgs),
@@ -151,41 +152,6 @@ pub fn numbered_output(path: &Path, frame: u32) -> Option<PathBuf> {
         width = end - start
     );
     Some(path.with_file_name(numbered))
-}
-
-/// Loads the scene at `path` with the command line's `--set` overrides (native scenes only),
-/// import options, camera choice and `--res`. The resolution is known while loading, so that a
-/// camera made to frame a scene that has none fits the image being rendered.
-pub fn load_scene_for(
-    path: &Path,
-    set: &[quadray_loader::Override],
-    options: &quadray_loader::ImportOptions,
-    camera: Option<&quadray_loader::Selector>,
-    res: Option<(u32, u32)>,
-) -> anyhow::Result<quadray_loader::LoadedScene> {
-    let native = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    if !native {
-        crate::usage_ensure(
-            set.is_empty(),
-            "--set overrides values of .toml scenes; OBJ and glTF files have no such keys",
-        )?;
-        let options = quadray_loader::ImportOptions {
-            resolution: res.map(|(w, h)| [w, h]),
-            ..options.clone()
-        };
-        return Ok(quadray_loader::load_any_with(path, &options, camera)?);
-    }
-    // In a native scene `--res` is the [render] resolution, as `--set` would write it.
-    let mut overrides = set.to_vec();
-    if let Some((w, h)) = res {
-        overrides.push(quadray_loader::Override {
-            key: "render.resolution".into(),
-            value: format!("[{w}, {h}]"),
-        });
-    }
-    Ok(quadray_loader::load_scene_with(path, &overrides)?)
 }
 
 /// Arguments of `quadray convert`.
@@ -299,11 +265,6 @@ pub fn parse_png_output(s: &str) -> Result<PathBuf, String> {
 /// Parses a glTF output path: .gltf or .glb.
 pub fn parse_gltf_output(s: &str) -> Result<PathBuf, String> {
     output_with(s, &["gltf", "glb"])
-}
-
-/// The default output of `render SCENE`: the scene's file name with `.png`, beside the scene.
-pub fn default_output(scene: &Path) -> PathBuf {
-    scene.with_extension("png")
 }
 
 #[cfg(test)]

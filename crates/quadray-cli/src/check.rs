@@ -10,7 +10,7 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     let start = Instant::now();
     quadray_loader::confine::record_reads();
     let loaded =
-        crate::args::load_scene_for(&args.scene, &args.set, &Default::default(), None, None)?;
+        quadray_app::scene_file::load(&args.scene, &args.set, &Default::default(), None, None)?;
     let reads = quadray_loader::confine::take_reads();
     log::info!(
         "loaded {} in {:.3} s",
@@ -46,7 +46,8 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     for file in reads {
         outln!("reads: {}", file.display())?;
     }
-    let output = loaded_output.unwrap_or_else(|| crate::args::default_output(&args.scene));
+    let output =
+        loaded_output.unwrap_or_else(|| quadray_app::scene_file::default_output(&args.scene));
     outln!(
         "writes: {} (unless -o names another file)",
         output.display()

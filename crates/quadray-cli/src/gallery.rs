@@ -3,7 +3,7 @@
 
 use crate::label::{Canvas, text_width};
 use crate::output::{Format, check_writable, write_rgb8_png};
-use crate::quadric_cmd::TextureChoice;
+use crate::showcase::TextureChoice;
 use crate::showcase::{BACKGROUND, Showcase};
 use anyhow::{Result, ensure};
 use clap::Args;

@@ -11,29 +11,32 @@ macro_rules! outln {
     }};
 }
 
+// The application layer's modules, under the names this crate's commands use for them.
+use quadray_app::{compare, exr_file, output, passes, showcase};
+pub use quadray_app::{logging, snippet};
+
 pub mod args;
+// `quadray bench`: the accuracy oracle, the holes census, the image race and the ray throughput,
+// behind the `bench` feature so the shipped binary does not link the test oracle.
+#[cfg(feature = "bench")]
 pub mod bench;
+#[cfg(feature = "bench")]
 pub mod bench_holes;
+#[cfg(feature = "bench")]
 pub mod bench_images;
+#[cfg(feature = "bench")]
 pub mod bench_rays;
 mod check;
-pub mod compare;
 pub mod compare_cmd;
 mod convert;
-pub mod exr_file;
 pub mod gallery;
 mod label;
-pub mod logging;
 mod merge_cmd;
-pub mod output;
-pub mod passes;
 mod progress;
 pub mod quadric_cmd;
 pub mod render_cmd;
 pub mod sampling_args;
 pub mod shell;
-pub mod showcase;
-pub mod snippet;
 pub mod tiles;
 mod warnings;
 
@@ -91,6 +94,9 @@ pub fn exit_status(err: &anyhow::Error, command_is_compare: bool) -> u8 {
     if let Some(e) = err.downcast_ref::<StatusError>() {
         e.status
     } else if err.downcast_ref::<clap::Error>().is_some()
+        || err
+            .downcast_ref::<quadray_app::scene_file::UsageError>()
+            .is_some()
         || command_is_compare
         || is_override_error(err)
     {
@@ -141,6 +147,7 @@ pub fn run(cli: args::Cli) -> anyhow::Result<()> {
         args::Command::Render(a) => render_cmd::run(&a),
         args::Command::Check(a) => check::run(&a),
         args::Command::Convert(a) => convert::run(&a),
+        #[cfg(feature = "bench")]
         args::Command::Bench(b) => bench::run(&b),
         args::Command::Quadric(a) => quadric_cmd::run(&a),
         args::Command::Gallery(a) => gallery::run(&a),

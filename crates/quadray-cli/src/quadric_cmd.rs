@@ -2,46 +2,12 @@
 //! cube under the orbit camera, every option with a sensible default; `--list` prints the kinds.
 
 use crate::output::{check_writable, write_film};
-use crate::showcase::{GENERAL_EQUATION, Showcase};
+use crate::showcase::{GENERAL_EQUATION, Showcase, TextureChoice};
 use crate::{StatusError, usage_ensure};
 use anyhow::{Context, Result};
-use clap::{Args, ValueEnum};
-use quadray::{Coefficients, QuadricKind, QuadricSurface, RenderSettings, Scene, Texture};
+use clap::Args;
+use quadray::{Coefficients, QuadricKind, QuadricSurface, RenderSettings, Scene};
 use std::path::PathBuf;
-
-/// The explorer's checkerboard colours: a warm white and a deep red.
-pub const CHECKER_EVEN: glam::Vec3 = glam::Vec3::new(0.85, 0.83, 0.78);
-/// The odd squares of the explorer's checkerboard.
-pub const CHECKER_ODD: glam::Vec3 = glam::Vec3::new(0.55, 0.07, 0.06);
-
-/// The explorer's textures (the seed's three, or a plain colour).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum TextureChoice {
-    /// Blue → green → yellow over the clipped height range.
-    Ramp,
-    /// The ramp in eight flat contour bands.
-    Bands,
-    /// A 3-D checkerboard of 0.25-unit cubes.
-    Checker,
-    /// One plain colour.
-    None,
-}
-
-impl TextureChoice {
-    /// The core texture this choice stands for.
-    pub fn texture(self) -> Texture {
-        match self {
-            TextureChoice::Ramp => Texture::HeightRamp,
-            TextureChoice::Bands => Texture::Bands { steps: 8 },
-            TextureChoice::Checker => Texture::Checker {
-                size: 0.25,
-                even: CHECKER_EVEN,
-                odd: CHECKER_ODD,
-            },
-            TextureChoice::None => Texture::Constant(glam::Vec3::new(0.75, 0.72, 0.66)),
-        }
-    }
-}
 
 /// Arguments of `quadray quadric`.
 #[derive(Args, Debug)]

@@ -126,7 +126,7 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
         scene: args.gltf_scene.clone(),
         ..Default::default()
     };
-    let mut loaded = crate::args::load_scene_for(
+    let mut loaded = quadray_app::scene_file::load(
         &args.scene,
         &args.set,
         &options,
@@ -144,7 +144,7 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
         .output
         .clone()
         .or_else(|| loaded.output.clone())
-        .unwrap_or_else(|| crate::args::default_output(&args.scene));
+        .unwrap_or_else(|| quadray_app::scene_file::default_output(&args.scene));
     if let (Some(frames), Some(frame)) = (args.orbit_frames, args.frame) {
         usage_ensure(
             frame < frames,

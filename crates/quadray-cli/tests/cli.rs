@@ -311,9 +311,13 @@ fn version_and_help_say_what_a_user_needs() {
         format!("quadray {}", env!("CARGO_PKG_VERSION"))
     );
     let help = String::from_utf8_lossy(&quadray(&["--help"]).stdout).into_owned();
+    let bench = cfg!(feature = "bench").then_some("bench");
     for command in [
-        "render", "check", "convert", "bench", "quadric", "gallery", "compare",
-    ] {
+        "render", "check", "convert", "quadric", "gallery", "compare",
+    ]
+    .into_iter()
+    .chain(bench)
+    {
         assert!(
             help.lines().any(|l| l.trim_start().starts_with(command)),
             "--help lists {command}: {help}"

@@ -6,7 +6,7 @@
 //! `cargo bench -p quadray-viewer --bench latency`; medians and maxima over the runs.
 
 use quadray::{RenderSettings, Scene};
-use quadray_cli::passes::Pass;
+use quadray_app::passes::Pass;
 use quadray_viewer::explorer::Explorer;
 use quadray_viewer::orbit::Orbit;
 use quadray_viewer::worker::{Request, Worker};

@@ -9,8 +9,8 @@ use glam::DVec3;
 use quadray::{
     ClipBox, Coefficients, QuadricKind, QuadricSurface, SceneDescription, Texture, Transform,
 };
-use quadray_cli::quadric_cmd::{CHECKER_EVEN, CHECKER_ODD, TextureChoice};
-use quadray_cli::showcase::{GENERAL, Showcase};
+use quadray_app::showcase::{CHECKER_EVEN, CHECKER_ODD, TextureChoice};
+use quadray_app::showcase::{GENERAL, Showcase};
 
 /// The surface kinds the explorer offers: the nine named ones and the general quadric.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -214,7 +214,7 @@ impl Explorer {
                 }
             }
             Kind::General => {
-                ui.label(quadray_cli::showcase::GENERAL_EQUATION);
+                ui.label(quadray_app::showcase::GENERAL_EQUATION);
                 egui::Grid::new("coefficients")
                     .num_columns(2)
                     .show(ui, |ui| {

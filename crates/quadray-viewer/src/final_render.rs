@@ -41,7 +41,7 @@ impl FinalRender {
         output: PathBuf,
         notify: impl Fn() + Send + Sync + Clone + 'static,
     ) -> Result<FinalRender> {
-        quadray_cli::output::check_writable(&output)?;
+        quadray_app::output::check_writable(&output)?;
         settings.validate()?;
         let rows = Arc::new(RowCounter {
             done: AtomicU32::new(0),
@@ -95,5 +95,5 @@ fn render_and_write(
 ) -> Result<()> {
     let rendered = quadray::render(scene, settings, progress)
         .with_context(|| format!("rendering {}", output.display()))?;
-    quadray_cli::output::write_film(&rendered.film, output)
+    quadray_app::output::write_film(&rendered.film, output)
 }

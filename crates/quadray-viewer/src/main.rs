@@ -55,7 +55,7 @@ impl eframe::App for App {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    quadray_cli::logging::init(quadray_cli::logging::level(args.verbose));
+    quadray_app::logging::init(quadray_app::logging::level(args.verbose));
     match run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {

@@ -27,7 +27,7 @@ pub struct LoadedFile {
 
 /// Loads and builds the scene at `path` as `quadray render` does; the error reads like the CLI's.
 pub fn load(path: &Path) -> Result<LoadedFile> {
-    let loaded = quadray_cli::args::load_scene_for(
+    let loaded = quadray_app::scene_file::load(
         path,
         &[],
         &quadray_loader::ImportOptions::default(),
@@ -37,7 +37,7 @@ pub fn load(path: &Path) -> Result<LoadedFile> {
     let output = loaded
         .output
         .clone()
-        .unwrap_or_else(|| quadray_cli::args::default_output(path));
+        .unwrap_or_else(|| quadray_app::scene_file::default_output(path));
     let settings = loaded.settings.render_settings();
     let scene = Scene::new(loaded.description)
         .with_context(|| format!("invalid scene {}", path.display()))?;

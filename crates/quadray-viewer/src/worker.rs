@@ -3,7 +3,7 @@
 //! the moment a newer request arrives. The UI thread only posts requests and picks up frames.
 
 use quadray::{Progress, ProgressiveFilm, RenderError, RenderSettings, Scene};
-use quadray_cli::passes::{Pass, pass_rgb8};
+use quadray_app::passes::{Pass, pass_rgb8};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};

@@ -8,7 +8,7 @@
 //! mean FLIP between two CLI renders with independent sample sets (`--seed`), and by 0.05 at most.
 //! Skips with a printed reason where xvfb-run or import is missing (`.ci/run` installs them).
 
-use quadray_cli::compare::{LinearImage, Thresholds, compare, read_image};
+use quadray_app::compare::{LinearImage, Thresholds, compare, read_image};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

@@ -9,7 +9,7 @@ use crate::source::{FileSource, LoadedFile};
 use crate::worker::{Frame, Request, Worker};
 use eframe::egui;
 use quadray::{Camera, RenderSettings, Scene};
-use quadray_cli::passes::Pass;
+use quadray_app::passes::Pass;
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
@@ -50,7 +50,7 @@ impl Waker {
 /// under it the scene line with a caret where the error has a place in a file.
 fn located(error: &anyhow::Error) -> String {
     let mut text = format!("error: {error:#}");
-    if let Some(snippet) = quadray_cli::snippet::for_error(error) {
+    if let Some(snippet) = quadray_app::snippet::for_error(error) {
         text += "\n";
         text += &snippet;
     }
@@ -126,7 +126,7 @@ impl Viewer {
         let (source, output) = match scene {
             Some(path) => {
                 let waker = waker.clone();
-                let output = quadray_cli::args::default_output(&path);
+                let output = quadray_app::scene_file::default_output(&path);
                 (
                     Source::File(FileSource::open(path, move || waker.wake())),
                     output,

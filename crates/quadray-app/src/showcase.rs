@@ -9,6 +9,40 @@ use quadray::{
     SceneDescription, SpecularModel, Texture, Transform,
 };
 
+/// The explorer's checkerboard colours: a warm white and a deep red.
+pub const CHECKER_EVEN: glam::Vec3 = glam::Vec3::new(0.85, 0.83, 0.78);
+/// The odd squares of the explorer's checkerboard.
+pub const CHECKER_ODD: glam::Vec3 = glam::Vec3::new(0.55, 0.07, 0.06);
+
+/// The explorer's textures (the seed's three, or a plain colour).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum TextureChoice {
+    /// Blue → green → yellow over the clipped height range.
+    Ramp,
+    /// The ramp in eight flat contour bands.
+    Bands,
+    /// A 3-D checkerboard of 0.25-unit cubes.
+    Checker,
+    /// One plain colour.
+    None,
+}
+
+impl TextureChoice {
+    /// The core texture this choice stands for.
+    pub fn texture(self) -> quadray::Texture {
+        match self {
+            TextureChoice::Ramp => quadray::Texture::HeightRamp,
+            TextureChoice::Bands => quadray::Texture::Bands { steps: 8 },
+            TextureChoice::Checker => quadray::Texture::Checker {
+                size: 0.25,
+                even: CHECKER_EVEN,
+                odd: CHECKER_ODD,
+            },
+            TextureChoice::None => quadray::Texture::Constant(glam::Vec3::new(0.75, 0.72, 0.66)),
+        }
+    }
+}
+
 /// A quadric as shown on its own: its surface, the seed's clip cube, and an orbit view.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Showcase {
