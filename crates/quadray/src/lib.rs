@@ -48,7 +48,6 @@
 //! ```
 
 pub mod accel;
-pub mod adaptive;
 pub mod aov;
 pub mod camera;
 pub mod coincident;
@@ -59,13 +58,15 @@ pub mod image_texture;
 pub mod instance;
 pub mod integrator;
 pub mod light;
+pub mod limits;
 pub mod material;
 pub mod math;
 pub mod mesh;
 pub mod plane;
-pub mod progressive;
 pub mod quadric;
 pub mod render;
+// The samplers keep the paths their users know.
+pub use render::{adaptive, progressive};
 pub mod sampler;
 pub mod scene;
 pub mod shape;

@@ -156,7 +156,7 @@ impl Scene {
         if let Projection::Orthographic { height } = d.camera.projection {
             // The image plane can reach this far from `from` (any aspect up to the documented maximum).
             origins
-                .push(d.camera.from.abs() + glam::DVec3::splat(height * crate::render::MAX_ASPECT));
+                .push(d.camera.from.abs() + glam::DVec3::splat(height * crate::limits::MAX_ASPECT));
         }
         let origin_extent = max_abs_coordinate(&origins);
         // Planes are not in the BVHs' boxes, but their points enter the same f32 arithmetic of

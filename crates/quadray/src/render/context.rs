@@ -1,0 +1,137 @@
+//! What every camera sample of one render needs, shared by the uniform, adaptive and progressive
+//! samplers: the scene, the prepared camera, the pixels and the passes, and the sampling of one
+//! camera ray into a pixel estimate.
+
+use crate::aov::{AovSample, AovSelection, Aovs};
+use crate::camera::CameraFrame;
+use crate::footprint::{HitFootprint, RayCone, footprint_scale};
+use crate::integrator::RayCounts;
+use crate::render::{PixelWindow, RenderError, RenderSettings};
+use crate::scene::Scene;
+use glam::{DVec3, Vec3};
+
+/// What every camera sample of one render needs: the scene, the prepared camera and the passes.
+pub(crate) struct SampleContext<'a> {
+    /// The scene being rendered.
+    pub scene: &'a Scene,
+    /// The settings being rendered.
+    pub settings: &'a RenderSettings,
+    /// The pixels to render.
+    pub window: PixelWindow,
+    /// The passes to fill besides the beauty image.
+    pub selection: AovSelection,
+    camera: CameraFrame,
+    forward: DVec3,
+}
+
+impl<'a> SampleContext<'a> {
+    pub(crate) fn new(
+        scene: &'a Scene,
+        settings: &'a RenderSettings,
+        selection: AovSelection,
+    ) -> Result<SampleContext<'a>, RenderError> {
+        let aspect = settings.width as f64 / settings.height as f64;
+        let camera = settings.camera.as_ref().unwrap_or(scene.camera());
+        Ok(SampleContext {
+            scene,
+            settings,
+            window: settings.window(),
+            selection,
+            camera: camera.prepare(aspect)?,
+            forward: (camera.to - camera.from).normalize(),
+        })
+    }
+
+    /// The same context over another window of the same image.
+    pub fn with_window(&self, window: PixelWindow) -> SampleContext<'a> {
+        SampleContext { window, ..*self }
+    }
+
+    /// The cone of each camera sample of a pixel that takes `samples` of them
+    /// ([`footprint_scale`]), or [`RayCone::POINT`] when no texture of the scene is filtered or
+    /// filtering is off.
+    pub fn sample_cone(&self, samples: u32) -> RayCone {
+        if self.settings.texture_filter && self.scene.filters_textures() {
+            self.camera
+                .pixel_cone(self.settings.height, footprint_scale(samples))
+        } else {
+            RayCone::POINT
+        }
+    }
+
+    /// The radiance of the camera ray through `(dx, dy)` inside pixel `(x, y)` of the full image,
+    /// for a sample standing for `cone`; with `aov`, also the pixel's surface passes from the
+    /// ray's first hit (its albedo averaged over the whole pixel, as one sample gives the pass).
+    pub fn trace(
+        &self,
+        (x, y): (u32, u32),
+        (dx, dy): (f64, f64),
+        cone: RayCone,
+        aov: Option<&mut AovSample>,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
+        let (w, h) = (self.settings.width as f64, self.settings.height as f64);
+        let ray = self.camera.ray((x as f64 + dx) / w, (y as f64 + dy) / h);
+        let whitted = &self.settings.whitted;
+        match aov {
+            Some(aov) => {
+                let (radiance, hit) = whitted.camera_ray_hit(self.scene, &ray, cone, counts);
+                let footprint = match &hit {
+                    Some(hit) if !cone.is_point() => HitFootprint::new(
+                        &self.sample_cone(1),
+                        ray.dir.normalize(),
+                        hit.t * ray.dir.length(),
+                    ),
+                    _ => HitFootprint::POINT,
+                };
+                *aov = AovSample::from_hit(
+                    self.scene,
+                    self.selection,
+                    (ray.origin, ray.dir),
+                    self.forward,
+                    hit.as_ref(),
+                    &footprint,
+                );
+                radiance
+            }
+            None => whitted.camera_ray(self.scene, &ray, cone, counts),
+        }
+    }
+
+    /// One pass sample per pixel of the window when any pass is selected, else nothing.
+    pub fn aov_buffer(&self) -> Vec<AovSample> {
+        let pixels = self.window.width() as usize * self.window.height() as usize;
+        if self.selection.any() {
+            vec![AovSample::MISS; pixels]
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// The buffer's rows (all `None` when it is empty: no pass selected).
+    pub fn aov_rows<'b>(&self, buffer: &'b mut [AovSample]) -> Vec<Option<&'b mut [AovSample]>> {
+        if buffer.is_empty() {
+            (0..self.window.height()).map(|_| None).collect()
+        } else {
+            buffer
+                .chunks_mut(self.window.width() as usize)
+                .map(Some)
+                .collect()
+        }
+    }
+
+    /// The passes of the finished window, or `None` when none was selected.
+    pub fn finish_aovs(&self, samples: Vec<AovSample>) -> Option<Aovs> {
+        self.selection
+            .any()
+            .then(|| {
+                Aovs::new(
+                    self.window.width(),
+                    self.window.height(),
+                    self.selection,
+                    samples,
+                )
+            })
+            .flatten()
+    }
+}

@@ -1,0 +1,79 @@
+//! Uniform sampling: the same number of samples in every pixel, rows in parallel.
+
+use crate::aov::Aovs;
+use crate::film::{Film, PixelEstimate};
+use crate::render::adaptive::SamplingStats;
+use crate::sampler::{PixelSampler, pixel_pattern};
+use crate::integrator::RayCounts;
+use crate::render::context::SampleContext;
+use crate::render::{Progress, RenderError, Rendered};
+use glam::Vec3;
+use rayon::prelude::*;
+use std::sync::Mutex;
+
+/// `settings.spp` samples in every pixel, by correlated multi-jittered sampling.
+pub(super) fn render_uniform(
+    context: &SampleContext<'_>,
+    progress: &dyn Progress,
+) -> Result<(Rendered, Option<Aovs>), RenderError> {
+    let (settings, window, selection) = (context.settings, context.window, context.selection);
+    let ww = window.width() as usize;
+    let mut film = Film::new(window.width(), window.height());
+    // Pass samples are allocated and computed only when a pass is selected.
+    let mut aov_samples = context.aov_buffer();
+    let aov_rows = context.aov_rows(&mut aov_samples);
+    let totals = Mutex::new(RayCounts::default());
+    let spp = settings.spp;
+    let inv_spp = 1.0 / spp as f32;
+    let cone = context.sample_cone(spp);
+    film.pixels_mut()
+        .par_chunks_mut(ww)
+        .zip(aov_rows)
+        .enumerate()
+        .for_each(|(row_index, (row, mut aov_row))| {
+            if progress.cancelled() {
+                return;
+            }
+            // Pixels are sampled by their position in the full image, so a window's pixels equal
+            // the whole render's.
+            let y = window.y0 + row_index as u32;
+            let mut counts = RayCounts::default();
+            let mut sampler = PixelSampler::new(spp);
+            for (column, pixel) in row.iter_mut().enumerate() {
+                let x = window.x0 + column as u32;
+                sampler.start_pixel(pixel_pattern(x, y, settings.seed));
+                let mut aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
+                // The variance pass needs the running estimate; the image keeps its f32 sum.
+                let mut estimate = selection.variance.then(PixelEstimate::default);
+                let mut sum = Vec3::ZERO;
+                for s in 0..spp {
+                    let offset = sampler.sample(s);
+                    let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
+                    let radiance = context.trace((x, y), offset, cone, first_hit, &mut counts);
+                    if let Some(e) = &mut estimate {
+                        e.add(radiance);
+                    }
+                    sum += radiance;
+                }
+                *pixel = sum * inv_spp;
+                if let Some(aov) = aov {
+                    aov.fill_sampling(selection, spp, estimate.map(|e| e.variance()));
+                }
+            }
+            *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
+            progress.row_done();
+        });
+    if progress.cancelled() {
+        return Err(RenderError::Cancelled);
+    }
+    let counts = totals.into_inner().unwrap_or_else(|e| e.into_inner());
+    Ok((
+        Rendered {
+            film,
+            window,
+            counts,
+            sampling: SamplingStats::uniform(spp),
+        },
+        context.finish_aovs(aov_samples),
+    ))
+}
