@@ -7,7 +7,7 @@
 //! visits all of them. Merged, work follows what is visible, not what is repeated.
 
 use crate::geometry::{Geometry, Prototype};
-use crate::instance::Instance;
+use crate::geometry::instance::Instance;
 use std::collections::HashMap;
 
 /// Merges the coincident placements of `g` (see the module documentation) and returns how many

@@ -51,11 +51,12 @@ pub mod accel;
 pub mod aov;
 pub mod camera;
 pub mod coincident;
+pub mod colour;
 pub mod film;
 pub mod footprint;
 pub mod geometry;
-pub mod image_texture;
-pub mod instance;
+// Placements live under the geometry they place; the old paths stay.
+pub use geometry::instance;
 pub mod integrator;
 pub mod light;
 pub mod limits;
@@ -72,6 +73,7 @@ pub mod scene;
 pub mod shape;
 pub mod sphere;
 pub mod texture;
+pub use texture::image as image_texture;
 pub mod triangle;
 
 pub use accel::{AccelStats, SimdPath, simd_path};

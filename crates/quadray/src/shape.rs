@@ -29,7 +29,7 @@ pub enum LocalPrim {
 ///
 /// Placements number the scene's instance tree expanded in depth-first order: 0 is the world
 /// itself, and every placement of a prototype, however deeply nested, has its own number
-/// ([`crate::instance::Placements`]). Two copies of one shared triangle are two primitives.
+/// ([`crate::geometry::instance::Placements`]). Two copies of one shared triangle are two primitives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PrimRef {
     /// The placement whose level holds the primitive (0: the world).

@@ -5,7 +5,7 @@ use super::analytic::AnalyticBvh;
 use super::mesh_bvh::MeshBvh;
 use super::{Accel, FLAT_TOP, LevelAccel, Placed, SimdPath, TopItem, simd_path};
 use crate::geometry::Geometry;
-use crate::instance::{Instance, Placements};
+use crate::geometry::instance::{Instance, Placements};
 use glam::{DVec3, Vec3A};
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, bvh2::builder::build_bvh2};
 use std::time::Duration;

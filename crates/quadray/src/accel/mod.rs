@@ -12,7 +12,7 @@
 //!   over the two items of scenes/defense.toml cost several percent); more get an obvhs BVH2. The
 //!   world's infinite planes are tested in a short list beside it.
 //!
-//! A hit names its placement ([`crate::instance::Placements`]): the instance path from the world,
+//! A hit names its placement ([`crate::geometry::instance::Placements`]): the instance path from the world,
 //! numbered, so a shared triangle placed twice is two primitives and a ray spawned on one copy
 //! still meets the other.
 //!
@@ -36,7 +36,7 @@ mod top;
 mod tri4;
 
 use crate::geometry::Geometry;
-use crate::instance::Placements;
+use crate::geometry::instance::Placements;
 use crate::math::Ray;
 use crate::shape::{LocalPrim, PrimRef};
 use analytic::AnalyticBvh;

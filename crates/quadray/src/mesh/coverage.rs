@@ -2,7 +2,7 @@
 //! BLEND), tested inside BVH traversal.
 
 use super::Mesh;
-use crate::image_texture::ImageMap;
+use crate::texture::image::ImageMap;
 use glam::Vec3;
 
 /// Partial coverage: a cut-out (glTF alpha mode MASK), where hits whose coverage alpha is below

@@ -3,7 +3,7 @@
 //! within that frame.
 
 use super::{Mesh, MeshError};
-use crate::image_texture::ImageMap;
+use crate::texture::image::ImageMap;
 use crate::shape::normal_or;
 use glam::{DVec3, Vec4};
 

@@ -4,7 +4,7 @@ use crate::accel::{Accel, max_abs_coordinate};
 use crate::camera::{Camera, CameraError, Projection};
 use crate::footprint::HitFootprint;
 use crate::geometry::Geometry;
-use crate::instance::{InstancePath, PlacementError};
+use crate::geometry::instance::{InstancePath, PlacementError};
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Ray, offset_origin};
@@ -148,7 +148,7 @@ impl Scene {
                 ));
             }
         }
-        let placements = crate::instance::Placements::new(&d.geometry)?;
+        let placements = crate::geometry::instance::Placements::new(&d.geometry)?;
         for (i, l) in d.lights.iter().enumerate() {
             l.validate().map_err(|p| invalid(format!("light {i}"), p))?;
         }
@@ -292,7 +292,7 @@ impl Scene {
         // instructions on defense.
         let decoded;
         let path = match hit.prim.placement {
-            0 => &crate::instance::WORLD_PATH,
+            0 => &crate::geometry::instance::WORLD_PATH,
             p => {
                 decoded = self.accel.placements().path(&self.geometry, p);
                 &decoded
@@ -335,7 +335,7 @@ impl Scene {
     #[inline(always)]
     fn with_path<R>(&self, prim: PrimRef, f: impl FnOnce(&InstancePath) -> R) -> R {
         match prim.placement {
-            0 => f(&crate::instance::WORLD_PATH),
+            0 => f(&crate::geometry::instance::WORLD_PATH),
             p => f(&self.accel.placements().path(&self.geometry, p)),
         }
     }
@@ -389,7 +389,7 @@ impl Scene {
         // The world's primitives (placement 0) need no path decoded.
         let decoded;
         let path = match prim.placement {
-            0 => &crate::instance::WORLD_PATH,
+            0 => &crate::geometry::instance::WORLD_PATH,
             p => {
                 decoded = self.accel.placements().path(&self.geometry, p);
                 &decoded

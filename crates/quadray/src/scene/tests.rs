@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::geometry::Prototype;
-use crate::instance::Instance;
+use crate::geometry::instance::Instance;
 use crate::math::Transform;
 use crate::{Projection, Sphere};
 use glam::{DAffine3, DVec3};

@@ -15,7 +15,7 @@ pub(super) fn validate_levels(g: &mut Geometry) -> Result<(), SceneError> {
     let mut levels: Vec<(
         String,
         &[crate::sphere::Sphere],
-        &mut [crate::instance::Instance],
+        &mut [crate::geometry::instance::Instance],
     )> = vec![(String::new(), &g.spheres, &mut g.instances)];
     for (i, p) in g.prototypes.iter_mut().enumerate() {
         levels.push((format!(" of prototype {i}"), &p.spheres, &mut p.instances));

@@ -1,6 +1,8 @@
 //! Textures: the seed's height ramp, contour bands and checkerboard, constant colour, and images.
 
-use crate::image_texture::ImageMap;
+pub mod image;
+
+use image::ImageMap;
 use glam::{DVec3, Vec2, Vec3, Vec4};
 
 /// Where a texture is evaluated: the hit in the object's own frame and its normalised height.
@@ -453,7 +455,7 @@ mod tests {
 
     #[test]
     fn image_texture_reads_uv_and_scales_by_factor() {
-        use crate::image_texture::{ColorEncoding, Filter, Image, Wrap};
+        use crate::texture::image::{ColorEncoding, Filter, Image, Wrap};
         let image = Image::from_rgba8(
             2,
             1,

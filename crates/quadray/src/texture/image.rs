@@ -13,7 +13,7 @@
 //! - No mipmaps: minified textures alias. Whitted renders with one or a few samples per pixel, and
 //!   the textures quadray meets (glTF base colours) are seldom minified strongly.
 
-use crate::film::decode_srgb8;
+use crate::colour::decode_srgb8;
 use crate::texture::VertexAttributes;
 use glam::{Vec2, Vec4};
 use std::fmt;

@@ -1,7 +1,9 @@
 //! All primitives of a scene, grouped in levels (the world and the prototypes it places), and the
 //! dispatch over [`LocalPrim`] for each phase of intersection.
 
-use crate::instance::{Instance, InstancePath};
+pub mod instance;
+
+use instance::{Instance, InstancePath};
 use crate::material::MaterialId;
 use crate::math::Ray;
 use crate::mesh::Mesh;
