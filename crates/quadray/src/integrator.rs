@@ -169,10 +169,7 @@ impl Whitted {
                 offset_origin(g.point, ng, g.error, inc.to_light),
                 inc.to_light,
             );
-            if scene
-                .accel()
-                .occluded(scene.geometry(), &shadow, inc.distance, Some(hit.prim))
-            {
+            if scene.occluded_from(&shadow, inc.distance, Some(hit.prim)) {
                 continue;
             }
             let mut response = base * (m.diffuse * matte * cos as f32);
