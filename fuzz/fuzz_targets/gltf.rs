@@ -3,11 +3,11 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use quadray_loader::{ImportOptions, gltf, gltf_document, standalone};
+use quadray_loader::{ImportOptions, gltf, standalone};
 
 fuzz_target!(|data: &[u8]| {
     let path = std::path::Path::new("fuzz.glb");
-    let Ok(file) = gltf_document::open_bytes(data, path) else { return };
+    let Ok(file) = gltf::open_bytes(data, path) else { return };
     if let Ok(imported) = gltf::convert(&file, path, &ImportOptions::default())
         && let Ok(loaded) = standalone::scene_from_import(imported, path, None)
     {

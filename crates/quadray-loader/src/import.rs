@@ -173,7 +173,7 @@ pub struct Imported {
     /// Degenerate triangles (a repeated vertex index) dropped from glTF primitives.
     pub degenerate: usize,
     /// Render settings the file carries for quadray (a glTF scene's `extras.quadray`).
-    pub hints: crate::quadrics_ext::RenderHints,
+    pub hints: crate::gltf::quadrics_ext::RenderHints,
     /// What the importer assumed, skipped or could not find, for the user to read.
     pub notes: Vec<String>,
 }

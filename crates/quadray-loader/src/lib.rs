@@ -3,40 +3,34 @@
 //! # Brief overview
 //! - [`native`]: the TOML scene format documented in `docs/scene-format.md`; [`load_scene`] reads a
 //!   file into a validated [`quadray::SceneDescription`] plus [`SceneSettings`].
-//! - [`obj`] (with [`mtl`]) and [`gltf`] (with the `gltf_*` modules and [`quadrics_ext`], the
+//! - [`obj`] (with its MTL materials) and [`gltf`] (with [`gltf::quadrics_ext`], the
 //!   `QUADRAY_quadrics` extension) import other formats into an [`Imported`] scene part, which
 //!   [`standalone`] completes into a scene of its own and [`native`] merges into a native scene.
 //! - [`export`] writes a scene as glTF 2.0 with the `QUADRAY_quadrics` extension.
 //! - [`LoadError`]: every error names the file, the line and column where known, and the bad key.
+//! - Around every format: [`read_limited`] (the sizes files are read within), [`image_file`]
+//!   (texture decoding and its budget), [`atomic_file`] (outputs written whole or not at all),
+//!   [`confine`] (reads and writes kept inside one folder), [`framing`] (a camera for a scene
+//!   without one) and [`suggest`] ("did you mean").
+//!
+//! One folder a format: `native/`, `obj/`, `gltf/`, `export/`.
 
 pub mod atomic_file;
 pub mod confine;
-pub mod error;
+mod error;
 pub mod export;
-pub mod export_document;
-pub mod export_shapes;
 pub mod framing;
 pub mod gltf;
-pub mod gltf_accessor;
-pub mod gltf_camera;
-pub mod gltf_document;
-pub mod gltf_graph;
-pub mod gltf_light;
-pub mod gltf_material;
-pub mod gltf_mesh;
 pub mod image_file;
-pub mod import;
-pub mod include;
-pub mod mtl;
+mod import;
+mod include;
 pub mod native;
 pub mod obj;
-mod obj_locate;
-pub mod quadrics_ext;
 pub mod read_limited;
 pub mod standalone;
 pub mod suggest;
-pub mod tangents;
-pub mod tessellate;
+mod tangents;
+mod tessellate;
 
 pub use error::{LoadError, LoadErrorKind, Location};
 pub use import::{ImportOptions, Imported, Selector, UpAxis};

@@ -3,7 +3,7 @@
 
 use glam::DAffine3;
 use quadray::Texture;
-use quadray_loader::quadrics_ext::{
+use quadray_loader::gltf::quadrics_ext::{
     MaterialExtension, NodeExtension, RootExtension, place, whitted_material,
 };
 use serde_json::Value;

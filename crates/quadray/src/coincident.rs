@@ -6,8 +6,8 @@
 //! identity, chained twenty levels deep, is 2²⁰ placements of one sphere, and every ray through it
 //! visits all of them. Merged, work follows what is visible, not what is repeated.
 
-use crate::geometry::{Geometry, Prototype};
 use crate::geometry::instance::Instance;
+use crate::geometry::{Geometry, Prototype};
 use std::collections::HashMap;
 
 /// Merges the coincident placements of `g` (see the module documentation) and returns how many

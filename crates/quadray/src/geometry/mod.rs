@@ -3,7 +3,6 @@
 
 pub mod instance;
 
-use instance::{Instance, InstancePath};
 use crate::material::MaterialId;
 use crate::math::Ray;
 use crate::mesh::Mesh;
@@ -13,6 +12,7 @@ use crate::shape::{LocalPrim, PrimRef, SurfaceGeometry};
 use crate::sphere::Sphere;
 use crate::texture::{TexturePoint, VertexAttributes};
 use glam::DVec3;
+use instance::{Instance, InstancePath};
 
 /// The scene's primitives: the world's own, by kind, and the prototypes its instances place.
 #[derive(Clone, Debug, Default)]

@@ -3,8 +3,8 @@
 //! within that frame.
 
 use super::{Mesh, MeshError};
-use crate::texture::image::ImageMap;
 use crate::shape::normal_or;
+use crate::texture::image::ImageMap;
 use glam::{DVec3, Vec4};
 
 /// A tangent-space normal map.

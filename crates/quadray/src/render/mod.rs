@@ -5,8 +5,8 @@
 pub mod adaptive;
 mod context;
 mod error;
-pub mod progressive;
 mod progress;
+pub mod progressive;
 mod uniform;
 
 pub(crate) use context::SampleContext;
@@ -15,11 +15,11 @@ pub use progress::{NoProgress, Progress};
 // The limits, where the render's users have always found them.
 pub use crate::limits::{MAX_ASPECT, MAX_DEPTH, MAX_PIXELS, MAX_SIDE, MAX_SPP};
 
-use adaptive::{Adaptive, SamplingStats};
 use crate::aov::{AovSelection, Aovs};
 use crate::film::Film;
 use crate::integrator::{RayCounts, Whitted};
 use crate::scene::Scene;
+use adaptive::{Adaptive, SamplingStats};
 
 /// What to render: resolution, sampling and recursion.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -2,11 +2,11 @@
 
 use crate::aov::Aovs;
 use crate::film::{Film, PixelEstimate};
-use crate::render::adaptive::SamplingStats;
-use crate::sampler::{PixelSampler, pixel_pattern};
 use crate::integrator::RayCounts;
+use crate::render::adaptive::SamplingStats;
 use crate::render::context::SampleContext;
 use crate::render::{Progress, RenderError, Rendered};
+use crate::sampler::{PixelSampler, pixel_pattern};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Mutex;

@@ -2,8 +2,8 @@
 
 pub mod image;
 
-use image::ImageMap;
 use glam::{DVec3, Vec2, Vec3, Vec4};
+use image::ImageMap;
 
 /// Where a texture is evaluated: the hit in the object's own frame and its normalised height.
 #[derive(Clone, Copy, Debug, PartialEq)]

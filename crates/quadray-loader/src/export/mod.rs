@@ -18,12 +18,17 @@
 //! The background colour and the render settings have no place in glTF; they are kept as
 //! application data in the scene's `extras.quadray`, which quadray reads back and others ignore.
 
-use crate::export_document::{Document, looking, set_matrix};
-use crate::export_shapes::ShapeWriter;
+mod document;
+mod shapes;
+
+pub use shapes::MAX_EXPORT_NODES;
+
+use crate::export::document::{Document, looking, set_matrix};
+use crate::export::shapes::ShapeWriter;
 use crate::framing::geometry_bounds;
-use crate::gltf_light::LUMENS_PER_WATT;
+use crate::gltf::light::LUMENS_PER_WATT;
+use crate::gltf::quadrics_ext::{self, NodeExtension, RootExtension, ShapeDef};
 use crate::native::LoadedScene;
-use crate::quadrics_ext::{self, NodeExtension, RootExtension, ShapeDef};
 use crate::tessellate;
 use glam::{DAffine3, DMat3, DVec3, Vec3};
 use quadray::math::orthonormal_basis;
@@ -84,7 +89,7 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
         .unwrap_or(10.0)
         .max(1.0);
 
-    // Meshes, quadrics, spheres and instances (prototypes written once: export_shapes.rs).
+    // Meshes, quadrics, spheres and instances (prototypes written once: shapes.rs).
     children.extend(ShapeWriter::new(g).level_nodes(&mut doc, 0, None)?);
     let normal_mapped = (0..g.level_count())
         .flat_map(|l| g.level(l).meshes)
@@ -246,7 +251,7 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
         used.push("KHR_lights_punctual");
     }
     if doc.emissive_strength {
-        used.push(crate::gltf_material::EMISSIVE_STRENGTH);
+        used.push(crate::gltf::material::EMISSIVE_STRENGTH);
     }
     let root_ext = RootExtension {
         shapes: std::mem::take(&mut doc.shapes),
@@ -578,7 +583,7 @@ intensity = 0.8
             assert!((vfov_deg - 35.0).abs() < 1e-12);
             assert!((cb.aspect.unwrap() - 320.0 / 180.0).abs() < 1e-15);
             // Listed as used, never required.
-            let doc = crate::gltf_document::open(&out).unwrap().document;
+            let doc = crate::gltf::document::open(&out).unwrap().document;
             assert!(doc.extensions_used().any(|e| e == quadrics_ext::EXTENSION));
             assert_eq!(doc.extensions_required().count(), 0);
             // Other viewers get fallback meshes: one per shape, on the nodes carrying the shapes.

@@ -10,14 +10,18 @@
 //!   (SOURCES.md lists five among the test assets); its faces get a default grey material and a
 //!   note names the file that was looked for. A library that exists but cannot be parsed is an error.
 
+mod locate;
+pub mod mtl;
+
+pub use locate::MAX_FACE_VERTICES;
+
 use crate::error::{LoadError, LoadErrorKind, Location};
 use crate::image_file::{ImageCache, resolve_reference};
 use crate::import::{ImportOptions, Imported};
-use crate::mtl::{prepare_mtl_text, whitted_material};
-pub use crate::obj_locate::MAX_FACE_VERTICES;
-use crate::obj_locate::{
+use crate::obj::locate::{
     locate_non_finite, locate_parse_error, locate_zero_index, oversized_face, undefined_materials,
 };
+use crate::obj::mtl::{prepare_mtl_text, whitted_material};
 use glam::{DVec3, Vec2, Vec3, Vec4};
 use quadray::{Material, Mesh};
 use std::cell::RefCell;

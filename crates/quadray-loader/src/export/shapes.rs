@@ -7,8 +7,8 @@
 //! node per placement: up to [`MAX_EXPORT_NODES`]; meshes and shapes are never copied.
 
 use crate::export::ExportError;
-use crate::export_document::{Document, MeshData, set_matrix};
-use crate::quadrics_ext::{self, NodeExtension, ShapeDef, SphereDef};
+use crate::export::document::{Document, MeshData, set_matrix};
+use crate::gltf::quadrics_ext::{self, NodeExtension, ShapeDef, SphereDef};
 use crate::tessellate;
 use quadray::{Geometry, MaterialId};
 use serde_json::{Value, json};

@@ -3,7 +3,7 @@
 //! primitives, camera, light and `QUADRAY_quadrics` shape placed in quadray's z-up world.
 //!
 //! - Nodes, meshes and shapes used more than once become prototypes placed by instances
-//!   ([`crate::gltf_graph`]): the node graph is never expanded, except to place cameras and lights.
+//!   ([`crate::gltf::graph`]): the node graph is never expanded, except to place cameras and lights.
 //! - Scenes: the one chosen by [`ImportOptions::scene`] (index or name), else the file's default
 //!   `scene`, else its first; a file with several scenes says which one was used.
 //! - A node carrying a `QUADRAY_quadrics` shape renders the analytic shape; its `mesh` is the
@@ -11,18 +11,29 @@
 //! - Skins, morph targets and animations are not evaluated: meshes render in their rest pose, placed
 //!   by their node, with a note.
 
+mod accessor;
+mod camera;
+pub(crate) mod document;
+mod graph;
+pub(crate) mod light;
+pub(crate) mod material;
+mod mesh;
+pub mod quadrics_ext;
+
+pub use accessor::{MAX_ELEMENTS, MAX_UNBACKED_BYTES};
+pub use document::{GltfFile, open_bytes};
+
 use crate::error::LoadError;
-use crate::gltf_document::{self, GltfFile};
-use crate::gltf_graph::GraphBuild;
+use crate::gltf::graph::GraphBuild;
 use crate::import::{ImportOptions, Imported, Selector, UpAxis};
-use crate::quadrics_ext::{self, RootExtension};
+use quadrics_ext::RootExtension;
 use std::path::Path;
 
-pub use crate::gltf_graph::{MAX_DEPTH, MAX_INSTANCES, MAX_TRIANGLES};
+pub use crate::gltf::graph::{MAX_DEPTH, MAX_INSTANCES, MAX_TRIANGLES};
 
 /// Reads the glTF or GLB file at `path`.
 pub fn import_gltf(path: &Path, options: &ImportOptions) -> Result<Imported, LoadError> {
-    let file = gltf_document::open(path)?;
+    let file = document::open(path)?;
     convert(&file, path, options)
 }
 
@@ -63,7 +74,7 @@ pub fn convert(
         ),
         None => doc.default_scene().or_else(|| doc.scenes().next()),
     };
-    let mut hints = crate::quadrics_ext::RenderHints::default();
+    let mut hints = crate::gltf::quadrics_ext::RenderHints::default();
     if let Some(extras) = scene
         .as_ref()
         .and_then(|s| file.scene_extras.get(s.index()))
@@ -82,7 +93,7 @@ pub fn convert(
                 ));
             }
             let nodes: Vec<gltf::Node<'_>> = s.nodes().collect();
-            crate::gltf_graph::refuse_repeats(
+            crate::gltf::graph::refuse_repeats(
                 nodes.iter().map(|n| n.index()),
                 || format!("scenes[{}].nodes", s.index()),
                 path,

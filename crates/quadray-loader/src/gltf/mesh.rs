@@ -5,15 +5,15 @@
 //!   (a repeated index, as strips use to restart) are dropped. POINTS and LINES* yield nothing and
 //!   the caller notes them.
 //! - Indexed or not; sparse accessors are read through the gltf crate's reader after
-//!   [`crate::gltf_accessor::check`] has bounded every access.
+//!   [`crate::gltf::accessor::check`] has bounded every access.
 //! - POSITION, NORMAL (transformed by the inverse transpose, so non-uniform scales keep them
 //!   perpendicular), TEXCOORD_0/1 (normalised integers become [0, 1]) and COLOR_0 (linear RGBA).
 //! - A node whose transform mirrors (negative determinant) flips every triangle's winding, so
 //!   front faces stay front faces (the spec's rule for negative scales).
 
-use crate::gltf_accessor::{Expect, check};
-use crate::gltf_document::GltfFile;
-use crate::gltf_material::MaterialUse;
+use crate::gltf::accessor::{Expect, check};
+use crate::gltf::document::GltfFile;
+use crate::gltf::material::MaterialUse;
 use glam::{DAffine3, DVec3, Vec2, Vec3, Vec4};
 use gltf::Semantic;
 use gltf::accessor::{DataType, Dimensions};

@@ -23,8 +23,8 @@
 //! | metallicRoughnessTexture | its mean metalness and roughness, with a note |
 //! | occlusionTexture | ignored, with a note |
 
-use crate::gltf_document::{GltfFile, read_image};
-use crate::quadrics_ext::{self, MaterialExtension};
+use crate::gltf::document::{GltfFile, read_image};
+use crate::gltf::quadrics_ext::{self, MaterialExtension};
 use glam::{Vec2, Vec3};
 use quadray::{
     AlphaMask, ColorEncoding, Filter, Image, ImageMap, ImageTexture, Material, NormalMap,

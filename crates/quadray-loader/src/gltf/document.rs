@@ -20,7 +20,7 @@ pub const SUPPORTED_REQUIRED: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_materials_unlit",
     "KHR_texture_transform",
-    crate::quadrics_ext::EXTENSION,
+    crate::gltf::quadrics_ext::EXTENSION,
 ];
 
 /// A glTF document with its binary buffers, ready to convert.
@@ -309,7 +309,7 @@ fn check_required_extensions(value: &mut Value) -> Result<(), LoadErrorKind> {
             described.join(", ")
         )));
     }
-    required.retain(|v| v.as_str() != Some(crate::quadrics_ext::EXTENSION));
+    required.retain(|v| v.as_str() != Some(crate::gltf::quadrics_ext::EXTENSION));
     Ok(())
 }
 

@@ -2,8 +2,8 @@
 //! it, with the writers of accessors, meshes, materials and textures.
 
 use crate::export::ExportError;
-use crate::gltf_material::EMISSIVE_STRENGTH;
-use crate::quadrics_ext::{self, MaterialExtension, ShapeDef};
+use crate::gltf::material::EMISSIVE_STRENGTH;
+use crate::gltf::quadrics_ext::{self, MaterialExtension, ShapeDef};
 use crate::tessellate::TriMesh;
 use glam::{DAffine3, DMat3, DVec3, Vec2, Vec3, Vec4};
 use quadray::math::orthonormal_basis;

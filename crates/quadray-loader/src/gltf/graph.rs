@@ -9,11 +9,11 @@
 //!   expanded, and only those).
 
 use crate::error::LoadError;
-use crate::gltf_document::GltfFile;
-use crate::gltf_material::{MaterialUse, Materials};
+use crate::gltf::document::GltfFile;
+use crate::gltf::material::{MaterialUse, Materials};
+use crate::gltf::quadrics_ext::{self, NodeExtension, RootExtension};
+use crate::gltf::{camera as gltf_camera, light as gltf_light, mesh as gltf_mesh};
 use crate::import::{Imported, PlacedShape};
-use crate::quadrics_ext::{self, NodeExtension, RootExtension};
-use crate::{gltf_camera, gltf_light, gltf_mesh};
 use glam::DAffine3;
 use quadray::{Instance, Plane, Prototype, Transform};
 use std::collections::{BTreeMap, HashMap};
