@@ -11,7 +11,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 runs=${1:-3}
 scenes=${2:-"defense reflective grid mesh"}
-cargo build --release -q -p quadray-cli
+cargo build --release -q -p quadray-cli --features bench
 bin=target/release/quadray
 harness=../shared/peers/povray
 out=docs/image-error

@@ -12,7 +12,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 reps=${1:-5}
-cargo build --release -q -p quadray-cli
+cargo build --release -q -p quadray-cli --features bench
 bin=$PWD/target/release/quadray
 out=$(mktemp -d)
 dragon=/tmp/quadray-speed/meshes/dragon.obj

@@ -10,7 +10,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 reps=${1:-5}
-cargo build --release -q -p quadray-cli
+cargo build --release -q -p quadray-cli --features bench
 bin=target/release/quadray
 harness=../shared/peers/povray
 pov_dir=$harness/pov

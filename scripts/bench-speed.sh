@@ -42,7 +42,7 @@ cp "$SPEED/obvhs-bench/Cargo.toml" "$SPEED/obvhs-bench/Cargo.lock" "$T/obvhs-ben
 cp "$SPEED/obvhs-bench/src/main.rs" "$T/obvhs-bench/src/"
 (cd "$T/obvhs-bench" && cargo build --release -q --bin obvhs-bench)
 [ -x "$T/embree_bench" ] || g++ -O3 -march=native -std=c++17 -o "$T/embree_bench" "$SPEED/embree-bench/embree_bench.cpp" -lembree3 -lpthread
-cargo build --release -q -p quadray-cli
+cargo build --release -q -p quadray-cli --features bench
 QR=$ROOT/target/release/quadray
 
 # 4. Identical ray files, written once.
