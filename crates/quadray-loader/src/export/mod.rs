@@ -19,6 +19,7 @@
 //! application data in the scene's `extras.quadray`, which quadray reads back and others ignore.
 
 mod document;
+mod lights;
 mod shapes;
 
 pub use shapes::MAX_EXPORT_NODES;
@@ -26,13 +27,12 @@ pub use shapes::MAX_EXPORT_NODES;
 use crate::export::document::{Document, looking, set_matrix};
 use crate::export::shapes::ShapeWriter;
 use crate::framing::geometry_bounds;
-use crate::gltf::light::LUMENS_PER_WATT;
 use crate::gltf::quadrics_ext::{self, NodeExtension, RootExtension, ShapeDef};
 use crate::native::LoadedScene;
 use crate::tessellate;
-use glam::{DAffine3, DMat3, DVec3, Vec3};
+use glam::{DAffine3, DMat3};
+use quadray::Projection;
 use quadray::math::orthonormal_basis;
-use quadray::{Light, Projection};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -100,6 +100,41 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
             "{normal_mapped} normal-mapped meshes are written without their normal maps (not exported yet)"
         ));
     }
+    children.extend(plane_nodes(&mut doc, g, extent, &mut notes)?);
+
+    let cam = &d.camera;
+    children.push(camera_node(&mut doc, scene, extent));
+    children.extend(lights::light_nodes(&mut doc, &d.lights, cam.to, &mut notes));
+
+    // quadray (x, y, z) → glTF (x, z, −y): columns are the images of x, y and z.
+    let root = doc.node(json!({
+        "name": "quadray (z up)",
+        "matrix": [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+        "children": children,
+    }));
+    // Not glTF content: quadray's own settings, as application data other tools ignore.
+    let hints = quadrics_ext::RenderHints {
+        background: Some(d.background.to_array()),
+        environment: d.environment.map(|e| e.to_array()),
+        resolution: Some([scene.settings.width, scene.settings.height]),
+        spp: Some(scene.settings.spp),
+        max_depth: Some(scene.settings.max_depth),
+    };
+
+    let gltf = document_json(&mut doc, root, hints, binary, out)?;
+    write_files(&gltf, &doc.bin, binary, out)?;
+    Ok(notes)
+}
+
+/// The nodes of the scene's infinite planes: each a `plane` shape with a square fallback mesh of
+/// side 4·`extent` for other viewers.
+fn plane_nodes(
+    doc: &mut Document,
+    g: &quadray::Geometry,
+    extent: f64,
+    notes: &mut Vec<String>,
+) -> Result<Vec<usize>, ExportError> {
+    let mut children = Vec::new();
     if !g.planes.is_empty() {
         notes.push(format!(
             "infinite planes get a square of side {:.4} as their fallback mesh in other viewers",
@@ -129,7 +164,12 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
         children.push(doc.node(node));
     }
 
-    let cam = &d.camera;
+    Ok(children)
+}
+
+/// The camera and its node (glTF cameras look down their −z with +y up).
+fn camera_node(doc: &mut Document, scene: &LoadedScene, extent: f64) -> usize {
+    let cam = &scene.description.camera;
     let aspect = scene.settings.width as f64 / scene.settings.height.max(1) as f64;
     let camera = match cam.projection {
         Projection::Perspective { vfov_deg } => json!({
@@ -147,105 +187,18 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
     let view = looking(cam.from, cam.to - cam.from, cam.up);
     let mut camera_node = json!({"name": "camera", "camera": 0});
     set_matrix(&mut camera_node, &view);
-    children.push(doc.node(camera_node));
+    doc.node(camera_node)
+}
 
-    let scale = (LUMENS_PER_WATT * std::f64::consts::PI) as f32;
-    let colour_and_intensity = |c: Vec3| {
-        let peak = c.max_element();
-        if peak > 0.0 {
-            ((c / peak).to_array(), peak * scale)
-        } else {
-            ([1.0; 3], 0.0)
-        }
-    };
-    for (i, l) in d.lights.iter().enumerate() {
-        let name = format!("light {i}");
-        let (light, node_matrix) = match *l {
-            Light::Point {
-                position,
-                intensity,
-            } => {
-                let (color, intensity) = colour_and_intensity(intensity);
-                (
-                    json!({"name": name, "type": "point", "color": color, "intensity": intensity}),
-                    DAffine3::from_translation(position),
-                )
-            }
-            Light::PointNoFalloff {
-                position,
-                irradiance,
-            } => {
-                // glTF point lights fall off with the inverse square: match the irradiance where
-                // the camera looks, and say that the falloff differs elsewhere.
-                let d2 = (cam.to - position).length_squared().max(1e-12) as f32;
-                notes.push(format!(
-                    "{name}: a light without falloff is written as a glTF point light matching its irradiance at the camera's target; it falls off elsewhere"
-                ));
-                let (color, intensity) = colour_and_intensity(irradiance * d2);
-                (
-                    json!({"name": name, "type": "point", "color": color, "intensity": intensity}),
-                    DAffine3::from_translation(position),
-                )
-            }
-            Light::Directional {
-                direction,
-                irradiance,
-            } => {
-                let (color, intensity) = colour_and_intensity(irradiance);
-                (
-                    json!({"name": name, "type": "directional", "color": color, "intensity": intensity}),
-                    looking(DVec3::ZERO, direction, DVec3::Z),
-                )
-            }
-            Light::Spot {
-                position,
-                direction,
-                intensity,
-                cos_inner,
-                cos_outer,
-            } => {
-                let (color, intensity) = colour_and_intensity(intensity);
-                let outer = cos_outer.clamp(-1.0, 1.0).acos();
-                let inner = cos_inner.clamp(-1.0, 1.0).acos();
-                let limit = std::f64::consts::FRAC_PI_2;
-                if outer > limit {
-                    notes.push(format!(
-                        "{name}: its cone is wider than glTF's 90° limit; written as 90°"
-                    ));
-                }
-                let outer = outer.min(limit);
-                let inner = inner.min(outer * 0.999_999);
-                (
-                    json!({"name": name, "type": "spot", "color": color, "intensity": intensity,
-                           "spot": {"innerConeAngle": inner, "outerConeAngle": outer}}),
-                    looking(position, direction, DVec3::Z),
-                )
-            }
-        };
-        doc.lights.push(light);
-        let mut node = json!({
-            "name": name,
-            "extensions": {"KHR_lights_punctual": {"light": doc.lights.len() - 1}},
-        });
-        set_matrix(&mut node, &node_matrix);
-        children.push(doc.node(node));
-    }
-
-    // quadray (x, y, z) → glTF (x, z, −y): columns are the images of x, y and z.
-    let root = doc.node(json!({
-        "name": "quadray (z up)",
-        "matrix": [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
-        "children": children,
-    }));
-    // Not glTF content: quadray's own settings, as application data other tools ignore.
-    let hints = quadrics_ext::RenderHints {
-        background: Some(d.background.to_array()),
-        environment: d.environment.map(|e| e.to_array()),
-        resolution: Some([scene.settings.width, scene.settings.height]),
-        spp: Some(scene.settings.spp),
-        max_depth: Some(scene.settings.max_depth),
-    };
-
+/// The glTF JSON of `doc` under the node `root`, with quadray's render `hints` and, for a `.gltf`,
+/// the `.bin` beside `out` named as its buffer's URI. Takes the document's lists.
+fn document_json(
+    doc: &mut Document,
+    root: usize,
+    hints: quadrics_ext::RenderHints,
+    binary: bool,
+    out: &Path,
+) -> Result<serde_json::Value, ExportError> {
     let mut used = vec![quadrics_ext::EXTENSION];
     if !doc.lights.is_empty() {
         used.push("KHR_lights_punctual");
@@ -260,7 +213,7 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
     };
     let mut extensions = json!({quadrics_ext::EXTENSION: root_ext});
     if !doc.lights.is_empty() {
-        extensions["KHR_lights_punctual"] = json!({"lights": doc.lights});
+        extensions["KHR_lights_punctual"] = json!({"lights": std::mem::take(&mut doc.lights)});
     }
     let bin_path = out.with_extension("bin");
     let mut buffer = json!({"byteLength": doc.bin.len()});
@@ -277,32 +230,44 @@ pub fn export_gltf(scene: &LoadedScene, out: &Path) -> Result<Vec<String>, Expor
         "extensions": extensions,
         "scene": 0,
         "scenes": [{"name": "quadray scene", "nodes": [root], "extras": {"quadray": hints}}],
-        "nodes": doc.nodes,
-        "meshes": doc.meshes,
-        "materials": doc.materials,
-        "cameras": doc.cameras,
+        "nodes": std::mem::take(&mut doc.nodes),
+        "meshes": std::mem::take(&mut doc.meshes),
+        "materials": std::mem::take(&mut doc.materials),
+        "cameras": std::mem::take(&mut doc.cameras),
         "buffers": [buffer],
-        "bufferViews": doc.buffer_views,
-        "accessors": doc.accessors,
+        "bufferViews": std::mem::take(&mut doc.buffer_views),
+        "accessors": std::mem::take(&mut doc.accessors),
     });
     for (key, list) in [
-        ("images", doc.images),
-        ("samplers", doc.samplers),
-        ("textures", doc.textures),
+        ("images", std::mem::take(&mut doc.images)),
+        ("samplers", std::mem::take(&mut doc.samplers)),
+        ("textures", std::mem::take(&mut doc.textures)),
     ] {
         if !list.is_empty() {
             gltf[key] = json!(list);
         }
     }
+    Ok(gltf)
+}
+
+/// Writes `gltf` and its binary buffer `bin` to `out`: one `.glb`, or a `.gltf` with a `.bin`
+/// beside it, each atomically.
+fn write_files(
+    gltf: &serde_json::Value,
+    bin: &[u8],
+    binary: bool,
+    out: &Path,
+) -> Result<(), ExportError> {
+    let bin_path = out.with_extension("bin");
     let text =
-        serde_json::to_vec_pretty(&gltf).map_err(|e| ExportError::Unsupported(e.to_string()))?;
+        serde_json::to_vec_pretty(gltf).map_err(|e| ExportError::Unsupported(e.to_string()))?;
     if binary {
-        write_atomically(out, &glb(&text, &doc.bin))?;
+        write_atomically(out, &glb(&text, bin))?;
     } else {
-        write_atomically(&bin_path, &doc.bin)?;
+        write_atomically(&bin_path, bin)?;
         write_atomically(out, &text)?;
     }
-    Ok(notes)
+    Ok(())
 }
 
 /// Characters escaped in the .bin file name written as a URI.
@@ -361,6 +326,8 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ExportError> {
 mod tests {
     use super::*;
     use crate::import::ImportOptions;
+    use glam::{DVec3, Vec3};
+    use quadray::Light;
     use quadray::Texture;
 
     const SCENE: &str = r#"
