@@ -54,7 +54,12 @@ pub fn encode_srgb(linear: f32) -> f32 {
 
 /// The inverse of [`encode_srgb8`]: an 8-bit sRGB code to linear.
 pub fn decode_srgb8(code: u8) -> f32 {
-    let e = code as f32 / 255.0;
+    decode_srgb(code as f32 / 255.0)
+}
+
+/// The inverse of [`encode_srgb`]: an sRGB-encoded value, clamped to [0, 1], to linear.
+pub fn decode_srgb(encoded: f32) -> f32 {
+    let e = encoded.clamp(0.0, 1.0);
     if e <= 0.04045 {
         e / 12.92
     } else {

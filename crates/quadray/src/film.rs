@@ -4,7 +4,7 @@
 use glam::{DVec3, Vec3};
 
 // The sRGB curve, where the film's users have always found it.
-pub use crate::colour::{decode_srgb8, display_value, encode_srgb, encode_srgb8};
+pub use crate::colour::{decode_srgb, decode_srgb8, display_value, encode_srgb, encode_srgb8};
 
 /// A linear, scene-referred RGB image, row-major from the top-left pixel.
 #[derive(Clone, Debug, PartialEq)]

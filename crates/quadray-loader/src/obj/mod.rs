@@ -56,6 +56,87 @@ pub fn import_obj_bytes(
         ));
     }
     let folder = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let Parsed {
+        models,
+        materials,
+        libraries,
+        mut notes,
+    } = parse(bytes, path, &folder)?;
+    check_numbers(bytes, path, &models)?;
+    let mut out = Imported::default();
+    if !options.skip_materials {
+        out.materials =
+            convert_materials(&materials, &libraries, &folder, path, options, &mut notes)?;
+    }
+    let default_id = out.materials.len() as u32;
+    let mut unmatched = 0;
+    for model in &models {
+        if model.mesh.indices.is_empty() {
+            continue;
+        }
+        let material = match model.mesh.material_id {
+            Some(i) if i < materials.len() && !options.skip_materials => i as u32,
+            _ => {
+                if !materials.is_empty() && !options.skip_materials {
+                    unmatched += 1;
+                }
+                default_id
+            }
+        };
+        out.geometry
+            .meshes
+            .push(convert_mesh(model, material, path, options)?);
+    }
+    if unmatched > 0 {
+        let defined: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+        let undefined = undefined_materials(bytes, &defined);
+        let named = if undefined.is_empty() {
+            String::new()
+        } else {
+            format!(" (undefined: {})", undefined.join(", "))
+        };
+        notes.push(format!(
+            "warning: {unmatched} object(s) name no material, or one their libraries do not define{named}; they use a default grey"
+        ));
+    }
+    if out
+        .geometry
+        .meshes
+        .iter()
+        .any(|m| m.material() == default_id)
+        || out.materials.is_empty()
+    {
+        out.materials.push(("default".into(), Material::default()));
+    }
+    if out.geometry.meshes.is_empty() {
+        // Comments only, binary junk, lines and points, faces of two vertices: nothing renders,
+        // which is worth saying rather than drawing an empty image.
+        return Err(LoadError::new(
+            path,
+            None,
+            LoadErrorKind::Unsupported(
+                "the file has no faces with three or more vertices: nothing to render (is it an OBJ file?)"
+                    .into(),
+            ),
+        ));
+    }
+    out.notes = notes;
+    Ok(out)
+}
+
+/// What tobj read: the objects, the materials of every library, where each library lies (in
+/// order, with its material count) and the notes about libraries that could not be read.
+struct Parsed {
+    models: Vec<tobj::Model>,
+    materials: Vec<tobj::Material>,
+    libraries: Vec<Library>,
+    notes: Vec<String>,
+}
+
+/// Parses the OBJ text with tobj, reading each MTL library it names beside `folder` (within the
+/// size limit; its numbers checked line by line). A library that cannot be read is a note (its
+/// materials fall back to grey); one that is malformed is an error naming both files.
+fn parse(bytes: &[u8], path: &Path, folder: &Path) -> Result<Parsed, LoadError> {
     let libraries = RefCell::new(Vec::<Library>::new());
     let notes = RefCell::new(Vec::<String>::new());
     let library_error = RefCell::new(None::<LoadError>);
@@ -66,7 +147,7 @@ pub fn import_obj_bytes(
         ignore_lines: true,
     };
     let result = tobj::load_obj_buf(&mut &bytes[..], &load_options, |reference| {
-        let mtl_path = resolve_reference(&folder, &reference.to_string_lossy());
+        let mtl_path = resolve_reference(folder, &reference.to_string_lossy());
         let text = match crate::read_limited::read(
             &mtl_path,
             crate::read_limited::MAX_MATERIAL_BYTES,
@@ -119,6 +200,18 @@ pub fn import_obj_bytes(
         ));
     }
     let (models, materials) = result.map_err(|e| obj_error(bytes, path, e))?;
+    Ok(Parsed {
+        models,
+        // tobj reports a missing library as an error in place of the materials; the note says so.
+        materials: materials.unwrap_or_default(),
+        libraries: libraries.into_inner(),
+        notes: notes.into_inner(),
+    })
+}
+
+/// An error on the first line whose numbers tobj read without complaint but quadray cannot use:
+/// a coordinate, normal, texture coordinate or colour that is not finite, or a face index 0.
+fn check_numbers(bytes: &[u8], path: &Path, models: &[tobj::Model]) -> Result<(), LoadError> {
     let non_finite = models.iter().any(|m| {
         let mesh = &m.mesh;
         [
@@ -146,145 +239,104 @@ pub fn import_obj_bytes(
             },
         ));
     }
-    let mut notes = notes.into_inner();
-    // tobj reports a missing library as an error in place of the materials; the note says so.
-    let materials = materials.unwrap_or_default();
+    Ok(())
+}
 
-    let mut out = Imported::default();
+/// The Whitted materials of the libraries' materials, each with its textures read beside its own
+/// library.
+fn convert_materials(
+    materials: &[tobj::Material],
+    libraries: &[Library],
+    folder: &Path,
+    path: &Path,
+    options: &ImportOptions,
+    notes: &mut Vec<String>,
+) -> Result<Vec<(String, Material)>, LoadError> {
+    let mut converted = Vec::with_capacity(materials.len());
     let mut images = ImageCache::new(options.textures.clone());
-    if !options.skip_materials {
-        let libraries = libraries.into_inner();
-        let mut library = libraries
-            .iter()
-            .flat_map(|l| std::iter::repeat_n(&l.folder, l.materials));
-        for m in &materials {
-            let lib_folder = library.next().unwrap_or(&folder);
-            let w =
-                whitted_material(m, lib_folder, &mut images, &mut notes).map_err(|message| {
-                    LoadError::invalid(path, None, format!("material \"{}\"", m.name), message)
-                })?;
-            out.materials.push((m.name.clone(), w));
-        }
+    let mut library = libraries
+        .iter()
+        .flat_map(|l| std::iter::repeat_n(l.folder.as_path(), l.materials));
+    for m in materials {
+        let lib_folder = library.next().unwrap_or(folder);
+        let w = whitted_material(m, lib_folder, &mut images, notes).map_err(|message| {
+            LoadError::invalid(path, None, format!("material \"{}\"", m.name), message)
+        })?;
+        converted.push((m.name.clone(), w));
     }
-    let default_id = out.materials.len() as u32;
-    let mut unmatched = 0;
+    Ok(converted)
+}
+
+/// One object's triangles as a mesh in quadray's world (`options`' up axis and placement), with
+/// its normals, texture coordinates and vertex colours where the file gives one per vertex.
+fn convert_mesh(
+    model: &tobj::Model,
+    material: u32,
+    path: &Path,
+    options: &ImportOptions,
+) -> Result<Mesh, LoadError> {
+    let mesh = &model.mesh;
     let root = options.root(options.up);
     let normal_matrix = root.matrix3.inverse().transpose();
     let flip = root.matrix3.determinant() < 0.0;
-    for model in &models {
-        let mesh = &model.mesh;
-        if mesh.indices.is_empty() {
-            continue;
-        }
-        let material = match mesh.material_id {
-            Some(i) if i < materials.len() && !options.skip_materials => i as u32,
-            _ => {
-                if !materials.is_empty() && !options.skip_materials {
-                    unmatched += 1;
-                }
-                default_id
-            }
-        };
-        let positions: Vec<Vec3> = mesh
-            .positions
+    let positions: Vec<Vec3> = mesh
+        .positions
+        .chunks_exact(3)
+        .map(|p| {
+            root.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+                .as_vec3()
+        })
+        .collect();
+    let vertices = positions.len();
+    let normals = (mesh.normals.len() == vertices * 3).then(|| {
+        mesh.normals
             .chunks_exact(3)
-            .map(|p| {
-                root.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+            .map(|n| {
+                (normal_matrix * DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64))
+                    .normalize_or_zero()
                     .as_vec3()
             })
-            .collect();
-        let vertices = positions.len();
-        let normals = (mesh.normals.len() == vertices * 3).then(|| {
-            mesh.normals
-                .chunks_exact(3)
-                .map(|n| {
-                    (normal_matrix * DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64))
-                        .normalize_or_zero()
-                        .as_vec3()
-                })
-                .collect()
-        });
-        let indices: Vec<[u32; 3]> = mesh
-            .indices
-            .chunks_exact(3)
-            .map(|t| {
-                if flip {
-                    [t[0], t[2], t[1]]
-                } else {
-                    [t[0], t[1], t[2]]
-                }
-            })
-            .collect();
-        let invalid = |e: quadray::MeshError| {
-            LoadError::invalid(
-                path,
-                None,
-                format!("object \"{}\"", model.name),
-                e.to_string(),
-            )
-        };
-        let mut built = Mesh::new(positions, indices, normals, material).map_err(invalid)?;
-        if mesh.texcoords.len() == vertices * 2 {
-            let uv = mesh
-                .texcoords
-                .chunks_exact(2)
-                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
-                .collect();
-            built = built.with_texcoords(0, uv).map_err(invalid)?;
-        }
-        if mesh.vertex_color.len() == vertices * 3 {
-            let decode = |c: f32| {
-                let c = c.clamp(0.0, 1.0);
-                if c <= 0.04045 {
-                    c / 12.92
-                } else {
-                    ((c + 0.055) / 1.055).powf(2.4)
-                }
-            };
-            let colors = mesh
-                .vertex_color
-                .chunks_exact(3)
-                .map(|c| Vec4::new(decode(c[0]), decode(c[1]), decode(c[2]), 1.0))
-                .collect();
-            built = built.with_colors(colors).map_err(invalid)?;
-        }
-        out.geometry.meshes.push(built);
-    }
-    if unmatched > 0 {
-        let defined: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
-        let undefined = undefined_materials(bytes, &defined);
-        let named = if undefined.is_empty() {
-            String::new()
-        } else {
-            format!(" (undefined: {})", undefined.join(", "))
-        };
-        notes.push(format!(
-            "warning: {unmatched} object(s) name no material, or one their libraries do not define{named}; they use a default grey"
-        ));
-    }
-    if out
-        .geometry
-        .meshes
-        .iter()
-        .any(|m| m.material() == default_id)
-        || out.materials.is_empty()
-    {
-        out.materials.push(("default".into(), Material::default()));
-    }
-    if out.geometry.meshes.is_empty() {
-        // Comments only, binary junk, lines and points, faces of two vertices: nothing renders,
-        // which is worth saying rather than drawing an empty image.
-        return Err(LoadError::new(
+            .collect()
+    });
+    let indices: Vec<[u32; 3]> = mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| {
+            if flip {
+                [t[0], t[2], t[1]]
+            } else {
+                [t[0], t[1], t[2]]
+            }
+        })
+        .collect();
+    let invalid = |e: quadray::MeshError| {
+        LoadError::invalid(
             path,
             None,
-            LoadErrorKind::Unsupported(
-                "the file has no faces with three or more vertices: nothing to render (is it an OBJ file?)"
-                    .into(),
-            ),
-        ));
+            format!("object \"{}\"", model.name),
+            e.to_string(),
+        )
+    };
+    let mut built = Mesh::new(positions, indices, normals, material).map_err(invalid)?;
+    if mesh.texcoords.len() == vertices * 2 {
+        let uv = mesh
+            .texcoords
+            .chunks_exact(2)
+            .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+            .collect();
+        built = built.with_texcoords(0, uv).map_err(invalid)?;
     }
-    out.notes = notes;
-    Ok(out)
+    if mesh.vertex_color.len() == vertices * 3 {
+        // OBJ vertex colours are display values (sRGB), as Blender writes them.
+        let decode = quadray::colour::decode_srgb;
+        let colors = mesh
+            .vertex_color
+            .chunks_exact(3)
+            .map(|c| Vec4::new(decode(c[0]), decode(c[1]), decode(c[2]), 1.0))
+            .collect();
+        built = built.with_colors(colors).map_err(invalid)?;
+    }
+    Ok(built)
 }
 
 /// A tobj error as a [`LoadError`], located on its line when a second look at the text finds it
