@@ -110,7 +110,7 @@ impl InstanceBits {
         }
         InstanceBits {
             prototype: inst.prototype,
-            material: inst.material.map(|m| m as u32),
+            material: inst.material,
             matrix,
         }
     }

@@ -7,6 +7,7 @@
 
 use crate::error::{LoadError, LoadErrorKind, Location};
 use crate::framing::{framing_camera, geometry_bounds};
+use crate::import::ImportedCamera;
 use crate::import::{ImportOptions, Selector, UpAxis, select_camera};
 use crate::include;
 use crate::suggest::did_you_mean;
@@ -319,22 +320,7 @@ impl Builder<'_> {
             .transpose()?;
         let mut notes = Vec::new();
 
-        let mut names = HashMap::new();
-        let mut materials = Vec::new();
-        let mut material_names = Vec::new();
-        for (i, m) in file.materials.iter().enumerate() {
-            let key = format!("material[{i}]");
-            let name = m.get_ref().name.get_ref().clone();
-            if names.insert(name.clone(), i as u32).is_some() {
-                return Err(self.err(
-                    m.get_ref().name.span(),
-                    format!("{key}.name"),
-                    format!("material \"{name}\" is defined twice"),
-                ));
-            }
-            materials.push(self.material(m.get_ref(), &key)?);
-            material_names.push(name);
-        }
+        let (names, materials, material_names) = self.materials(&file)?;
 
         // The world and every group, built into prototypes children first (groups.rs).
         let world = groups::Contents::world(&file);
@@ -367,6 +353,78 @@ impl Builder<'_> {
         for (i, l) in file.lights.iter().enumerate() {
             lights.push(self.light(l.get_ref(), &format!("light[{i}]"))?);
         }
+        let included_cameras = self.include_all(
+            &file,
+            (&mut materials, &mut material_names),
+            &mut geometry,
+            &mut lights,
+            &mut notes,
+        )?;
+        if !file.includes.is_empty() {
+            merged_placements += quadray::coincident::merge_coincident(&mut geometry);
+        }
+        if let Some(note) = crate::coincident_note(merged_placements) {
+            notes.push(note);
+        }
+        let camera = self.scene_camera(
+            &file,
+            &included_cameras,
+            &mut settings,
+            &geometry,
+            &mut notes,
+        )?;
+        Ok(LoadedScene {
+            description: SceneDescription {
+                camera,
+                background,
+                environment,
+                materials,
+                lights,
+                geometry,
+            },
+            settings,
+            output,
+            material_names,
+            notes,
+        })
+    }
+
+    /// The file's materials, their names, and the name → index map shapes refer to them by.
+    #[allow(clippy::type_complexity)]
+    fn materials(
+        &self,
+        file: &SceneFile,
+    ) -> Result<(HashMap<String, u32>, Vec<quadray::Material>, Vec<String>), LoadError> {
+        let mut names = HashMap::new();
+        let mut materials = Vec::new();
+        let mut material_names = Vec::new();
+        for (i, m) in file.materials.iter().enumerate() {
+            let key = format!("material[{i}]");
+            let name = m.get_ref().name.get_ref().clone();
+            if names.insert(name.clone(), i as u32).is_some() {
+                return Err(self.err(
+                    m.get_ref().name.span(),
+                    format!("{key}.name"),
+                    format!("material \"{name}\" is defined twice"),
+                ));
+            }
+            materials.push(self.material(m.get_ref(), &key)?);
+            material_names.push(name);
+        }
+
+        Ok((names, materials, material_names))
+    }
+
+    /// Imports every `[[include]]` into `geometry`, its materials after the scene's and its
+    /// lights (unless `lights = false`) beside the scene's; returns the cameras it brings.
+    fn include_all(
+        &self,
+        file: &SceneFile,
+        (materials, material_names): (&mut Vec<quadray::Material>, &mut Vec<String>),
+        geometry: &mut Geometry,
+        lights: &mut Vec<quadray::Light>,
+        notes: &mut Vec<String>,
+    ) -> Result<Vec<ImportedCamera>, LoadError> {
         let mut included_cameras = Vec::new();
         for (i, inc) in file.includes.iter().enumerate() {
             let key = format!("include[{i}]");
@@ -386,15 +444,9 @@ impl Builder<'_> {
             let path = include::resolve(self.path, spec.path.get_ref());
             let imported = include::import_file(&path, &options)
                 .map_err(|e| self.include_err(Some(&spec.path), &format!("{key}.path"), e))?;
-            let mut merged = include::merge(
-                imported,
-                &path,
-                None,
-                &mut materials,
-                &mut material_names,
-                &mut geometry,
-            )
-            .map_err(|e| self.include_err(Some(&spec.path), &format!("{key}.path"), e))?;
+            let mut merged =
+                include::merge(imported, &path, None, materials, material_names, geometry)
+                    .map_err(|e| self.include_err(Some(&spec.path), &format!("{key}.path"), e))?;
             notes.append(&mut merged.notes);
             if spec.lights.unwrap_or(true) {
                 lights.append(&mut merged.lights);
@@ -410,13 +462,21 @@ impl Builder<'_> {
             };
             included_cameras.extend(chosen);
         }
-        if !file.includes.is_empty() {
-            merged_placements += quadray::coincident::merge_coincident(&mut geometry);
-        }
-        if let Some(note) = crate::coincident_note(merged_placements) {
-            notes.push(note);
-        }
-        let camera = match &file.camera {
+        Ok(included_cameras)
+    }
+
+    /// The scene's camera: its `[camera]`, else the first included camera (fitted to the image,
+    /// whose height follows that camera's aspect when the file sets no resolution), else one
+    /// that frames the scene's bounds; the last two with a note.
+    fn scene_camera(
+        &self,
+        file: &SceneFile,
+        included_cameras: &[ImportedCamera],
+        settings: &mut SceneSettings,
+        geometry: &Geometry,
+        notes: &mut Vec<String>,
+    ) -> Result<quadray::Camera, LoadError> {
+        Ok(match &file.camera {
             Some(c) => self.camera(c)?,
             None => match included_cameras.first() {
                 Some(c) => {
@@ -436,25 +496,11 @@ impl Builder<'_> {
                 None => {
                     notes.push("no [camera] and no included camera: using one that frames the scene's bounds".into());
                     framing_camera(
-                        geometry_bounds(&geometry),
+                        geometry_bounds(geometry),
                         settings.width as f64 / settings.height as f64,
                     )
                 }
             },
-        };
-        Ok(LoadedScene {
-            description: SceneDescription {
-                camera,
-                background,
-                environment,
-                materials,
-                lights,
-                geometry,
-            },
-            settings,
-            output,
-            material_names,
-            notes,
         })
     }
 

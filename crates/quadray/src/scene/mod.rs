@@ -163,7 +163,7 @@ impl Scene {
         // ray offsets and textures: the same limit.
         for (i, plane) in d.geometry.planes.iter().enumerate() {
             let far = plane.point.abs().max_element();
-            if !(far <= MAX_COORDINATE) {
+            if far.is_nan() || far > MAX_COORDINATE {
                 return Err(invalid(
                     format!("plane {i}"),
                     format!(
