@@ -47,33 +47,7 @@ pub fn convert(
     let invalid = |key: String, message: String| LoadError::invalid(path, None, key, message);
     let mut notes = Vec::new();
 
-    let scene_count = doc.scenes().len();
-    let scene = match &options.scene {
-        Some(Selector::Index(i)) => Some(doc.scenes().nth(*i).ok_or_else(|| {
-            invalid(
-                "scene".into(),
-                format!("scene #{i} does not exist (the file has {scene_count})"),
-            )
-        })?),
-        Some(Selector::Name(n)) => Some(
-            doc.scenes()
-                .find(|s| s.name() == Some(n.as_str()))
-                .ok_or_else(|| {
-                    let names: Vec<String> = doc
-                        .scenes()
-                        .map(|s| {
-                            s.name()
-                                .map_or(format!("#{}", s.index()), |n| format!("\"{n}\""))
-                        })
-                        .collect();
-                    invalid(
-                        "scene".into(),
-                        format!("no scene is named \"{n}\" (scenes: {})", names.join(", ")),
-                    )
-                })?,
-        ),
-        None => doc.default_scene().or_else(|| doc.scenes().next()),
-    };
+    let scene = choose_scene(doc, options.scene.as_ref(), path)?;
     let mut hints = crate::gltf::quadrics_ext::RenderHints::default();
     if let Some(extras) = scene
         .as_ref()
@@ -83,36 +57,7 @@ pub fn convert(
         hints = serde_json::from_value(extras.clone())
             .map_err(|e| invalid("scenes[].extras.quadray".into(), e.to_string()))?;
     }
-    let roots: Vec<gltf::Node<'_>> = match &scene {
-        Some(s) => {
-            if scene_count > 1 {
-                notes.push(format!(
-                    "the file has {scene_count} scenes; using scene #{}{}",
-                    s.index(),
-                    s.name().map(|n| format!(" \"{n}\"")).unwrap_or_default()
-                ));
-            }
-            let nodes: Vec<gltf::Node<'_>> = s.nodes().collect();
-            crate::gltf::graph::refuse_repeats(
-                nodes.iter().map(|n| n.index()),
-                || format!("scenes[{}].nodes", s.index()),
-                path,
-            )?;
-            nodes
-        }
-        None => {
-            // No scene at all: show every node that is nobody's child.
-            let mut is_child = vec![false; doc.nodes().len()];
-            doc.nodes()
-                .flat_map(|n| n.children())
-                .for_each(|c| is_child[c.index()] = true);
-            let roots: Vec<_> = doc.nodes().filter(|n| !is_child[n.index()]).collect();
-            if !roots.is_empty() {
-                notes.push("the file defines no scene; showing all root nodes".into());
-            }
-            roots
-        }
-    };
+    let roots = scene_roots(doc, scene.as_ref(), &mut notes, path)?;
 
     let shapes: RootExtension = match doc.extension_value(quadrics_ext::EXTENSION) {
         Some(v) => serde_json::from_value(v.clone()).map_err(|e| {
@@ -187,4 +132,83 @@ pub fn convert(
     quadray::Placements::new(&out.geometry)
         .map_err(|e| invalid("nodes".into(), format!("the node graph is too large: {e}")))?;
     Ok(out)
+}
+
+/// The scene `selector` names (by index or name), else the file's default scene, else its first;
+/// `None` for a file without scenes.
+fn choose_scene<'d>(
+    doc: &'d gltf::Document,
+    selector: Option<&Selector>,
+    path: &Path,
+) -> Result<Option<gltf::Scene<'d>>, LoadError> {
+    let invalid = |key: String, message: String| LoadError::invalid(path, None, key, message);
+    let scene_count = doc.scenes().len();
+    let scene = match selector {
+        Some(Selector::Index(i)) => Some(doc.scenes().nth(*i).ok_or_else(|| {
+            invalid(
+                "scene".into(),
+                format!("scene #{i} does not exist (the file has {scene_count})"),
+            )
+        })?),
+        Some(Selector::Name(n)) => Some(
+            doc.scenes()
+                .find(|s| s.name() == Some(n.as_str()))
+                .ok_or_else(|| {
+                    let names: Vec<String> = doc
+                        .scenes()
+                        .map(|s| {
+                            s.name()
+                                .map_or(format!("#{}", s.index()), |n| format!("\"{n}\""))
+                        })
+                        .collect();
+                    invalid(
+                        "scene".into(),
+                        format!("no scene is named \"{n}\" (scenes: {})", names.join(", ")),
+                    )
+                })?,
+        ),
+        None => doc.default_scene().or_else(|| doc.scenes().next()),
+    };
+    Ok(scene)
+}
+
+/// The root nodes to place: the scene's (each listed once), or without a scene every node that
+/// is nobody's child, with a note either way when it is a choice.
+fn scene_roots<'d>(
+    doc: &'d gltf::Document,
+    scene: Option<&gltf::Scene<'d>>,
+    notes: &mut Vec<String>,
+    path: &Path,
+) -> Result<Vec<gltf::Node<'d>>, LoadError> {
+    let scene_count = doc.scenes().len();
+    Ok(match scene {
+        Some(s) => {
+            if scene_count > 1 {
+                notes.push(format!(
+                    "the file has {scene_count} scenes; using scene #{}{}",
+                    s.index(),
+                    s.name().map(|n| format!(" \"{n}\"")).unwrap_or_default()
+                ));
+            }
+            let nodes: Vec<gltf::Node<'_>> = s.nodes().collect();
+            crate::gltf::graph::refuse_repeats(
+                nodes.iter().map(|n| n.index()),
+                || format!("scenes[{}].nodes", s.index()),
+                path,
+            )?;
+            nodes
+        }
+        None => {
+            // No scene at all: show every node that is nobody's child.
+            let mut is_child = vec![false; doc.nodes().len()];
+            doc.nodes()
+                .flat_map(|n| n.children())
+                .for_each(|c| is_child[c.index()] = true);
+            let roots: Vec<_> = doc.nodes().filter(|n| !is_child[n.index()]).collect();
+            if !roots.is_empty() {
+                notes.push("the file defines no scene; showing all root nodes".into());
+            }
+            roots
+        }
+    })
 }
