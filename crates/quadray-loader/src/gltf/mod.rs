@@ -18,6 +18,7 @@ mod graph;
 pub(crate) mod light;
 pub(crate) mod material;
 mod mesh;
+mod node_graph;
 pub mod quadrics_ext;
 
 pub use accessor::{MAX_ELEMENTS, MAX_UNBACKED_BYTES};
@@ -191,7 +192,7 @@ fn scene_roots<'d>(
                 ));
             }
             let nodes: Vec<gltf::Node<'_>> = s.nodes().collect();
-            crate::gltf::graph::refuse_repeats(
+            crate::gltf::node_graph::refuse_repeats(
                 nodes.iter().map(|n| n.index()),
                 || format!("scenes[{}].nodes", s.index()),
                 path,

@@ -86,9 +86,7 @@ impl ProgressiveFilm {
     /// The image so far: each pixel's mean.
     pub fn film(&self) -> Film {
         let window = self.settings.window();
-        let pixels = self.estimates.iter().map(PixelEstimate::mean).collect();
-        Film::from_pixels(window.width(), window.height(), pixels)
-            .expect("one estimate per pixel of the window")
+        Film::of_estimates(window.width(), window.height(), &self.estimates)
     }
 
     /// The mean over pixels of the relative standard error adaptive sampling uses

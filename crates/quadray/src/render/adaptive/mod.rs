@@ -451,12 +451,7 @@ impl Sampled {
         let window = context.window;
         let estimates = crop(&self.estimates, sampled, window);
         let errors = crop(&self.errors, sampled, window);
-        let film = Film::from_pixels(
-            window.width(),
-            window.height(),
-            estimates.iter().map(PixelEstimate::mean).collect(),
-        )
-        .expect("one estimate per pixel");
+        let film = Film::of_estimates(window.width(), window.height(), &estimates);
         let mut aov_samples = crop(&self.aov_samples, sampled, window).into_owned();
         for (aov, estimate) in aov_samples.iter_mut().zip(estimates.iter()) {
             aov.fill_sampling(
