@@ -35,58 +35,7 @@ impl Builder<'_> {
             }
         }
         match kind {
-            "spot" => {
-                if let Some(f) = l.falloff.as_ref().filter(|f| !*f.get_ref()) {
-                    return Err(self.err(
-                        f.span(),
-                        format!("{key}.falloff"),
-                        "a spot light always falls off with the inverse square of the distance",
-                    ));
-                }
-                let need = |name: &str| {
-                    self.err(
-                        l.kind.span(),
-                        format!("{key}.{name}"),
-                        format!("a spot light needs `{name}`"),
-                    )
-                };
-                let position = l.position.as_ref().ok_or_else(|| need("position"))?;
-                let position = self.vec3(position, &format!("{key}.position"))?;
-                let direction = l.direction.as_ref().ok_or_else(|| need("direction"))?;
-                let direction = self.unit(direction, &format!("{key}.direction"))?;
-                let angle = |v: &Option<Spanned<f64>>,
-                             name: &str,
-                             default: f64|
-                 -> Result<f64, LoadError> {
-                    let Some(v) = v else { return Ok(default) };
-                    let a = self.number(v, &format!("{key}.{name}"))?;
-                    if !(0.0..=180.0).contains(&a) {
-                        return Err(self.err(
-                            v.span(),
-                            format!("{key}.{name}"),
-                            format!("must be an angle in [0, 180] degrees, got {a}"),
-                        ));
-                    }
-                    Ok(a)
-                };
-                let inner = angle(&l.inner_angle, "inner_angle", 0.0)?;
-                let outer = angle(&l.outer_angle, "outer_angle", 45.0)?;
-                if inner > outer {
-                    let span = l.inner_angle.as_ref().map_or(l.kind.span(), |v| v.span());
-                    return Err(self.err(
-                        span,
-                        format!("{key}.inner_angle"),
-                        format!("must not exceed outer_angle ({outer}), got {inner}"),
-                    ));
-                }
-                Ok(Light::Spot {
-                    position,
-                    direction,
-                    intensity: color * intensity,
-                    cos_inner: inner.to_radians().cos(),
-                    cos_outer: outer.to_radians().cos(),
-                })
-            }
+            "spot" => self.spot_light(l, color * intensity, key),
             "point" => {
                 unused(&l.direction, "direction", "point")?;
                 let p = l.position.as_ref().ok_or_else(|| {
@@ -139,5 +88,58 @@ impl Builder<'_> {
                 ),
             )),
         }
+    }
+
+    /// A spot light: `position`, `direction`, and the cone's `inner_angle` and `outer_angle` in
+    /// degrees (0 and 45 unless given), with `intensity` its colour times its intensity.
+    fn spot_light(&self, l: &LightSpec, intensity: Vec3, key: &str) -> Result<Light, LoadError> {
+        if let Some(f) = l.falloff.as_ref().filter(|f| !*f.get_ref()) {
+            return Err(self.err(
+                f.span(),
+                format!("{key}.falloff"),
+                "a spot light always falls off with the inverse square of the distance",
+            ));
+        }
+        let need = |name: &str| {
+            self.err(
+                l.kind.span(),
+                format!("{key}.{name}"),
+                format!("a spot light needs `{name}`"),
+            )
+        };
+        let position = l.position.as_ref().ok_or_else(|| need("position"))?;
+        let position = self.vec3(position, &format!("{key}.position"))?;
+        let direction = l.direction.as_ref().ok_or_else(|| need("direction"))?;
+        let direction = self.unit(direction, &format!("{key}.direction"))?;
+        let angle =
+            |v: &Option<Spanned<f64>>, name: &str, default: f64| -> Result<f64, LoadError> {
+                let Some(v) = v else { return Ok(default) };
+                let a = self.number(v, &format!("{key}.{name}"))?;
+                if !(0.0..=180.0).contains(&a) {
+                    return Err(self.err(
+                        v.span(),
+                        format!("{key}.{name}"),
+                        format!("must be an angle in [0, 180] degrees, got {a}"),
+                    ));
+                }
+                Ok(a)
+            };
+        let inner = angle(&l.inner_angle, "inner_angle", 0.0)?;
+        let outer = angle(&l.outer_angle, "outer_angle", 45.0)?;
+        if inner > outer {
+            let span = l.inner_angle.as_ref().map_or(l.kind.span(), |v| v.span());
+            return Err(self.err(
+                span,
+                format!("{key}.inner_angle"),
+                format!("must not exceed outer_angle ({outer}), got {inner}"),
+            ));
+        }
+        Ok(Light::Spot {
+            position,
+            direction,
+            intensity,
+            cos_inner: inner.to_radians().cos(),
+            cos_outer: outer.to_radians().cos(),
+        })
     }
 }

@@ -10,89 +10,8 @@ impl Builder<'_> {
             .as_ref()
             .map(|c| self.colour(c, &format!("{key}.color")))
             .transpose()?;
-        let texture_name = m.texture.as_ref().map(|t| (t.get_ref().as_str(), t.span()));
-        let only_for =
-            |field: Option<Range<usize>>, name: &str, texture: &str| -> Result<(), LoadError> {
-                match field {
-                    Some(span) => Err(self.err(
-                        span,
-                        format!("{key}.{name}"),
-                        format!("only applies to texture = \"{texture}\""),
-                    )),
-                    None => Ok(()),
-                }
-            };
-        if !matches!(texture_name, Some(("bands", _))) {
-            only_for(m.bands.as_ref().map(|b| b.span()), "bands", "bands")?;
-        }
-        if !matches!(texture_name, Some(("checker", _))) {
-            only_for(
-                m.checker_size.as_ref().map(|c| c.span()),
-                "checker_size",
-                "checker",
-            )?;
-            only_for(m.color2.as_ref().map(|c| c.span()), "color2", "checker")?;
-        }
-        let texture = match texture_name {
-            None | Some(("constant", _)) => Texture::Constant(color.unwrap_or(Vec3::splat(0.8))),
-            Some(("ramp", _)) => Texture::HeightRamp,
-            Some(("bands", _)) => {
-                let steps = m
-                    .bands
-                    .as_ref()
-                    .map(|b| self.count(b, &format!("{key}.bands"), 1024))
-                    .transpose()?
-                    .unwrap_or(8);
-                Texture::Bands { steps }
-            }
-            Some(("checker", _)) => {
-                let even = color.unwrap_or(Vec3::splat(0.4));
-                let size = m
-                    .checker_size
-                    .as_ref()
-                    .map(|s| self.positive(s, &format!("{key}.checker_size")))
-                    .transpose()?
-                    .unwrap_or(1.0);
-                let odd = m
-                    .color2
-                    .as_ref()
-                    .map(|c| self.colour(c, &format!("{key}.color2")))
-                    .transpose()?;
-                Texture::Checker {
-                    size,
-                    even,
-                    odd: odd.unwrap_or(quadray::texture::lighten(even)),
-                }
-            }
-            Some((other, span)) => {
-                return Err(self.err(
-                    span,
-                    format!("{key}.texture"),
-                    format!(
-                        "unknown texture \"{other}\" (constant, ramp, bands, checker){}",
-                        did_you_mean(other, ["constant", "ramp", "bands", "checker"])
-                    ),
-                ));
-            }
-        };
-        let specular_model = match m
-            .specular_model
-            .as_ref()
-            .map(|s| (s.get_ref().as_str(), s.span()))
-        {
-            None | Some(("phong", _)) => SpecularModel::Phong,
-            Some(("blinn", _)) => SpecularModel::Blinn,
-            Some((other, span)) => {
-                return Err(self.err(
-                    span,
-                    format!("{key}.specular_model"),
-                    format!(
-                        "unknown model \"{other}\" (phong, blinn){}",
-                        did_you_mean(other, ["phong", "blinn"])
-                    ),
-                ));
-            }
-        };
+        let texture = self.texture(m, color, key)?;
+        let specular_model = self.specular_model(m, key)?;
         let reflectivity =
             self.non_negative(&m.reflectivity, &format!("{key}.reflectivity"), 0.0)?;
         if reflectivity > 1.0 {
@@ -141,6 +60,105 @@ impl Builder<'_> {
                 None => None,
             },
         })
+    }
+
+    /// The material's texture (`texture`, with `color`, `bands`, `checker_size`, `color2`),
+    /// refusing a key that only applies to another texture.
+    fn texture(
+        &self,
+        m: &MaterialSpec,
+        color: Option<Vec3>,
+        key: &str,
+    ) -> Result<Texture, LoadError> {
+        let texture_name = m.texture.as_ref().map(|t| (t.get_ref().as_str(), t.span()));
+        let only_for =
+            |field: Option<Range<usize>>, name: &str, texture: &str| -> Result<(), LoadError> {
+                match field {
+                    Some(span) => Err(self.err(
+                        span,
+                        format!("{key}.{name}"),
+                        format!("only applies to texture = \"{texture}\""),
+                    )),
+                    None => Ok(()),
+                }
+            };
+        if !matches!(texture_name, Some(("bands", _))) {
+            only_for(m.bands.as_ref().map(|b| b.span()), "bands", "bands")?;
+        }
+        if !matches!(texture_name, Some(("checker", _))) {
+            only_for(
+                m.checker_size.as_ref().map(|c| c.span()),
+                "checker_size",
+                "checker",
+            )?;
+            only_for(m.color2.as_ref().map(|c| c.span()), "color2", "checker")?;
+        }
+        Ok(match texture_name {
+            None | Some(("constant", _)) => Texture::Constant(color.unwrap_or(Vec3::splat(0.8))),
+            Some(("ramp", _)) => Texture::HeightRamp,
+            Some(("bands", _)) => {
+                let steps = m
+                    .bands
+                    .as_ref()
+                    .map(|b| self.count(b, &format!("{key}.bands"), 1024))
+                    .transpose()?
+                    .unwrap_or(8);
+                Texture::Bands { steps }
+            }
+            Some(("checker", _)) => {
+                let even = color.unwrap_or(Vec3::splat(0.4));
+                let size = m
+                    .checker_size
+                    .as_ref()
+                    .map(|s| self.positive(s, &format!("{key}.checker_size")))
+                    .transpose()?
+                    .unwrap_or(1.0);
+                let odd = m
+                    .color2
+                    .as_ref()
+                    .map(|c| self.colour(c, &format!("{key}.color2")))
+                    .transpose()?;
+                Texture::Checker {
+                    size,
+                    even,
+                    odd: odd.unwrap_or(quadray::texture::lighten(even)),
+                }
+            }
+            Some((other, span)) => {
+                return Err(self.err(
+                    span,
+                    format!("{key}.texture"),
+                    format!(
+                        "unknown texture \"{other}\" (constant, ramp, bands, checker){}",
+                        did_you_mean(other, ["constant", "ramp", "bands", "checker"])
+                    ),
+                ));
+            }
+        })
+    }
+
+    /// The material's `specular_model` (Phong unless it says Blinn).
+    fn specular_model(&self, m: &MaterialSpec, key: &str) -> Result<SpecularModel, LoadError> {
+        Ok(
+            match m
+                .specular_model
+                .as_ref()
+                .map(|s| (s.get_ref().as_str(), s.span()))
+            {
+                None | Some(("phong", _)) => SpecularModel::Phong,
+                Some(("blinn", _)) => SpecularModel::Blinn,
+                Some((other, span)) => {
+                    return Err(self.err(
+                        span,
+                        format!("{key}.specular_model"),
+                        format!(
+                            "unknown model \"{other}\" (phong, blinn){}",
+                            did_you_mean(other, ["phong", "blinn"])
+                        ),
+                    ));
+                }
+            },
+        )
     }
 
     /// A tint in [0, 1], 0 when absent.
