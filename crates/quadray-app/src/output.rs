@@ -29,13 +29,16 @@ impl Format {
     }
 }
 
-/// Checks before rendering that `path` can be written: known format, existing folder.
+/// Checks before rendering that `path` can be written: known format, existing folder, inside
+/// the confinement folder if there is one ([`quadray_loader::confine`]).
 pub fn check_writable(path: &Path) -> Result<Format> {
     let format = Format::from_path(path)?;
     let dir = parent_dir(path);
     if !dir.is_dir() {
         bail!("output folder {} does not exist", dir.display());
     }
+    quadray_loader::confine::check_write(path)
+        .with_context(|| format!("writing {}", path.display()))?;
     Ok(format)
 }
 

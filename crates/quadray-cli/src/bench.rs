@@ -85,7 +85,7 @@ fn accuracy(a: &AccuracyArgs) -> Result<()> {
     });
     let table = report.markdown();
     if !quiet {
-        outln!("{table}")?;
+        crate::unless_pipe_closed(outln!("{table}"))?;
     }
     let md = a.out.join("accuracy.md");
     let svg = a.out.join("accuracy.svg");

@@ -159,7 +159,7 @@ pub fn run(a: &HolesArgs) -> Result<()> {
     }
     let md = markdown(&mapped);
     if !a.quiet {
-        outln!("{}", holes::markdown(&mapped))?;
+        crate::unless_pipe_closed(outln!("{}", holes::markdown(&mapped)))?;
     }
     let path = a.out.join("holes.md");
     write_bytes_atomically(&path, md.as_bytes())?;

@@ -48,10 +48,13 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     }
     let output =
         loaded_output.unwrap_or_else(|| quadray_app::scene_file::default_output(&args.scene));
-    outln!(
-        "writes: {} (unless -o names another file)",
-        output.display()
-    )?;
+    match quadray_loader::confine::check_write(&output) {
+        Ok(()) => outln!(
+            "writes: {} (unless -o names another file)",
+            output.display()
+        )?,
+        Err(e) => outln!("writes: {} (refused: {e})", output.display())?,
+    }
     Ok(())
 }
 

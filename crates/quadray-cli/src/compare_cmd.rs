@@ -85,10 +85,11 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let reference = read_image(&args.reference)?;
     let test = read_image(&args.test)?;
     let c = compare(&reference, &test, &thresholds)?;
-    outln!("{}", c.summary(&thresholds))?;
     if let Some(diff) = &args.diff {
         write_rgb8_png(c.width, c.height, &c.heat_map(), diff)?;
     }
+    // A closed pipe must not turn images that differ into a success.
+    crate::unless_pipe_closed(outln!("{}", c.summary(&thresholds)))?;
     let failures = c.failures(&thresholds);
     if !failures.is_empty() {
         return Err(crate::StatusError::images_differ(format!(

@@ -115,6 +115,15 @@ fn is_override_error(err: &anyhow::Error) -> bool {
     })
 }
 
+/// `printed`, with a reader that closed the pipe taken as success: for output printed before
+/// work that must still happen (a comparison's verdict, a report's files).
+pub fn unless_pipe_closed(printed: std::io::Result<()>) -> std::io::Result<()> {
+    match printed {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        other => other,
+    }
+}
+
 /// Whether `err` comes from writing to a pipe whose reader has gone: the command's output is
 /// unwanted, not wrong, so `main` exits quietly with success, as ripgrep does.
 pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
@@ -159,6 +168,8 @@ pub fn run(cli: args::Cli) -> anyhow::Result<()> {
 }
 
 /// Parses `args` (without the program name) and runs them; usage errors become errors too.
+/// `--confine` is applied by `main` only (it holds for the whole process): in process it is
+/// parsed and ignored.
 pub fn run_args<I, S>(args: I) -> anyhow::Result<()>
 where
     I: IntoIterator<Item = S>,

@@ -302,7 +302,8 @@ fn write_output(
 /// Identifies what a piece was rendered from: the scene file's bytes and every command-line
 /// choice that changes the scene (overrides, the glTF scene, the camera, the turntable frame).
 fn scene_hash(args: &RenderArgs) -> Result<String> {
-    let bytes = std::fs::read(&args.scene)
+    use quadray_loader::read_limited::{MAX_MESH_BYTES, read};
+    let bytes = read(&args.scene, MAX_MESH_BYTES)
         .with_context(|| format!("reading {} again to identify it", args.scene.display()))?;
     let choices = format!(
         "{:?} {:?} {:?} {:?} {:?}",

@@ -310,7 +310,7 @@ fn pieces_are_reproducible_and_never_merged_over() {
     let pieces: Vec<PathBuf> = (0..3).map(|i| piece(&dir, i, 3)).collect();
     let round_about = dir.path().join(".").join(pieces[2].file_name().unwrap());
     for output in [&pieces[0], &round_about] {
-        let before = std::fs::read(&pieces[2]).unwrap();
+        let before = std::fs::read(output).unwrap();
         let o = merge(&pieces, &["-o", output.to_str().unwrap()]);
         assert_eq!(
             o.status.code(),
@@ -319,6 +319,10 @@ fn pieces_are_reproducible_and_never_merged_over() {
             String::from_utf8_lossy(&o.stderr)
         );
         assert!(String::from_utf8_lossy(&o.stderr).contains("is one of the pieces to merge"));
-        assert_eq!(std::fs::read(&pieces[2]).unwrap(), before);
+        assert_eq!(
+            std::fs::read(output).unwrap(),
+            before,
+            "the piece is untouched"
+        );
     }
 }

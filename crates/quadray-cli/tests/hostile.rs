@@ -324,8 +324,6 @@ fn confinement_keeps_reads_and_writes_inside_the_folder() {
     assert_eq!(o.status.code(), Some(1));
     assert!(!jail.join("copy.glb").exists());
     // An output outside, and a folder that does not exist.
-    let inside = jail.join("mesh-up.toml");
-    fs::write(&inside, format!("{header}[[mesh]]\npath = \"link.obj\"\n")).unwrap();
     let o = common::quadray(&[
         "--confine",
         &jail_arg,
@@ -340,6 +338,20 @@ fn confinement_keeps_reads_and_writes_inside_the_folder() {
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );
+    // A folder inside that is a link to one outside: the write goes where the link points.
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(base.path(), jail.join("out-link")).unwrap();
+        let through = jail.join("out-link/q.png").to_string_lossy().into_owned();
+        let o = common::quadray(&["--confine", &jail_arg, "quadric", "cone", "-o", &through]);
+        assert_eq!(
+            o.status.code(),
+            Some(1),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(!base.path().join("q.png").exists());
+    }
     let o = common::quadray(&["--confine", "/no/such/folder", "check", &scene]);
     assert_eq!(o.status.code(), Some(2));
     // check lists what a scene reads and where it would write.

@@ -50,10 +50,10 @@ pub fn replace_with<E: From<std::io::Error>>(
         Some(ext) => format!(".quadray-tmp.{ext}"),
         None => ".quadray-tmp".to_string(),
     };
-    let prefix = format!(
-        ".{}.p",
-        cut_to(name, NAME_MAX - NAME_OVERHEAD - suffix.len())
-    );
+    // An extension too long for any temporary name leaves none of NAME; the write then fails
+    // with the file system's own error.
+    let room = NAME_MAX.saturating_sub(NAME_OVERHEAD + suffix.len());
+    let prefix = format!(".{}.p", cut_to(name, room));
     remove_leftovers(&dir, &prefix, &suffix);
     let pid_prefix = format!("{prefix}{}.", std::process::id());
     let mut builder = tempfile::Builder::new();
@@ -111,12 +111,24 @@ fn ask_for_default_mode(builder: &mut tempfile::Builder<'_, '_>) {
 }
 
 /// Gives the temporary file the permission bits of the file it replaces, if that is a regular
-/// file: replacing a shared `0644` render must not make it private.
+/// file: replacing a shared `0644` render must not make it private. Only the read, write and
+/// execute bits are copied, never set-user-ID, set-group-ID or sticky.
 fn keep_existing_mode(path: &Path, tmp: &File) -> std::io::Result<()> {
     match std::fs::metadata(path) {
-        Ok(old) if old.is_file() => tmp.set_permissions(old.permissions()),
+        Ok(old) if old.is_file() => tmp.set_permissions(plain_bits(old.permissions())),
         _ => Ok(()),
     }
+}
+
+#[cfg(unix)]
+fn plain_bits(p: std::fs::Permissions) -> std::fs::Permissions {
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::Permissions::from_mode(p.mode() & 0o777)
+}
+
+#[cfg(not(unix))]
+fn plain_bits(p: std::fs::Permissions) -> std::fs::Permissions {
+    p
 }
 
 /// Makes a rename in `dir` durable. Best effort: a folder cannot be opened for syncing on every
@@ -129,7 +141,10 @@ fn sync_dir(dir: &Path) {
 
 /// Deletes the temporary files of earlier writes to the same target (`prefix` PID `.` random
 /// `suffix`) whose process no longer runs. Best effort: where processes cannot be looked up
-/// (no `/proc`), or a file cannot be removed, it stays.
+/// (no `/proc`), or a file cannot be removed, it stays. The PID is looked up on this machine and
+/// in this PID namespace: processes of other machines writing into a shared folder (NFS) are not
+/// known here, so render farms should give each worker its own output names, as
+/// `render --tile` does.
 fn remove_leftovers(dir: &Path, prefix: &str, suffix: &str) {
     let proc = Path::new("/proc");
     if !proc.join("self").exists() {

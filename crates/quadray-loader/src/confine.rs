@@ -53,8 +53,33 @@ pub fn check_read(path: &Path) -> std::io::Result<()> {
 }
 
 fn read_within(root: &Path, path: &Path) -> std::io::Result<()> {
-    let resolved = std::fs::canonicalize(path)?;
-    inside(root, &resolved, path)
+    match std::fs::canonicalize(path) {
+        Ok(resolved) => inside(root, &resolved, path),
+        // A file that cannot be resolved (missing) is judged by its spelling, so that "not
+        // found" and "outside" do not tell a stranger which files exist outside the folder.
+        Err(e) => {
+            let spelt = lexical(path);
+            inside(root, &spelt, path)?;
+            Err(e)
+        }
+    }
+}
+
+/// `path` made absolute and with `.` and `..` taken away by spelling alone (links unresolved).
+fn lexical(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut out = PathBuf::new();
+    for part in absolute.components() {
+        match part {
+            Component::ParentDir => {
+                out.pop();
+            }
+            Component::CurDir => {}
+            other => out.push(other),
+        }
+    }
+    out
 }
 
 /// An error unless the file `path` would be written inside the confinement folder (or there is
@@ -135,7 +160,12 @@ mod tests {
         let root = std::fs::canonicalize(&inner).unwrap();
         read_within(&root, &inner.join("in.txt")).unwrap();
         write_within(&root, &inner.join("new.png")).unwrap();
-        for refused in [base.path().join("out.txt"), inner.join("../out.txt")] {
+        // Outside whether or not the file exists: the answer must not tell which.
+        for refused in [
+            base.path().join("out.txt"),
+            inner.join("../out.txt"),
+            inner.join("../missing.txt"),
+        ] {
             let e = read_within(&root, &refused).unwrap_err();
             assert_eq!(e.kind(), ErrorKind::PermissionDenied);
             assert!(

@@ -22,8 +22,8 @@ pub const MAX_IMAGE_ALLOC: u64 = 1 << 30;
 /// device, a pipe (whose read would block or never end) or a folder.
 /// A file outside the confinement folder ([`crate::confine`]) is refused the same way.
 pub fn regular_file(path: &Path) -> std::io::Result<std::fs::Metadata> {
-    let meta = std::fs::metadata(path)?;
     crate::confine::check_read(path)?;
+    let meta = std::fs::metadata(path)?;
     if !meta.is_file() {
         return Err(Error::new(
             ErrorKind::InvalidInput,

@@ -69,10 +69,14 @@ fn same_contents(a: &Prototype, b: &Prototype) -> bool {
         && a.meshes == b.meshes
 }
 
-/// What two prototypes with equal contents certainly share: their counts and what they place.
+/// What two prototypes with equal contents certainly share: their counts, their spheres, each
+/// mesh's size and material, and what they place. Enough that prototypes which differ rarely
+/// meet in one bucket, where they are compared in full (meshes vertex by vertex).
 #[derive(Hash, PartialEq, Eq)]
 struct Key {
     counts: [usize; 3],
+    spheres: Vec<[u64; 5]>,
+    meshes: Vec<(usize, usize, u32)>,
     instances: Vec<InstanceBits>,
 }
 
@@ -80,6 +84,19 @@ impl Key {
     fn of(p: &Prototype) -> Key {
         Key {
             counts: [p.spheres.len(), p.quadrics.len(), p.meshes.len()],
+            spheres: p
+                .spheres
+                .iter()
+                .map(|s| {
+                    let [x, y, z] = s.center.to_array().map(f64::to_bits);
+                    [x, y, z, s.radius.to_bits(), u64::from(s.material)]
+                })
+                .collect(),
+            meshes: p
+                .meshes
+                .iter()
+                .map(|m| (m.triangle_count(), m.positions().len(), m.material()))
+                .collect(),
             instances: p.instances.iter().map(InstanceBits::of).collect(),
         }
     }

@@ -19,7 +19,7 @@ impl Film {
     /// The one way adaptive and progressive sampling write pixels; uniform sampling, which needs
     /// no running estimate, writes its f32 sum over the count instead (its images depend on those
     /// bits).
-    pub fn of_estimates(width: u32, height: u32, estimates: &[PixelEstimate]) -> Film {
+    pub(crate) fn of_estimates(width: u32, height: u32, estimates: &[PixelEstimate]) -> Film {
         let pixels = estimates.iter().map(PixelEstimate::mean).collect();
         Film::from_pixels(width, height, pixels).expect("one estimate per pixel")
     }

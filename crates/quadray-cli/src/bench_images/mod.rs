@@ -438,7 +438,7 @@ pub fn run(a: &ImagesArgs) -> Result<()> {
     })?;
     let table = report.markdown();
     if !quiet {
-        outln!("{table}")?;
+        crate::unless_pipe_closed(outln!("{table}"))?;
     }
     write_outputs(&report, &a.out, &a.name, &table)?;
     if !quiet {

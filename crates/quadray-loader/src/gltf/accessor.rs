@@ -91,11 +91,13 @@ pub fn check(
     match accessor.view() {
         Some(view) => check_range(&name, &view, accessor.offset(), count, element, buffers)?,
         None => {
-            if count.saturating_mul(element) > MAX_UNBACKED_BYTES {
+            // Decoded as 4-byte floats or integers, whatever the component type.
+            let decoded = count.saturating_mul(accessor.dimensions().multiplicity() * 4);
+            if decoded > MAX_UNBACKED_BYTES {
                 return Err(format!(
-                    "{name} has no buffer view, and its {count} elements of {element} bytes would \
-                     take {} MiB (at most {} MiB for an accessor whose data is not in the file)",
-                    count.saturating_mul(element) >> 20,
+                    "{name} has no buffer view, and its {count} elements would take {} MiB \
+                     decoded (at most {} MiB for an accessor whose data is not in the file)",
+                    decoded >> 20,
                     MAX_UNBACKED_BYTES >> 20
                 ));
             }

@@ -148,50 +148,62 @@ fn texture_file_name(statement: &str) -> Option<&str> {
 pub fn prepare_mtl_text(text: &str) -> Result<String, (usize, String)> {
     let mut out = String::with_capacity(text.len() + 64);
     for (n, line) in text.lines().enumerate() {
-        let mut words = line.split_whitespace();
+        // A `#` starts a comment, on a line of its own or after a statement's numbers.
+        let statement = line.split('#').next().unwrap_or_default();
+        let mut words = statement.split_whitespace();
         let keyword = words.next();
-        if let Some(key @ ("Ns" | "Ni" | "d" | "Tr" | "illum")) = keyword {
-            let values: Vec<&str> = words.clone().collect();
-            if values.len() != 1 || !values[0].parse::<f32>().is_ok_and(f32::is_finite) {
-                return Err((
-                    n + 1,
-                    format!("`{key}` needs one finite number, got {values:?}"),
+        let values: Vec<&str> = words.collect();
+        let fail = |message: String| -> Result<String, (usize, String)> { Err((n + 1, message)) };
+        let one_finite = |key: &str, v: &[&str]| {
+            if v.len() == 1 && v[0].parse::<f32>().is_ok_and(f32::is_finite) {
+                Ok(())
+            } else {
+                Err((n + 1, format!("`{key}` needs one finite number, got {v:?}")))
+            }
+        };
+        match keyword {
+            Some("illum") if values.len() != 1 || values[0].parse::<u8>().is_err() => {
+                return fail(format!(
+                    "`illum` needs one whole number from 0 to 255, got {values:?}"
                 ));
             }
-        }
-        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke" | "Tf")) = keyword {
-            let values: Vec<&str> = words.collect();
-            if let Some(bad) = values
-                .iter()
-                .find(|v| v.parse::<f32>().is_ok_and(|x| !x.is_finite() || x < 0.0))
-            {
-                return Err((
-                    n + 1,
-                    format!("`{key}` {bad}: a colour takes finite numbers of 0 or more"),
-                ));
+            Some("d") if values.first() == Some(&"-halo") => {
+                return fail("`d -halo` (halo dissolve) is not supported".into());
             }
-            let all_numbers = values.iter().all(|v| v.parse::<f32>().is_ok());
-            if !all_numbers && values.len() != 2 && !values.is_empty() {
-                let bad = values
-                    .iter()
-                    .find(|v| v.parse::<f32>().is_err())
-                    .unwrap_or(&"");
-                return Err((n + 1, format!("`{key}`: `{bad}` is not a number")));
-            }
-            match values.len() {
-                1 if all_numbers => {
-                    let v = values[0];
-                    out.push_str(&format!("{key} {v} {v} {v}\n"));
-                    continue;
+            Some(key @ ("Ns" | "Ni" | "d" | "Tr")) => one_finite(key, &values)?,
+            // The CIE XYZ and spectral forms of a transmission filter: quadray does not read `Tf`.
+            Some("Tf") if matches!(values.first(), Some(&("xyz" | "spectral"))) => {}
+            Some(key @ ("Ka" | "Kd" | "Ks" | "Ke" | "Tf")) => {
+                if let Some(bad) = values.iter().find(|v| v.parse::<f32>().is_err()) {
+                    return fail(format!("`{key}`: `{bad}` is not a number"));
                 }
-                0 | 2 => {
-                    return Err((
-                        n + 1,
-                        format!("`{key}` needs one or three numbers, got {}", values.len()),
+                // `Ka` is not read (see the table above), so only its form is checked.
+                let colour_read = key != "Ka";
+                if let Some(bad) = values.iter().find(|v| {
+                    v.parse::<f32>()
+                        .is_ok_and(|x| !x.is_finite() || (colour_read && x < 0.0))
+                }) {
+                    return fail(format!(
+                        "`{key}` {bad}: a colour takes finite numbers of 0 or more"
                     ));
                 }
-                _ => {}
+                match values.len() {
+                    1 => {
+                        let v = values[0];
+                        out.push_str(&format!("{key} {v} {v} {v}\n"));
+                        continue;
+                    }
+                    3 => {
+                        out.push_str(statement);
+                        out.push('\n');
+                        continue;
+                    }
+                    count => {
+                        return fail(format!("`{key}` needs one or three numbers, got {count}"));
+                    }
+                }
             }
+            _ => {}
         }
         out.push_str(line);
         out.push('\n');
@@ -229,12 +241,25 @@ mod tests {
             ("newmtl a\n\nKd -1 -1 -1\n", 3, "`Kd` -1"),
             ("newmtl a\nKs 0.1 x 0.2\n", 2, "`x` is not a number"),
             ("newmtl a\nNs inf\n", 2, "`Ns` needs one finite number"),
-            ("newmtl a\nillum\n", 2, "`illum` needs one finite number"),
+            ("newmtl a\nillum\n", 2, "`illum` needs one whole number"),
+            ("newmtl a\nillum 2.5\n", 2, "`illum` needs one whole number"),
+            ("newmtl a\nd -halo 0.5\n", 2, "`d -halo`"),
+            ("newmtl a\nKd 1 1 1 1\n", 2, "one or three numbers"),
             ("newmtl a\nTf 0.5 0.5\n", 2, "one or three numbers"),
         ] {
             let (at, message) = prepare_mtl_text(text).unwrap_err();
             assert_eq!(at, line, "{text:?}");
             assert!(message.contains(says), "{text:?}: {message}");
+        }
+        // Legal forms still pass: comments after numbers, Tf's xyz and spectral forms, and a
+        // negative Ka (which quadray does not read).
+        for text in [
+            "newmtl a\nKd 1 0.5 0.25 # orange\nNs 10 # sharp\nillum 2\n",
+            "newmtl a\nTf xyz 0.5 0.5 0.5\nTf spectral glass.rfl 1.0\n",
+            "newmtl a\nKa -0.1 0 0\n",
+        ] {
+            let prepared = prepare_mtl_text(text).unwrap_or_else(|e| panic!("{text:?}: {e:?}"));
+            tobj::load_mtl_buf(&mut prepared.as_bytes()).unwrap();
         }
     }
 
