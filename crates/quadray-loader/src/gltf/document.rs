@@ -114,6 +114,25 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
     })?;
     let document = gltf::Document::from_json(root).map_err(|e| validation_error(path, e))?;
     let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let buffers = read_buffers(&document, blob, &base, path)?;
+    Ok(GltfFile {
+        document,
+        buffers,
+        base,
+        node_transforms,
+        scene_extras,
+        cameras,
+    })
+}
+
+/// The bytes of every buffer of `document`: the GLB binary chunk `blob`, data URIs, or files
+/// beside the document (within the size limits); each at least as long as its `byteLength`.
+fn read_buffers(
+    document: &gltf::Document,
+    blob: Option<&[u8]>,
+    base: &Path,
+    path: &Path,
+) -> Result<Vec<Vec<u8>>, LoadError> {
     let mut blob = blob.map(<[u8]>::to_vec);
     let mut buffers = Vec::new();
     for buffer in document.buffers() {
@@ -127,7 +146,7 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
                     "refers to the GLB binary chunk, which the file does not have",
                 )
             })?,
-            gltf::buffer::Source::Uri(uri) => read_uri(&base, uri).map_err(|e| match e {
+            gltf::buffer::Source::Uri(uri) => read_uri(base, uri).map_err(|e| match e {
                 UriError::Io(file, source) => LoadError::new(
                     path,
                     None,
@@ -156,14 +175,7 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
         }
         buffers.push(data);
     }
-    Ok(GltfFile {
-        document,
-        buffers,
-        base,
-        node_transforms,
-        scene_extras,
-        cameras,
-    })
+    Ok(buffers)
 }
 
 /// A node's local transform from its JSON: `matrix` (column-major, must be affine) or

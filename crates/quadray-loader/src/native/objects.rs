@@ -91,6 +91,53 @@ impl Builder<'_> {
         names: &HashMap<String, u32>,
     ) -> Result<Quadric, LoadError> {
         let q = spec.get_ref();
+        let surface = self.quadric_surface(spec, key)?;
+        let clip = match q.clip.get_ref() {
+            ClipSpec::Radius(r) => {
+                if !(*r > 0.0 && r.is_finite()) {
+                    return Err(self.err(
+                        q.clip.span(),
+                        format!("{key}.clip"),
+                        format!("a clip radius must be a positive finite number, got {r}"),
+                    ));
+                }
+                ClipBox::cube(*r)
+            }
+            ClipSpec::Box { min, max } => ClipBox {
+                min: DVec3::from_array(min.0),
+                max: DVec3::from_array(max.0),
+            },
+        };
+        let transform = self.transform(&q.transform, &format!("{key}.transform"))?;
+        let material = self.material_id(names, &q.material, &format!("{key}.material"))?;
+        Quadric::new(surface, clip, transform, material).map_err(|e| {
+            let (span, key) = match (&e, &q.coefficients) {
+                (quadray::QuadricError::EmptyClipBox { .. }, _) => {
+                    (q.clip.span(), format!("{key}.clip"))
+                }
+                (quadray::QuadricError::BadTransform, _) => (
+                    q.transform.as_ref().map_or(spec.span(), |t| t.span()),
+                    format!("{key}.transform"),
+                ),
+                (
+                    quadray::QuadricError::NonFiniteCoefficient { .. }
+                    | quadray::QuadricError::Degenerate(_),
+                    Some(k),
+                ) => (k.span(), format!("{key}.coefficients")),
+                _ => (spec.span(), key.to_string()),
+            };
+            self.err(span, key, e.to_string())
+        })
+    }
+
+    /// A quadric's surface: a canonical `kind` with its `a`, `b`, `c` (1 where not given), or the
+    /// ten `coefficients` of a `general` one; each refused where it belongs to the other.
+    fn quadric_surface(
+        &self,
+        spec: &Spanned<QuadricSpec>,
+        key: &str,
+    ) -> Result<QuadricSurface, LoadError> {
+        let q = spec.get_ref();
         let param = |v: &Option<Spanned<f64>>, name: &str| -> Result<f64, LoadError> {
             v.as_ref()
                 .map(|v| self.positive(v, &format!("{key}.{name}")))
@@ -98,7 +145,7 @@ impl Builder<'_> {
                 .map(|x| x.unwrap_or(1.0))
         };
         let kind = q.kind.get_ref().as_str();
-        let surface = if kind == "general" {
+        Ok(if kind == "general" {
             if q.a.is_some() || q.b.is_some() || q.c.is_some() {
                 return Err(self.err(
                     spec.span(),
@@ -154,42 +201,6 @@ impl Builder<'_> {
                 b: param(&q.b, "b")?,
                 c: param(&q.c, "c")?,
             }
-        };
-        let clip = match q.clip.get_ref() {
-            ClipSpec::Radius(r) => {
-                if !(*r > 0.0 && r.is_finite()) {
-                    return Err(self.err(
-                        q.clip.span(),
-                        format!("{key}.clip"),
-                        format!("a clip radius must be a positive finite number, got {r}"),
-                    ));
-                }
-                ClipBox::cube(*r)
-            }
-            ClipSpec::Box { min, max } => ClipBox {
-                min: DVec3::from_array(min.0),
-                max: DVec3::from_array(max.0),
-            },
-        };
-        let transform = self.transform(&q.transform, &format!("{key}.transform"))?;
-        let material = self.material_id(names, &q.material, &format!("{key}.material"))?;
-        Quadric::new(surface, clip, transform, material).map_err(|e| {
-            let (span, key) = match (&e, &q.coefficients) {
-                (quadray::QuadricError::EmptyClipBox { .. }, _) => {
-                    (q.clip.span(), format!("{key}.clip"))
-                }
-                (quadray::QuadricError::BadTransform, _) => (
-                    q.transform.as_ref().map_or(spec.span(), |t| t.span()),
-                    format!("{key}.transform"),
-                ),
-                (
-                    quadray::QuadricError::NonFiniteCoefficient { .. }
-                    | quadray::QuadricError::Degenerate(_),
-                    Some(k),
-                ) => (k.span(), format!("{key}.coefficients")),
-                _ => (spec.span(), key.to_string()),
-            };
-            self.err(span, key, e.to_string())
         })
     }
 
