@@ -159,25 +159,31 @@ impl NodeGraph {
                 }
             }
         }
+        g.propagate(doc, &order);
+        Ok(g)
+    }
+
+    /// Pushes placement counts down from parents to children and meshes, and pulls "holds a
+    /// camera or light" up, over `order`, the reached nodes children before parents.
+    fn propagate(&mut self, doc: &gltf::Document, order: &[usize]) {
         // Parents after children in `order`: walk it backwards to push placements down, and
         // forwards to pull "holds a camera or light" up.
         for &i in order.iter().rev() {
             let node = doc.nodes().nth(i).expect("reached nodes exist");
             for child in node.children() {
                 let c = child.index();
-                g.placements[c] = g.placements[c].saturating_add(g.placements[i]);
+                self.placements[c] = self.placements[c].saturating_add(self.placements[i]);
             }
         }
-        for &i in &order {
+        for &i in order {
             let node = doc.nodes().nth(i).expect("reached nodes exist");
-            if let (Some(mesh), None) = (node.mesh(), g.node_shapes[i]) {
-                let p = &mut g.mesh_placements[mesh.index()];
-                *p = p.saturating_add(g.placements[i]);
+            if let (Some(mesh), None) = (node.mesh(), self.node_shapes[i]) {
+                let p = &mut self.mesh_placements[mesh.index()];
+                *p = p.saturating_add(self.placements[i]);
             }
-            if node.children().any(|c| g.has_camera_or_light[c.index()]) {
-                g.has_camera_or_light[i] = true;
+            if node.children().any(|c| self.has_camera_or_light[c.index()]) {
+                self.has_camera_or_light[i] = true;
             }
         }
-        Ok(g)
     }
 }
