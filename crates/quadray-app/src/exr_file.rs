@@ -293,39 +293,7 @@ fn layer(
         .map(|c| AnyChannel::new(beauty_names[c], beauty(c)))
         .collect();
     if let Some(a) = aovs {
-        let sel = a.selection();
-        let samples = a.samples();
-        let f32s =
-            |f: &dyn Fn(&AovSample) -> f32| FlatSamples::F32(samples.iter().map(f).collect());
-        if sel.depth {
-            channels.push(AnyChannel::new(DEPTH, f32s(&|s| s.depth)));
-        }
-        if sel.normal {
-            for (c, name) in NORMAL.iter().enumerate() {
-                channels.push(AnyChannel::new(*name, f32s(&|s| s.normal[c])));
-            }
-        }
-        if sel.albedo {
-            for (c, name) in ALBEDO.iter().enumerate() {
-                channels.push(AnyChannel::new(*name, f32s(&|s| s.albedo[c])));
-            }
-        }
-        if sel.object_id {
-            // Blender stores the index as a float; ids below 2^24 are exact.
-            channels.push(AnyChannel::new(INDEX_OB, f32s(&|s| s.object_id as f32)));
-        }
-        if sel.sample_count {
-            // As a float, like Blender's; counts up to MAX_SPP are exact.
-            channels.push(AnyChannel::new(
-                SAMPLE_COUNT,
-                f32s(&|s| s.sample_count as f32),
-            ));
-        }
-        if sel.variance {
-            for (c, name) in VARIANCE.iter().enumerate() {
-                channels.push(AnyChannel::new(*name, f32s(&|s| s.variance[c])));
-            }
-        }
+        channels.extend(pass_channels(a));
     }
     // pLinear 0 on every channel, as Blender and OpenEXR's own writer store them: pLinear marks
     // perceptually linear values for lossy compression, which linear light is not.
@@ -352,6 +320,44 @@ fn layer(
         encoding,
         AnyChannels::sort(SmallVec::from_vec(channels)),
     ))
+}
+
+/// The channels of the passes `aovs` holds, under Blender's names, all f32.
+fn pass_channels(a: &Aovs) -> Vec<AnyChannel<FlatSamples>> {
+    let mut channels = Vec::new();
+    let sel = a.selection();
+    let samples = a.samples();
+    let f32s = |f: &dyn Fn(&AovSample) -> f32| FlatSamples::F32(samples.iter().map(f).collect());
+    if sel.depth {
+        channels.push(AnyChannel::new(DEPTH, f32s(&|s| s.depth)));
+    }
+    if sel.normal {
+        for (c, name) in NORMAL.iter().enumerate() {
+            channels.push(AnyChannel::new(*name, f32s(&|s| s.normal[c])));
+        }
+    }
+    if sel.albedo {
+        for (c, name) in ALBEDO.iter().enumerate() {
+            channels.push(AnyChannel::new(*name, f32s(&|s| s.albedo[c])));
+        }
+    }
+    if sel.object_id {
+        // Blender stores the index as a float; ids below 2^24 are exact.
+        channels.push(AnyChannel::new(INDEX_OB, f32s(&|s| s.object_id as f32)));
+    }
+    if sel.sample_count {
+        // As a float, like Blender's; counts up to MAX_SPP are exact.
+        channels.push(AnyChannel::new(
+            SAMPLE_COUNT,
+            f32s(&|s| s.sample_count as f32),
+        ));
+    }
+    if sel.variance {
+        for (c, name) in VARIANCE.iter().enumerate() {
+            channels.push(AnyChannel::new(*name, f32s(&|s| s.variance[c])));
+        }
+    }
+    channels
 }
 
 /// An EXR file read back: its full frame, its text attributes, and each part's rectangle with
