@@ -53,7 +53,7 @@ fn main() {
     );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for (name, path) in meshes {
-        let bytes = zstd::decode_all(std::fs::File::open(&path).expect("asset")).expect("zstd");
+        let bytes = unzstd(&path);
         let plain = path.with_extension(""); // MTL files resolve beside the .obj name
         let options = tobj::LoadOptions {
             triangulate: true,
@@ -128,4 +128,14 @@ fn main() {
             rss_growth as f64 / triangles as f64,
         );
     }
+}
+
+/// The bytes of the zstd-compressed file at `path`.
+fn unzstd(path: &std::path::Path) -> Vec<u8> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).expect("the compressed asset opens");
+    let mut decoder = ruzstd::decoding::StreamingDecoder::new(file).expect("a zstd frame");
+    let mut bytes = Vec::new();
+    decoder.read_to_end(&mut bytes).expect("zstd decodes");
+    bytes
 }

@@ -103,10 +103,24 @@ impl Builder<'_> {
                 }
                 ClipBox::cube(*r)
             }
-            ClipSpec::Box { min, max } => ClipBox {
-                min: DVec3::from_array(min.0),
-                max: DVec3::from_array(max.0),
-            },
+            ClipSpec::Box { min, max } => {
+                if let Some(&x) = min
+                    .0
+                    .iter()
+                    .chain(&max.0)
+                    .find(|x| x.abs() > super::MAX_NUMBER)
+                {
+                    return Err(self.err(
+                        q.clip.span(),
+                        format!("{key}.clip"),
+                        super::beyond_limit(x),
+                    ));
+                }
+                ClipBox {
+                    min: DVec3::from_array(min.0),
+                    max: DVec3::from_array(max.0),
+                }
+            }
         };
         let transform = self.transform(&q.transform, &format!("{key}.transform"))?;
         let material = self.material_id(names, &q.material, &format!("{key}.material"))?;
