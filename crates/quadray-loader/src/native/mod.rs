@@ -176,11 +176,6 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<LoadedScene, LoadError> {
 /// none becomes infinite later (as an f32, or once transformed) far from its line.
 const MAX_NUMBER: f64 = quadray::MAX_COORDINATE;
 
-/// The message for a number beyond [`MAX_NUMBER`].
-fn beyond_limit(x: f64) -> String {
-    format!("{x:e} is beyond the limit of ±{MAX_NUMBER:e} for numbers in a scene")
-}
-
 /// Validation context: the file's path and text, to turn spans into locations.
 struct Builder<'a> {
     path: &'a Path,
@@ -208,9 +203,7 @@ impl Builder<'_> {
         if !d.is_finite() {
             return Err(self.err(v.span(), key, format!("must be finite numbers, got {d}")));
         }
-        if let Some(x) = d.to_array().into_iter().find(|x| x.abs() > MAX_NUMBER) {
-            return Err(self.err(v.span(), key, beyond_limit(x)));
-        }
+        self.within_limit(d.to_array(), v.span(), key)?;
         Ok(d)
     }
 
@@ -232,14 +225,30 @@ impl Builder<'_> {
         Ok(c.as_vec3())
     }
 
+    /// An error at `span` for the first of `values` beyond [`MAX_NUMBER`]: the one check every
+    /// number of the file passes (vectors, scalars, matrices, coefficients, clip boxes).
+    fn within_limit(
+        &self,
+        values: impl IntoIterator<Item = f64>,
+        span: Range<usize>,
+        key: &str,
+    ) -> Result<(), LoadError> {
+        match values.into_iter().find(|x| x.abs() > MAX_NUMBER) {
+            Some(x) => Err(self.err(
+                span,
+                key,
+                format!("{x:e} is beyond the limit of ±{MAX_NUMBER:e} for numbers in a scene"),
+            )),
+            None => Ok(()),
+        }
+    }
+
     fn number(&self, v: &Spanned<f64>, key: &str) -> Result<f64, LoadError> {
         let x = *v.get_ref();
         if !x.is_finite() {
             return Err(self.err(v.span(), key, format!("must be a finite number, got {x}")));
         }
-        if x.abs() > MAX_NUMBER {
-            return Err(self.err(v.span(), key, beyond_limit(x)));
-        }
+        self.within_limit([x], v.span(), key)?;
         Ok(x)
     }
 

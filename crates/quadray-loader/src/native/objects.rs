@@ -104,18 +104,8 @@ impl Builder<'_> {
                 ClipBox::cube(*r)
             }
             ClipSpec::Box { min, max } => {
-                if let Some(&x) = min
-                    .0
-                    .iter()
-                    .chain(&max.0)
-                    .find(|x| x.abs() > super::MAX_NUMBER)
-                {
-                    return Err(self.err(
-                        q.clip.span(),
-                        format!("{key}.clip"),
-                        super::beyond_limit(x),
-                    ));
-                }
+                let corners = min.0.iter().chain(&max.0).copied();
+                self.within_limit(corners, q.clip.span(), &format!("{key}.clip"))?;
                 ClipBox {
                     min: DVec3::from_array(min.0),
                     max: DVec3::from_array(max.0),
@@ -181,13 +171,7 @@ impl Builder<'_> {
                     format!("needs exactly 10 numbers (A..J), got {}", k.get_ref().len()),
                 )
             })?;
-            if let Some(&x) = arr.iter().find(|x| x.abs() > super::MAX_NUMBER) {
-                return Err(self.err(
-                    k.span(),
-                    format!("{key}.coefficients"),
-                    super::beyond_limit(x),
-                ));
-            }
+            self.within_limit(arr, k.span(), &format!("{key}.coefficients"))?;
             QuadricSurface::General(Coefficients(arr))
         } else {
             let kind = QuadricKind::from_name(kind).ok_or_else(|| {

@@ -113,9 +113,7 @@ impl Builder<'_> {
                 "must be finite numbers (found NaN or infinity)",
             ));
         }
-        if let Some(&x) = rows.iter().flatten().find(|x| x.abs() > super::MAX_NUMBER) {
-            return Err(self.err(m.span(), key, super::beyond_limit(x)));
-        }
+        self.within_limit(rows.iter().flatten().copied(), m.span(), key)?;
         if rows[3] != [0.0, 0.0, 0.0, 1.0] {
             return Err(self.err(
                 m.span(),
