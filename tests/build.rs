@@ -1,16 +1,8 @@
-//! Which of this crate's tests can run here. Those that read `../shared/assets` (real third-party
-//! files, never copied into the repository) get the cfg `quadray_shared` where the folder is
-//! present, and always under CI (`CI` set), where its absence must fail them; elsewhere they are
-//! `#[ignore]`d with the reason, so `cargo test` counts them as not run instead of passing them.
+//! Which of this crate's tests can run here: those reading `../shared/assets` get the cfg
+//! `quadray_shared` (see `cfgs.rs`).
+
+include!("cfgs.rs");
 
 fn main() {
-    let manifest = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
-    // The folder holding the repository and `shared/`: its entries change when `shared` appears.
-    let parent = std::path::Path::new(&manifest).join("../..");
-    println!("cargo::rustc-check-cfg=cfg(quadray_shared)");
-    println!("cargo::rerun-if-env-changed=CI");
-    println!("cargo::rerun-if-changed={}", parent.display());
-    if parent.join("shared/assets").is_dir() || std::env::var_os("CI").is_some() {
-        println!("cargo::rustc-cfg=quadray_shared");
-    }
+    enable("quadray_shared", shared_assets(".."));
 }
