@@ -14,6 +14,10 @@
 //! and the largest resident-set growth seen over one `Scene::new` (which also counts the build's
 //! transient buffers and whatever the allocator keeps).
 
+// The tests' helpers (the compressed assets' decoding).
+#[path = "../tests/common/mod.rs"]
+mod common;
+
 use quadray::Scene;
 use quadray_loader::ImportOptions;
 use quadray_loader::obj::import_obj_bytes;
@@ -53,7 +57,7 @@ fn main() {
     );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for (name, path) in meshes {
-        let bytes = unzstd(&path);
+        let bytes = common::unzstd(&path);
         let plain = path.with_extension(""); // MTL files resolve beside the .obj name
         let options = tobj::LoadOptions {
             triangulate: true,
@@ -128,14 +132,4 @@ fn main() {
             rss_growth as f64 / triangles as f64,
         );
     }
-}
-
-/// The bytes of the zstd-compressed file at `path`.
-fn unzstd(path: &std::path::Path) -> Vec<u8> {
-    use std::io::Read;
-    let file = std::fs::File::open(path).expect("the compressed asset opens");
-    let mut decoder = ruzstd::decoding::StreamingDecoder::new(file).expect("a zstd frame");
-    let mut bytes = Vec::new();
-    decoder.read_to_end(&mut bytes).expect("zstd decodes");
-    bytes
 }

@@ -53,7 +53,7 @@ fn read_obj(root: &Path, file: &str) -> quadray_loader::Imported {
     let path = root.join(file);
     match file.strip_suffix(".zst") {
         Some(plain) => {
-            let bytes = unzstd(&path);
+            let bytes = common::unzstd(&path);
             import_obj_bytes(&bytes, &root.join(plain), &ImportOptions::default())
         }
         None => quadray_loader::obj::import_obj(&path, &ImportOptions::default()),
@@ -117,14 +117,4 @@ fn obj_quirks_are_handled_and_said() {
         read_obj(&root, "meshes/qt3d/toyplane.obj").triangle_count(),
         7548
     );
-}
-
-/// The bytes of the zstd-compressed file at `path`.
-fn unzstd(path: &std::path::Path) -> Vec<u8> {
-    use std::io::Read;
-    let file = std::fs::File::open(path).expect("the compressed asset opens");
-    let mut decoder = ruzstd::decoding::StreamingDecoder::new(file).expect("a zstd frame");
-    let mut bytes = Vec::new();
-    decoder.read_to_end(&mut bytes).expect("zstd decodes");
-    bytes
 }

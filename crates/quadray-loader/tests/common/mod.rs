@@ -74,3 +74,13 @@ pub fn assets() -> PathBuf {
     );
     dir
 }
+
+/// The bytes of the zstd-compressed file at `path` (the large meshes of `../shared/assets`).
+pub fn unzstd(path: &std::path::Path) -> Vec<u8> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).expect("the compressed asset opens");
+    let mut decoder = ruzstd::decoding::StreamingDecoder::new(file).expect("a zstd frame");
+    let mut bytes = Vec::new();
+    decoder.read_to_end(&mut bytes).expect("zstd decodes");
+    bytes
+}
