@@ -1,45 +1,24 @@
-//! The bottom level for triangle meshes: a 4-wide BVH of quadray's own layout, collapsed from
-//! obvhs' BVH2 build (PLOC, reinsertion, SAH leaf collapse), with float boxes in
-//! structure-of-arrays form and leaves of four triangles ([`Tri4`]) tested at once.
-//!
-//! A node holds its four children's boxes as six `Vec4`s, so one ray meets all four in a dozen
-//! SIMD operations (glam's `Vec4`: SSE2 on x86-64, NEON on aarch64); the children hit are visited
-//! nearest first. There is no entry clamp: hits at any distance count (obvhs' CWBVH node test
-//! clamps entry distances to 1e-4 world units, which breaks scale invariance). Reciprocal
-//! directions are clamped at ±1e20 and the near/far planes follow the reciprocal's sign, so a −0.0
-//! direction component cannot invert a slab.
+//! The bottom level for triangle meshes: a 4-wide BVH of quadray's own layout ([`super::wide`]),
+//! collapsed from obvhs' BVH2 build (PLOC, reinsertion, SAH leaf collapse), with leaves of four
+//! triangles ([`Tri4`]) tested at once; the children a ray enters are visited nearest first.
 //!
 //! Leaves hold copies of their triangles' vertices (no index lookups while tracing). A block lane
 //! names its triangle by number: over a single mesh the mesh's triangle index, over several meshes
 //! an index into a table of (mesh, triangle).
 
 use super::tri4::Tri4;
+use super::wide::{BoxRay, LEAF, Node4, collapse, covering_boxes};
 use crate::mesh::Mesh;
 use crate::triangle::{ShearedRay, TriangleHit};
-use collapse::collapse;
-use glam::{Vec3, Vec3A, Vec4};
+use glam::{Vec3, Vec3A};
 use obvhs::aabb::Aabb;
-
-mod collapse;
 
 /// A triangle of a [`MeshBvh`]: index of the mesh among those it was built over, and the triangle.
 pub(crate) type TriId = (u32, u32);
 
-/// A child reference with this bit set is a leaf: the rest is its first [`Tri4`] block, and the
-/// low [`LEAF_COUNT_BITS`] bits hold the block count.
-const LEAF: u32 = 1 << 31;
+/// A leaf's payload: its first [`Tri4`] block, shifted past the low [`LEAF_COUNT_BITS`] bits that
+/// hold the block count.
 const LEAF_COUNT_BITS: u32 = 3;
-/// An unused child slot (its box is empty, so no ray enters it).
-const EMPTY: u32 = LEAF;
-
-/// Four children: their boxes as `[min x, max x, min y, max y, min z, max z]` lanes, and their
-/// references (a node index, a leaf, or [`EMPTY`]).
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
-struct Node4 {
-    bounds: [[f32; 4]; 6],
-    children: [u32; 4],
-}
 
 /// A wide BVH over the triangles of one or more meshes.
 #[derive(Clone, Debug)]
@@ -56,42 +35,16 @@ pub(crate) struct MeshBvh {
 /// An f32 ray in a mesh's space, prepared for the node and triangle tests.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct MeshRay {
-    origin: Vec3A,
-    inv_dir: Vec3A,
-    /// The reciprocal widened by 1 + 2γ(3), for exit distances: Ize's robust slab test (pbrt-v3
-    /// §3.9.2). It makes the f32 box test conservative for the f32 ray wherever it starts, so no
-    /// ray slips between two boxes that meet face to face; scaling the reciprocal once per ray,
-    /// rather than each exit distance, keeps the node test's length.
-    inv_dir_far: Vec3A,
-    /// Whether each reciprocal direction component is negative: the near slab is the high one.
-    negative: [bool; 3],
+    boxes: BoxRay,
     sheared: ShearedRay,
-}
-
-/// 1 + 2γ(3) in f32: the factor that makes a slab's exit distance conservative.
-const ROBUST_EXIT: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
-
-/// Reciprocals clamped to ±1e20, keeping the sign of zero: three lanes in one division.
-#[inline(always)]
-fn safe_recip(x: Vec3A) -> Vec3A {
-    let tiny = x.abs().cmplt(Vec3A::splat(1e-20));
-    Vec3A::select(tiny, Vec3A::splat(1e20).copysign(x), Vec3A::ONE / x)
 }
 
 impl MeshRay {
     /// Prepares `origin + t·dir` for traversal (a ray that is not finite in f32 meets nothing).
     #[inline]
     pub(crate) fn new(origin: Vec3, dir: Vec3) -> MeshRay {
-        let inv = safe_recip(dir.into());
         MeshRay {
-            origin: origin.into(),
-            inv_dir: inv,
-            inv_dir_far: inv * ROBUST_EXIT,
-            negative: [
-                inv.x.is_sign_negative(),
-                inv.y.is_sign_negative(),
-                inv.z.is_sign_negative(),
-            ],
+            boxes: BoxRay::new(origin.into(), dir.into()),
             sheared: ShearedRay::new(origin, dir),
         }
     }
@@ -100,37 +53,7 @@ impl MeshRay {
     /// direction (which identify the ray as well as its direction does, and are at hand).
     #[inline]
     fn coverage_key(&self) -> u32 {
-        crate::mesh::coverage_key(self.origin.into(), self.inv_dir.into())
-    }
-}
-
-impl Node4 {
-    /// Entry distances of the four children and the mask of those the ray enters in [0, `t_max`].
-    #[inline(always)]
-    fn intersect(&self, ray: &MeshRay, t_max: f32) -> (Vec4, u32) {
-        let slab = |axis: usize| {
-            let (lo, hi) = (self.bounds[2 * axis], self.bounds[2 * axis + 1]);
-            let (near, far) = if ray.negative[axis] {
-                (hi, lo)
-            } else {
-                (lo, hi)
-            };
-            let o = Vec4::splat(ray.origin[axis]);
-            let (inv, inv_far) = (
-                Vec4::splat(ray.inv_dir[axis]),
-                Vec4::splat(ray.inv_dir_far[axis]),
-            );
-            (
-                (Vec4::from(near) - o) * inv,
-                (Vec4::from(far) - o) * inv_far,
-            )
-        };
-        let (x0, x1) = slab(0);
-        let (y0, y1) = slab(1);
-        let (z0, z1) = slab(2);
-        let enter = x0.max(y0).max(z0).max(Vec4::ZERO);
-        let exit = x1.min(y1).min(z1).min(Vec4::splat(t_max));
-        (enter, enter.cmple(exit).bitmask())
+        crate::mesh::coverage_key(self.boxes.origin.into(), self.boxes.inv_dir.into())
     }
 }
 
@@ -181,7 +104,25 @@ impl MeshBvh {
         // blocks 60% full). Measured on the kitchen: obvhs' slow build (wider PLOC search, more
         // reinsertion) and spatial pre-splits change throughput by under 2% at 1.2-2x the time.
         let bvh2 = super::build::build_single_leaves(&aabbs);
-        let (nodes, blocks) = collapse(&bvh2, &triangles);
+        let mut blocks = Vec::new();
+        let nodes = collapse(
+            &bvh2,
+            |_| 1,
+            |prims| {
+                let first = blocks.len() as u32;
+                for lanes in prims.chunks(4) {
+                    let lanes: Vec<_> = lanes.iter().map(|&p| (triangles[p as usize], p)).collect();
+                    blocks.push(Tri4::new(&lanes));
+                }
+                let count = blocks.len() as u32 - first;
+                // Block numbers have 28 bits: 2^28 blocks would be 170 GB of leaves.
+                assert!(
+                    blocks.len() <= 1 << 28 && count < 1 << LEAF_COUNT_BITS,
+                    "a mesh BVH holds at most 2^30 triangles"
+                );
+                (first << LEAF_COUNT_BITS) | count
+            },
+        );
         let nodes = nodes.into_boxed_slice().into_vec();
         let blocks = blocks.into_boxed_slice().into_vec();
         if meshes.len() > 1 {
@@ -195,26 +136,7 @@ impl MeshBvh {
     /// The boxes of the root's children's children (at most 16): their union holds every
     /// triangle, and they hug the mesh far closer than one box once rotated.
     pub(crate) fn covering_boxes(&self) -> Vec<(glam::DVec3, glam::DVec3)> {
-        let slot = |n: &Node4, lane: usize| {
-            let b = &n.bounds;
-            let lo = glam::DVec3::new(b[0][lane] as f64, b[2][lane] as f64, b[4][lane] as f64);
-            let hi = glam::DVec3::new(b[1][lane] as f64, b[3][lane] as f64, b[5][lane] as f64);
-            lo.cmple(hi).all().then_some((lo, hi))
-        };
-        let Some(root) = self.nodes.first() else {
-            return Vec::new();
-        };
-        let mut boxes = Vec::new();
-        for lane in 0..4 {
-            let child = root.children[lane];
-            if child & LEAF != 0 {
-                boxes.extend(slot(root, lane));
-                continue;
-            }
-            let node = &self.nodes[child as usize];
-            boxes.extend((0..4).filter_map(|l| slot(node, l)));
-        }
-        boxes
+        covering_boxes(&self.nodes)
     }
 
     /// Bytes of the wide nodes, the triangle blocks and the id table.
@@ -306,8 +228,7 @@ impl MeshBvh {
             loop {
                 if current & LEAF == 0 {
                     let node = &self.nodes[current as usize];
-                    let (enter, mask) = node.intersect(ray, limit);
-                    let enter = enter.to_array();
+                    let (enter, mask) = node.intersect(&ray.boxes, limit);
                     match mask.count_ones() {
                         0 => {}
                         1 => {
@@ -316,25 +237,7 @@ impl MeshBvh {
                         }
                         _ => {
                             // Push the children hit far to near; visit the nearest next.
-                            let mut order = [(0u32, 0f32); 4];
-                            let mut n = 0;
-                            for (lane, (&child, &t)) in node.children.iter().zip(&enter).enumerate()
-                            {
-                                if mask & (1 << lane) != 0 {
-                                    let mut j = n;
-                                    while j > 0 && order[j - 1].1 < t {
-                                        order[j] = order[j - 1];
-                                        j -= 1;
-                                    }
-                                    order[j] = (child, t);
-                                    n += 1;
-                                }
-                            }
-                            for &(child, _) in &order[..n - 1] {
-                                self.prefetch(child);
-                            }
-                            stack.extend_from_slice(&order[..n - 1]);
-                            current = order[n - 1].0;
+                            current = node.push_ordered(enter, mask, stack, |c| self.prefetch(c));
                             continue;
                         }
                     }
@@ -386,7 +289,7 @@ impl MeshBvh {
             loop {
                 if current & LEAF == 0 {
                     let node = &self.nodes[current as usize];
-                    let (_, mask) = node.intersect(ray, t_max);
+                    let (_, mask) = node.intersect(&ray.boxes, t_max);
                     let mut m = mask;
                     while m != 0 {
                         let lane = m.trailing_zeros() as usize;

@@ -4,8 +4,9 @@
 //! other prototypes, so instance graphs nest). Each level is built once, in its own space:
 //! - **Bottom level**: one wide BVH over the level's meshes ([`mesh_bvh`]: a 4-wide BVH of
 //!   quadray's layout collapsed from obvhs' BVH2, with f32 watertight triangle tests four at a
-//!   time), and one BVH2 over its spheres and quadrics ([`analytic`]: f32 traversal over padded
-//!   boxes, f64 intersection).
+//!   time), and one 4-wide BVH of the same node layout over its spheres and quadrics
+//!   ([`analytic`]: f32 traversal over padded boxes, spheres four at a time and quadrics one by
+//!   one in f64).
 //! - **Top**: those two and the level's instances, each an affine transform and the level it
 //!   places (rays are mapped into the placed level's space, where t is unchanged, and that level
 //!   is traversed the same way). Up to eight items are tested box by box (measured: an obvhs BVH2
@@ -30,10 +31,12 @@ mod analytic;
 mod build;
 mod mesh_bvh;
 mod simd;
+mod sphere4;
 mod stack;
 mod stats;
 mod top;
 mod tri4;
+mod wide;
 
 use crate::geometry::Geometry;
 use crate::geometry::instance::Placements;

@@ -1,26 +1,15 @@
-//! Collapsing obvhs' BVH2 (built down to single triangles) into quadray's 4-wide nodes and
-//! four-triangle leaf blocks, without recursion (trees of degenerate input can be deep).
+//! Collapsing obvhs' BVH2 (built down to single primitives) into 4-wide nodes over leaves whose
+//! contents the caller packs, without recursion (trees of degenerate input can be deep).
 
-use super::{EMPTY, LEAF, LEAF_COUNT_BITS, Node4};
-use crate::accel::tri4::Tri4;
+use super::{EMPTY_NODE, LEAF, Node4};
 use obvhs::bvh2::Bvh2;
 
-/// An empty Node4 (no child is ever entered).
-const EMPTY_NODE: Node4 = Node4 {
-    bounds: [
-        [f32::INFINITY; 4],
-        [f32::NEG_INFINITY; 4],
-        [f32::INFINITY; 4],
-        [f32::NEG_INFINITY; 4],
-        [f32::INFINITY; 4],
-        [f32::NEG_INFINITY; 4],
-    ],
-    children: [EMPTY; 4],
-};
+/// Most weight one leaf holds: a leaf is a block of four lanes.
+pub(in crate::accel) const LEAF_WEIGHT: u32 = 4;
 
-/// Number of triangles under each BVH2 node, without recursion (trees of degenerate input can be
-/// deep): nodes in pre-order, then summed in reverse.
-fn subtree_counts(bvh2: &Bvh2) -> Vec<u32> {
+/// Total weight of the primitives under each BVH2 node, without recursion (trees of degenerate
+/// input can be deep): nodes in pre-order, then summed in reverse.
+fn subtree_weights(bvh2: &Bvh2, weight: &impl Fn(u32) -> u32) -> Vec<u32> {
     let mut order = Vec::with_capacity(bvh2.nodes.len());
     let mut stack = vec![0u32];
     while let Some(i) = stack.pop() {
@@ -34,7 +23,10 @@ fn subtree_counts(bvh2: &Bvh2) -> Vec<u32> {
     for &i in order.iter().rev() {
         let node = &bvh2.nodes[i as usize];
         counts[i as usize] = if node.is_leaf() {
-            node.prim_count
+            let first = node.first_index as usize;
+            (bvh2.primitive_indices[first..first + node.prim_count as usize].iter())
+                .map(|&p| weight(p))
+                .sum()
         } else {
             counts[node.first_index as usize] + counts[node.first_index as usize + 1]
         };
@@ -42,8 +34,8 @@ fn subtree_counts(bvh2: &Bvh2) -> Vec<u32> {
     counts
 }
 
-/// The BVH2's triangles under node `index`, in tree order.
-fn subtree_triangles(bvh2: &Bvh2, index: u32) -> Vec<u32> {
+/// The BVH2's primitives under node `index`, in tree order.
+fn subtree_primitives(bvh2: &Bvh2, index: u32) -> Vec<u32> {
     let mut out = Vec::new();
     let mut stack = vec![index];
     while let Some(i) = stack.pop() {
@@ -58,12 +50,18 @@ fn subtree_triangles(bvh2: &Bvh2, index: u32) -> Vec<u32> {
     out
 }
 
-/// Collapses a BVH2 (built down to single triangles) into Node4s and full Tri4 leaves: every
-/// subtree of at most four triangles becomes one leaf block, and each wide node takes the four
-/// largest subtrees below a BVH2 node (Embree's BVH4 collapse). Iterative, for deep trees.
-pub(super) fn collapse(bvh2: &Bvh2, triangles: &[[[f32; 3]; 3]]) -> (Vec<Node4>, Vec<Tri4>) {
-    let counts = subtree_counts(bvh2);
-    let is_leaf = |i: u32| counts[i as usize] <= 4;
+/// Collapses a BVH2 (built down to single primitives) into Node4s: every subtree whose
+/// primitives weigh at most [`LEAF_WEIGHT`] together becomes one leaf, whose payload `leaf` makes
+/// from the subtree's primitives (it packs them into a block and names it in 31 bits), and each
+/// wide node takes the four largest subtrees below a BVH2 node (Embree's BVH4 collapse). A
+/// primitive that weighs the whole block is a leaf of its own. Iterative, for deep trees.
+pub(in crate::accel) fn collapse(
+    bvh2: &Bvh2,
+    weight: impl Fn(u32) -> u32,
+    mut leaf: impl FnMut(&[u32]) -> u32,
+) -> Vec<Node4> {
+    let counts = subtree_weights(bvh2, &weight);
+    let is_leaf = |i: u32| counts[i as usize] <= LEAF_WEIGHT || bvh2.nodes[i as usize].is_leaf();
     // The BVH2 nodes a wide node over BVH2 node `index` takes as children: open the largest
     // internal one until there are four.
     let children_of = |index: u32| {
@@ -85,7 +83,6 @@ pub(super) fn collapse(bvh2: &Bvh2, triangles: &[[[f32; 3]; 3]]) -> (Vec<Node4>,
         kids
     };
     let mut nodes = vec![EMPTY_NODE];
-    let mut blocks = Vec::new();
     // (BVH2 node, wide node it becomes a child of, lane there). The root wide node takes the
     // BVH2 root's children (or the root itself when it is a single leaf).
     let mut work: Vec<(u32, usize, usize)> = if is_leaf(0) {
@@ -99,17 +96,9 @@ pub(super) fn collapse(bvh2: &Bvh2, triangles: &[[[f32; 3]; 3]]) -> (Vec<Node4>,
     };
     while let Some((index, parent, lane)) = work.pop() {
         let reference = if is_leaf(index) {
-            let lanes: Vec<([[f32; 3]; 3], u32)> = subtree_triangles(bvh2, index)
-                .iter()
-                .map(|&p| (triangles[p as usize], p))
-                .collect();
-            blocks.push(Tri4::new(&lanes));
-            // Block numbers have 28 bits: 2^28 blocks would be 170 GB of leaves.
-            assert!(
-                blocks.len() <= 1 << 28,
-                "a mesh BVH holds at most 2^30 triangles"
-            );
-            LEAF | ((blocks.len() as u32 - 1) << LEAF_COUNT_BITS) | 1
+            let payload = leaf(&subtree_primitives(bvh2, index));
+            debug_assert!(payload & LEAF == 0, "a leaf payload has 31 bits");
+            LEAF | payload
         } else {
             let slot = nodes.len();
             nodes.push(EMPTY_NODE);
@@ -129,5 +118,5 @@ pub(super) fn collapse(bvh2: &Bvh2, triangles: &[[[f32; 3]; 3]]) -> (Vec<Node4>,
         }
         n.children[lane] = reference;
     }
-    (nodes, blocks)
+    nodes
 }
