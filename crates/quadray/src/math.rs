@@ -221,6 +221,26 @@ pub fn offset_origin(p: DVec3, geometric_normal: DVec3, offset: f64, dir: DVec3)
     p + geometric_normal * (offset * side)
 }
 
+/// `x.floor()`, bit for bit for every input, without a library call: baseline x86-64 has no
+/// rounding instruction (SSE4.1's `roundsd`), so `f64::floor` calls libm, which cost 2% of a
+/// checkered frame.
+#[inline(always)]
+pub fn floor(x: f64) -> f64 {
+    // From 2⁵² on (and for NaN and infinities) every f64 is its own floor.
+    if !(x.abs() < 4_503_599_627_370_496.0) {
+        return x;
+    }
+    // Truncation toward zero is exact here; a negative non-integer steps down one.
+    let t = x as i64 as f64;
+    if t == x {
+        x
+    } else if t > x {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
 /// Builds an orthonormal basis whose third axis is `n` (Duff et al., "Building an Orthonormal Basis, Revisited", 2017).
 pub fn orthonormal_basis(n: DVec3) -> (DVec3, DVec3) {
     let sign = 1f64.copysign(n.z);
@@ -235,6 +255,44 @@ pub fn orthonormal_basis(n: DVec3) -> (DVec3, DVec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn floor_matches_the_library_bit_for_bit() {
+        let mut values = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            -1.5,
+            2.5,
+            4_503_599_627_370_495.5,
+            -4_503_599_627_370_495.5,
+            4_503_599_627_370_496.0,
+            -4_503_599_627_370_497.0,
+            1e300,
+            -1e300,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            1.0 - f64::EPSILON / 2.0,
+            -(1.0 - f64::EPSILON / 2.0),
+        ];
+        let mut bits = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..200_000 {
+            bits ^= bits << 13;
+            bits ^= bits >> 7;
+            bits ^= bits << 17;
+            values.push(f64::from_bits(bits));
+            values.push((bits >> 11) as f64 / (1u64 << 40) as f64 - 4096.0);
+        }
+        for x in values {
+            assert_eq!(floor(x).to_bits(), x.floor().to_bits(), "{x}");
+        }
+    }
 
     #[test]
     fn quadratic_matches_known_roots() {

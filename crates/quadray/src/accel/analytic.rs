@@ -95,20 +95,21 @@ impl AnalyticBvh {
             |p| if is_sphere(p) { 1 } else { LEAF_WEIGHT },
             |prims| {
                 let first = blocks.len() as u32;
-                let (sphere_prims, quadric_prims): (Vec<u32>, Vec<u32>) =
-                    prims.iter().partition(|&&p| is_sphere(p));
-                for lanes in sphere_prims.chunks(4) {
-                    let mut block = Block {
-                        spheres: Sphere4::EMPTY,
-                        prims: [NO_PRIM; 4],
-                    };
-                    for (lane, &p) in lanes.iter().enumerate() {
-                        block.spheres.set(lane, &level.spheres[p as usize]);
-                        block.prims[lane] = p;
+                let mut lane = 4;
+                for &p in prims.iter().filter(|&&p| is_sphere(p)) {
+                    if lane == 4 {
+                        blocks.push(Block {
+                            spheres: Sphere4::EMPTY,
+                            prims: [NO_PRIM; 4],
+                        });
+                        lane = 0;
                     }
-                    blocks.push(block);
+                    let block = blocks.last_mut().expect("a block was pushed");
+                    block.spheres.set(lane, &level.spheres[p as usize]);
+                    block.prims[lane] = p;
+                    lane += 1;
                 }
-                for &p in &quadric_prims {
+                for &p in prims.iter().filter(|&&p| !is_sphere(p)) {
                     let mut prims = [NO_PRIM; 4];
                     prims[0] = QUADRIC | (p - spheres as u32);
                     blocks.push(Block {
@@ -126,8 +127,8 @@ impl AnalyticBvh {
             },
         );
         Some(AnalyticBvh {
-            nodes,
-            blocks,
+            nodes: nodes.into_boxed_slice().into_vec(),
+            blocks: blocks.into_boxed_slice().into_vec(),
             root: *bvh2.nodes[0].aabb(),
             len: aabbs.len(),
         })

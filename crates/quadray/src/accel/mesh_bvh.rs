@@ -111,8 +111,11 @@ impl MeshBvh {
             |prims| {
                 let first = blocks.len() as u32;
                 for lanes in prims.chunks(4) {
-                    let lanes: Vec<_> = lanes.iter().map(|&p| (triangles[p as usize], p)).collect();
-                    blocks.push(Tri4::new(&lanes));
+                    let mut block = [([[0.0; 3]; 3], 0); 4];
+                    for (slot, &p) in block.iter_mut().zip(lanes) {
+                        *slot = (triangles[p as usize], p);
+                    }
+                    blocks.push(Tri4::new(&block[..lanes.len()]));
                 }
                 let count = blocks.len() as u32 - first;
                 // Block numbers have 28 bits: 2^28 blocks would be 170 GB of leaves.

@@ -200,7 +200,7 @@ fn filtered_checker(q: DVec3, w: DVec3, even: Vec3, odd: Vec3) -> Vec3 {
 fn square_wave_mean(x: f64, w: f64) -> f64 {
     if w <= 0.0 {
         // Integer parity, as the point-sampled checker takes it (a float remainder is slower).
-        return if (x.floor() as i64) & 1 == 0 {
+        return if (crate::math::floor(x) as i64) & 1 == 0 {
             1.0
         } else {
             -1.0
@@ -208,7 +208,7 @@ fn square_wave_mean(x: f64, w: f64) -> f64 {
     }
     // ∫₀ˣ of the wave: rises on even cells, falls on odd ones, period 2.
     let integral = |x: f64| {
-        let m = x - 2.0 * (0.5 * x).floor();
+        let m = x - 2.0 * crate::math::floor(0.5 * x);
         if m < 1.0 { m } else { 2.0 - m }
     };
     // Far from the origin the two integrals cancel badly; the mean stays a mean.
@@ -237,10 +237,10 @@ impl Texture {
             }
             Texture::Checker { size, even, odd } => {
                 // Integer parity of the cell (the float fmod of rem_euclid showed up in profiles).
-                let q = (p.local / *size).floor();
-                let parity = (q.x as i64)
-                    .wrapping_add(q.y as i64)
-                    .wrapping_add(q.z as i64)
+                let q = (p.local / *size).to_array().map(crate::math::floor);
+                let parity = (q[0] as i64)
+                    .wrapping_add(q[1] as i64)
+                    .wrapping_add(q[2] as i64)
                     & 1;
                 if parity == 0 { *even } else { *odd }
             }

@@ -34,10 +34,11 @@ fn subtree_weights(bvh2: &Bvh2, weight: &impl Fn(u32) -> u32) -> Vec<u32> {
     counts
 }
 
-/// The BVH2's primitives under node `index`, in tree order.
-fn subtree_primitives(bvh2: &Bvh2, index: u32) -> Vec<u32> {
-    let mut out = Vec::new();
-    let mut stack = vec![index];
+/// The BVH2's primitives under node `index`, in tree order, into `out` (`stack` is scratch).
+fn subtree_primitives(bvh2: &Bvh2, index: u32, out: &mut Vec<u32>, stack: &mut Vec<u32>) {
+    out.clear();
+    stack.clear();
+    stack.push(index);
     while let Some(i) = stack.pop() {
         let node = &bvh2.nodes[i as usize];
         if node.is_leaf() {
@@ -47,7 +48,6 @@ fn subtree_primitives(bvh2: &Bvh2, index: u32) -> Vec<u32> {
             stack.extend([node.first_index + 1, node.first_index]);
         }
     }
-    out
 }
 
 /// Collapses a BVH2 (built down to single primitives) into Node4s: every subtree whose
@@ -66,21 +66,21 @@ pub(in crate::accel) fn collapse(
     // internal one until there are four.
     let children_of = |index: u32| {
         let node = &bvh2.nodes[index as usize];
-        let mut kids = vec![node.first_index, node.first_index + 1];
-        while kids.len() < 4 {
+        let mut kids = [node.first_index, node.first_index + 1, 0, 0];
+        let mut n = 2;
+        while n < 4 {
             let area = |k: u32| bvh2.nodes[k as usize].aabb().half_area();
-            let open = kids
-                .iter()
-                .enumerate()
-                .filter(|&(_, &k)| !is_leaf(k))
-                .max_by(|a, b| area(*a.1).total_cmp(&area(*b.1)))
-                .map(|(i, _)| i);
+            let open = (0..n)
+                .filter(|&i| !is_leaf(kids[i]))
+                .max_by(|&a, &b| area(kids[a]).total_cmp(&area(kids[b])));
             let Some(i) = open else { break };
-            let k = kids.swap_remove(i);
-            let first = bvh2.nodes[k as usize].first_index;
-            kids.extend([first, first + 1]);
+            let first = bvh2.nodes[kids[i] as usize].first_index;
+            kids[i] = kids[n - 1];
+            kids[n - 1] = first;
+            kids[n] = first + 1;
+            n += 1;
         }
-        kids
+        (kids, n)
     };
     let mut nodes = vec![EMPTY_NODE];
     // (BVH2 node, wide node it becomes a child of, lane there). The root wide node takes the
@@ -88,26 +88,23 @@ pub(in crate::accel) fn collapse(
     let mut work: Vec<(u32, usize, usize)> = if is_leaf(0) {
         vec![(0, 0, 0)]
     } else {
-        children_of(0)
-            .iter()
-            .enumerate()
+        let (kids, n) = children_of(0);
+        (kids[..n].iter().enumerate())
             .map(|(l, &k)| (k, 0, l))
             .collect()
     };
+    let (mut prims, mut scratch) = (Vec::new(), Vec::new());
     while let Some((index, parent, lane)) = work.pop() {
         let reference = if is_leaf(index) {
-            let payload = leaf(&subtree_primitives(bvh2, index));
+            subtree_primitives(bvh2, index, &mut prims, &mut scratch);
+            let payload = leaf(&prims);
             debug_assert!(payload & LEAF == 0, "a leaf payload has 31 bits");
             LEAF | payload
         } else {
             let slot = nodes.len();
             nodes.push(EMPTY_NODE);
-            work.extend(
-                children_of(index)
-                    .iter()
-                    .enumerate()
-                    .map(|(l, &k)| (k, slot, l)),
-            );
+            let (kids, n) = children_of(index);
+            work.extend(kids[..n].iter().enumerate().map(|(l, &k)| (k, slot, l)));
             slot as u32
         };
         let b = *bvh2.nodes[index as usize].aabb();
