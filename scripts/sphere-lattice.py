@@ -71,7 +71,7 @@ def main():
 
     extent = max(half, 1.0)
     top = (nz - 1) * a.spacing
-    distance = 3.2 * extent + top
+    distance = 2.0 * extent + 0.6 * top
     radius_line = "" if a.radii else f"radius = {a.radius}\n"
     scene = f"""# Written by scripts/sphere-lattice.py: {a.n} x {a.n} x {nz} spheres from lattice.ply.
 version = 1

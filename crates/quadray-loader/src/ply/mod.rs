@@ -59,10 +59,17 @@ pub struct SphereFile {
     body: (usize, usize),
     /// Index of the `vertex` element among the header's elements.
     vertex_element: usize,
-    /// The radius of vertices without a `radius` property.
-    default_radius: f64,
-    has_radius: bool,
+    radii: Radii,
     has_colour: bool,
+}
+
+/// Where the spheres' radii come from.
+#[derive(Clone, Copy, Debug)]
+enum Radii {
+    /// The vertices' `radius` property.
+    PerVertex,
+    /// One radius for all (the file has no `radius` property).
+    Default(f64),
 }
 
 impl SphereFile {
@@ -109,11 +116,10 @@ impl SphereFile {
                 ));
             }
         }
-        let has_radius = scalar("radius")?.is_some();
-        let default_radius = match (has_radius, default_radius) {
-            (true, _) => f64::NAN,
-            (false, Some(r)) => r,
-            (false, None) => {
+        let radii = match (scalar("radius")?, default_radius) {
+            (Some(_), _) => Radii::PerVertex,
+            (None, Some(r)) => Radii::Default(r),
+            (None, None) => {
                 return Err(invalid(
                     "vertex.radius",
                     "the vertex element has no `radius` property: give the scene's table a \
@@ -158,8 +164,7 @@ impl SphereFile {
             header,
             body: (body_start, body_line),
             vertex_element,
-            default_radius,
-            has_radius,
+            radii,
             has_colour: given.len() == 3,
             bytes,
         };
@@ -169,7 +174,7 @@ impl SphereFile {
 
     /// Whether the vertices carry their own radii (a `radius` property).
     pub fn has_radius(&self) -> bool {
-        self.has_radius
+        matches!(self.radii, Radii::PerVertex)
     }
 
     /// How many spheres to reserve room for: the vertex count of a binary file whose rows have a
@@ -329,18 +334,19 @@ impl SphereFile {
         for (value, name) in raw.position.iter().zip(["x", "y", "z"]) {
             check(*value, name)?;
         }
-        let radius = if self.has_radius {
-            check(raw.radius, "radius")?;
-            if raw.radius <= 0.0 {
-                return Err(self.error(
-                    at,
-                    &format!("vertex[{i}].radius"),
-                    format!("must be positive, got {}", raw.radius),
-                ));
+        let radius = match self.radii {
+            Radii::Default(r) => r,
+            Radii::PerVertex => {
+                check(raw.radius, "radius")?;
+                if raw.radius <= 0.0 {
+                    return Err(self.error(
+                        at,
+                        &format!("vertex[{i}].radius"),
+                        format!("must be positive, got {}", raw.radius),
+                    ));
+                }
+                raw.radius
             }
-            raw.radius
-        } else {
-            self.default_radius
         };
         let colour = if self.has_colour {
             for (value, name) in raw.colour.iter().zip(COLOUR_NAMES) {
