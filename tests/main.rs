@@ -8,5 +8,6 @@ mod instancing;
 mod instancing_gltf;
 mod khronos;
 mod meshes;
+mod ply_spheres;
 mod regression;
 mod scenes;

@@ -6,6 +6,7 @@
 //! - [`obj`] (with its MTL materials) and [`gltf`] (with [`gltf::quadrics_ext`], the
 //!   `QUADRAY_quadrics` extension) import other formats into an [`Imported`] scene part, which
 //!   [`standalone`] completes into a scene of its own and [`native`] merges into a native scene.
+//! - `ply`: the vertices of a PLY file as spheres, for a native scene's `[[spheres]]` table.
 //! - [`export`] writes a scene as glTF 2.0 with the `QUADRAY_quadrics` extension.
 //! - [`LoadError`]: every error names the file, the line and column where known, and the bad key.
 //! - Around every format: [`read_limited`] (the sizes files are read within), [`image_file`]
@@ -13,7 +14,7 @@
 //!   [`confine`] (reads and writes kept inside one folder), [`framing`] (a camera for a scene
 //!   without one) and [`suggest`] ("did you mean").
 //!
-//! One folder a format: `native/`, `obj/`, `gltf/`, `export/`.
+//! One folder a format: `native/`, `obj/`, `gltf/`, `ply/`, `export/`.
 
 pub mod atomic_file;
 pub mod confine;
@@ -26,6 +27,7 @@ mod import;
 mod include;
 pub mod native;
 pub mod obj;
+mod ply;
 pub mod read_limited;
 pub mod standalone;
 pub mod suggest;

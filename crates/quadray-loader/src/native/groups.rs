@@ -24,6 +24,7 @@ pub(super) enum Def<'f> {
 pub(super) struct Contents<'f> {
     pub(super) key: String,
     pub(super) spheres: &'f [Spanned<SphereSpec>],
+    pub(super) sphere_sets: &'f [Spanned<SphereSetSpec>],
     pub(super) planes: &'f [Spanned<PlaneSpec>],
     pub(super) quadrics: &'f [Spanned<QuadricSpec>],
     pub(super) meshes: &'f [Spanned<MeshSpec>],
@@ -37,6 +38,7 @@ impl<'f> Contents<'f> {
         Contents {
             key: String::new(),
             spheres: &file.spheres,
+            sphere_sets: &file.sphere_sets,
             planes: &file.planes,
             quadrics: &file.quadrics,
             meshes: &file.meshes,
@@ -49,6 +51,7 @@ impl<'f> Contents<'f> {
         Contents {
             key: format!("{key}."),
             spheres: &g.spheres,
+            sphere_sets: &g.sphere_sets,
             planes: &g.planes,
             quadrics: &g.quadrics,
             meshes: &g.meshes,
@@ -78,6 +81,8 @@ pub(super) struct GraphState<'f> {
     pub(super) material_names: Vec<String>,
     /// Notes for the user.
     pub(super) notes: Vec<String>,
+    /// Materials made for `[[spheres]]` vertex colours, by base material and colour bits.
+    pub(super) tinted: HashMap<(u32, [u32; 3]), u32>,
 }
 
 impl Builder<'_> {
@@ -99,6 +104,7 @@ impl Builder<'_> {
             materials,
             material_names,
             notes: Vec::new(),
+            tinted: HashMap::new(),
         };
         let mut todo = vec![world.clone()];
         while let Some(c) = todo.pop() {
@@ -175,6 +181,9 @@ impl Builder<'_> {
                 continue;
             }
             self.sphere(s, &key, names, false, out)?;
+        }
+        for (i, s) in c.sphere_sets.iter().enumerate() {
+            self.sphere_set(st, names, s, &format!("{k}spheres[{i}]"), out)?;
         }
         for (i, p) in c.planes.iter().enumerate() {
             let key = format!("{k}plane[{i}]");

@@ -32,6 +32,7 @@ mod objects;
 pub mod overrides;
 mod render;
 mod spec;
+mod sphere_set;
 #[cfg(test)]
 mod tests;
 mod transform;
@@ -176,6 +177,11 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<LoadedScene, LoadError> {
 /// none becomes infinite later (as an f32, or once transformed) far from its line.
 const MAX_NUMBER: f64 = quadray::MAX_COORDINATE;
 
+/// The message for a number `x` beyond [`MAX_NUMBER`], in the scene or in a file it reads.
+pub(crate) fn beyond_limit(x: f64) -> String {
+    format!("{x:e} is beyond the limit of ±{MAX_NUMBER:e} for numbers in a scene")
+}
+
 /// Validation context: the file's path and text, to turn spans into locations.
 struct Builder<'a> {
     path: &'a Path,
@@ -234,11 +240,7 @@ impl Builder<'_> {
         key: &str,
     ) -> Result<(), LoadError> {
         match values.into_iter().find(|x| x.abs() > MAX_NUMBER) {
-            Some(x) => Err(self.err(
-                span,
-                key,
-                format!("{x:e} is beyond the limit of ±{MAX_NUMBER:e} for numbers in a scene"),
-            )),
+            Some(x) => Err(self.err(span, key, beyond_limit(x))),
             None => Ok(()),
         }
     }

@@ -18,6 +18,8 @@ pub(super) struct SceneFile {
     pub(super) materials: Vec<Spanned<MaterialSpec>>,
     #[serde(default, rename = "sphere")]
     pub(super) spheres: Vec<Spanned<SphereSpec>>,
+    #[serde(default, rename = "spheres")]
+    pub(super) sphere_sets: Vec<Spanned<SphereSetSpec>>,
     #[serde(default, rename = "plane")]
     pub(super) planes: Vec<Spanned<PlaneSpec>>,
     #[serde(default, rename = "quadric")]
@@ -44,6 +46,8 @@ pub(super) struct GroupSpec {
     pub(super) template: Option<Spanned<bool>>,
     #[serde(default, rename = "sphere")]
     pub(super) spheres: Vec<Spanned<SphereSpec>>,
+    #[serde(default, rename = "spheres")]
+    pub(super) sphere_sets: Vec<Spanned<SphereSetSpec>>,
     /// Present only to be refused with a clear message: a plane is unbounded.
     #[serde(default, rename = "plane")]
     pub(super) planes: Vec<Spanned<PlaneSpec>>,
@@ -153,6 +157,17 @@ pub(super) struct SphereSpec {
     pub(super) name: Option<Spanned<String>>,
     pub(super) center: Spanned<V3>,
     pub(super) radius: Spanned<f64>,
+    pub(super) transform: Option<Spanned<TransformSpec>>,
+    pub(super) material: Spanned<String>,
+}
+
+/// `[[spheres]]`: one sphere a vertex of a PLY file.
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SphereSetSpec {
+    pub(super) path: Spanned<String>,
+    /// The radius of vertices without a `radius` property.
+    pub(super) radius: Option<Spanned<f64>>,
     pub(super) transform: Option<Spanned<TransformSpec>>,
     pub(super) material: Spanned<String>,
 }
