@@ -17,6 +17,7 @@
 
 use super::build::{build_single_leaves, padded_aabb};
 use super::round_up;
+use super::sphere_clusters::{CLUSTER, CLUSTER_FROM, morton_order};
 use super::sphere4::{FilterRay, Sphere4};
 use super::stack::{Stacks, with_stack};
 use super::wide::{BoxRay, LEAF, LEAF_WEIGHT, Node4, collapse};
@@ -78,25 +79,60 @@ impl AnalyticBvh {
     /// Builds the BVH, or `None` when there are no analytic primitives. `extent` bounds the
     /// magnitude of every coordinate a ray may start at.
     pub(crate) fn build(level: Level<'_>, extent: f32) -> Option<AnalyticBvh> {
-        let spheres = level.spheres.len();
-        let aabbs: Vec<Aabb> = (level.spheres.iter().map(|s| s.bounds()))
-            .chain(level.quadrics.iter().map(|q| q.bounds()))
-            .map(|b| padded_aabb(b, extent))
-            .collect();
-        if aabbs.is_empty() {
+        Self::build_grouping(level, extent, level.spheres.len() >= CLUSTER_FROM)
+    }
+
+    /// [`AnalyticBvh::build`], grouping the spheres before the build or not.
+    fn build_grouping(level: Level<'_>, extent: f32, group: bool) -> Option<AnalyticBvh> {
+        let len = level.spheres.len() + level.quadrics.len();
+        if len == 0 {
             return None;
         }
-        // Primitive p is sphere p below `spheres`, quadric p − spheres above.
+        // The builder's items: the spheres one by one, or grouped four by four in Morton order
+        // (many spheres); then the quadrics one by one.
+        let grouped = group.then(|| morton_order(level.spheres));
+        let sphere_box = |i: u32| padded_aabb(level.spheres[i as usize].bounds(), extent);
+        let mut aabbs: Vec<Aabb> = match &grouped {
+            Some(order) => (order.chunks(CLUSTER))
+                .map(|group| {
+                    (group.iter().map(|&i| sphere_box(i)))
+                        .reduce(|a, b| a.union(&b))
+                        .expect("groups are not empty")
+                })
+                .collect(),
+            None => (0..level.spheres.len() as u32).map(sphere_box).collect(),
+        };
+        let sphere_items = aabbs.len();
+        aabbs.extend((level.quadrics.iter()).map(|q| padded_aabb(q.bounds(), extent)));
         let bvh2 = build_single_leaves(&aabbs);
-        let is_sphere = |p: u32| (p as usize) < spheres;
+        // 32 bytes an item, not needed past the build: freed before the leaves are packed.
+        drop(aabbs);
+        let is_sphere = |p: u32| (p as usize) < sphere_items;
+        // The spheres of sphere item `p`.
+        let spheres_of = |p: u32| {
+            let mut out = [p; CLUSTER];
+            let n = match &grouped {
+                Some(order) => {
+                    let first = p as usize * CLUSTER;
+                    let group = &order[first..(first + CLUSTER).min(order.len())];
+                    out[..group.len()].copy_from_slice(group);
+                    group.len()
+                }
+                None => 1,
+            };
+            (out, n)
+        };
+        let weight = |p: u32| match grouped {
+            None if is_sphere(p) => 1,
+            _ => LEAF_WEIGHT,
+        };
         let mut blocks: Vec<Block> = Vec::new();
-        let nodes = collapse(
-            &bvh2,
-            |p| if is_sphere(p) { 1 } else { LEAF_WEIGHT },
-            |prims| {
-                let first = blocks.len() as u32;
-                let mut lane = 4;
-                for &p in prims.iter().filter(|&&p| is_sphere(p)) {
+        let nodes = collapse(&bvh2, weight, |prims| {
+            let first = blocks.len() as u32;
+            let mut lane = 4;
+            for &p in prims.iter().filter(|&&p| is_sphere(p)) {
+                let (group, n) = spheres_of(p);
+                for &sphere in &group[..n] {
                     if lane == 4 {
                         blocks.push(Block {
                             spheres: Sphere4::EMPTY,
@@ -105,32 +141,32 @@ impl AnalyticBvh {
                         lane = 0;
                     }
                     let block = blocks.last_mut().expect("a block was pushed");
-                    block.spheres.set(lane, &level.spheres[p as usize]);
-                    block.prims[lane] = p;
+                    block.spheres.set(lane, &level.spheres[sphere as usize]);
+                    block.prims[lane] = sphere;
                     lane += 1;
                 }
-                for &p in prims.iter().filter(|&&p| !is_sphere(p)) {
-                    let mut prims = [NO_PRIM; 4];
-                    prims[0] = QUADRIC | (p - spheres as u32);
-                    blocks.push(Block {
-                        spheres: Sphere4::EMPTY,
-                        prims,
-                    });
-                }
-                let count = blocks.len() as u32 - first;
-                // Leaves of one BVH2 leaf hold one primitive, so a leaf is one block.
-                assert!(
-                    count < 1 << LEAF_COUNT_BITS && blocks.len() < 1 << 27,
-                    "an analytic BVH leaf holds at most 7 blocks, and a BVH 2^27 blocks"
-                );
-                (first << LEAF_COUNT_BITS) | count
-            },
-        );
+            }
+            for &p in prims.iter().filter(|&&p| !is_sphere(p)) {
+                let mut prims = [NO_PRIM; 4];
+                prims[0] = QUADRIC | (p - sphere_items as u32);
+                blocks.push(Block {
+                    spheres: Sphere4::EMPTY,
+                    prims,
+                });
+            }
+            let count = blocks.len() as u32 - first;
+            // A BVH2 leaf holds one item, and a leaf at most four spheres' weight: one block.
+            assert!(
+                count < 1 << LEAF_COUNT_BITS && blocks.len() < 1 << 27,
+                "an analytic BVH leaf holds at most 7 blocks, and a BVH 2^27 blocks"
+            );
+            (first << LEAF_COUNT_BITS) | count
+        });
         Some(AnalyticBvh {
             nodes: nodes.into_boxed_slice().into_vec(),
             blocks: blocks.into_boxed_slice().into_vec(),
             root: *bvh2.nodes[0].aabb(),
-            len: aabbs.len(),
+            len,
         })
     }
 
@@ -287,4 +323,105 @@ fn block_closest(
         }
     }
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quadric::{ClipBox, Quadric, QuadricKind, QuadricSurface};
+    use crate::sphere::Sphere;
+    use crate::{Transform, math::Ray};
+    use glam::DVec3;
+
+    /// The nearest hit over every primitive, one by one.
+    fn brute(level: Level<'_>, ray: &Ray, from: Option<LocalPrim>) -> Option<(f64, LocalPrim)> {
+        let prims = (0..level.spheres.len() as u32)
+            .map(LocalPrim::Sphere)
+            .chain((0..level.quadrics.len() as u32).map(LocalPrim::Quadric));
+        let mut best: Option<(f64, LocalPrim)> = None;
+        for p in prims {
+            let limit = best.map_or(f64::INFINITY, |b| b.0);
+            if let Some(t) = level.intersect(p, ray, limit, from == Some(p)) {
+                best = Some((t, p));
+            }
+        }
+        best
+    }
+
+    /// Spheres of a jittered lattice and a few quadrics among them, built with and without the
+    /// Morton grouping: closest and any-hit answers equal a brute-force scan for rays from
+    /// outside and rays spawned on the primitives.
+    #[test]
+    fn traversal_matches_brute_force_grouped_or_not() {
+        let mut seed = 0x1234_5678_9abc_def0u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut spheres = Vec::new();
+        for i in 0..12 {
+            for j in 0..12 {
+                for k in 0..10 {
+                    let c = DVec3::new(i as f64, j as f64, k as f64)
+                        + DVec3::new(next(), next(), next()) * 0.3;
+                    spheres.push(Sphere {
+                        center: c,
+                        radius: 0.2 + 0.25 * next(),
+                        material: 0,
+                    });
+                }
+            }
+        }
+        let quadrics: Vec<Quadric> = QuadricKind::ALL
+            .iter()
+            .enumerate()
+            .map(|(n, &kind)| {
+                let at = DVec3::new(n as f64 * 1.3, 5.5, 4.5);
+                let t = Transform::from_srt(DVec3::splat(0.4), DVec3::ZERO, at).unwrap();
+                let surface = QuadricSurface::Canonical {
+                    kind,
+                    a: 1.0,
+                    b: 1.0,
+                    c: 1.0,
+                };
+                Quadric::new(surface, ClipBox::cube(1.0), t, 0).unwrap()
+            })
+            .collect();
+        let level = Level {
+            spheres: &spheres,
+            quadrics: &quadrics,
+            meshes: &[],
+            instances: &[],
+        };
+        for group in [false, true] {
+            let bvh = AnalyticBvh::build_grouping(level, 30.0, group).unwrap();
+            assert_eq!(bvh.len(), spheres.len() + quadrics.len());
+            for k in 0..3000 {
+                let target = DVec3::new(next() * 12.0, next() * 12.0, next() * 10.0);
+                let (ray, from) = if k % 2 == 0 {
+                    let origin = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 80.0;
+                    (Ray::new(origin, target - origin), None)
+                } else {
+                    // Spawned on the nearest hit of another ray.
+                    let origin = DVec3::new(-20.0, 6.0, 5.0);
+                    let probe = Ray::new(origin, target - origin);
+                    let Some((t, p)) = brute(level, &probe, None) else {
+                        continue;
+                    };
+                    let dir = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
+                    (Ray::new(probe.at(t), dir), Some(p))
+                };
+                let want = brute(level, &ray, from);
+                let mut best_t = f64::INFINITY;
+                let got = bvh.closest(level, &ray, &mut best_t, from);
+                assert_eq!(got.map(|p| (best_t, p)), want, "grouped {group}, ray {k}");
+                for limit in [0.5, 2.0] {
+                    let blocked = want.is_some_and(|(t, _)| t < limit);
+                    assert_eq!(bvh.occluded(level, &ray, limit, from), blocked);
+                }
+            }
+        }
+    }
 }

@@ -32,6 +32,7 @@ mod build;
 mod mesh_bvh;
 mod simd;
 mod sphere4;
+mod sphere_clusters;
 mod stack;
 mod stats;
 mod top;
