@@ -205,11 +205,9 @@ impl AnalyticBvh {
         from: Option<LocalPrim>,
     ) -> Option<LocalPrim> {
         let mut best = None;
-        if !in_f32_range(ray) {
+        let Some((boxes, filter)) = f32_rays(ray) else {
             return None;
-        }
-        let boxes = BoxRay::new(ray.origin.as_vec3a(), ray.dir.as_vec3a());
-        let filter = FilterRay::new(ray.origin, ray.dir);
+        };
         let mut limit = round_up(*best_t);
         with_stack(&STACK, |stack| {
             let mut current = 0u32;
@@ -262,11 +260,9 @@ impl AnalyticBvh {
         t_max: f64,
         from: Option<LocalPrim>,
     ) -> bool {
-        if !in_f32_range(ray) {
+        let Some((boxes, filter)) = f32_rays(ray) else {
             return false;
-        }
-        let boxes = BoxRay::new(ray.origin.as_vec3a(), ray.dir.as_vec3a());
-        let filter = FilterRay::new(ray.origin, ray.dir);
+        };
         let limit = round_up(t_max);
         with_stack(&STACK, |stack| {
             let mut current = 0u32;
@@ -295,12 +291,15 @@ impl AnalyticBvh {
     }
 }
 
-/// Whether the ray's origin and direction are finite in f32. A ray beyond f32's range (an origin
-/// at 10³⁹, reached through an instance scaled by 10⁻⁴⁰) meets nothing, as at every level: the
-/// f32 boxes cannot bound it, so any hit found would depend on how their infinities compare.
+/// The ray in f32 for the node test and the sphere filter, or `None` when its origin or direction
+/// is not finite in f32. A ray beyond f32's range (an origin at 10³⁹, reached through an instance
+/// scaled by 10⁻⁴⁰) meets nothing, as at every level: the f32 boxes cannot bound it, so any hit
+/// found would depend on how their infinities compare.
 #[inline(always)]
-fn in_f32_range(ray: &Ray) -> bool {
-    ray.origin.as_vec3a().is_finite() && ray.dir.as_vec3a().is_finite()
+fn f32_rays(ray: &Ray) -> Option<(BoxRay, FilterRay)> {
+    let (origin, dir) = (ray.origin.as_vec3a(), ray.dir.as_vec3a());
+    (origin.is_finite() && dir.is_finite())
+        .then(|| (BoxRay::new(origin, dir), FilterRay::new(origin, dir)))
 }
 
 /// A leaf's payload: its first [`Block`], shifted past the low bits that hold the block count.

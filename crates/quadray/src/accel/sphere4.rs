@@ -52,10 +52,9 @@ pub(crate) struct FilterRay {
 }
 
 impl FilterRay {
-    /// The f64 ray `origin + t·dir` rounded to f32 for the filter.
+    /// The filter's ray from the f64 ray `origin + t·dir` rounded to f32.
     #[inline(always)]
-    pub(crate) fn new(origin: glam::DVec3, dir: glam::DVec3) -> FilterRay {
-        let (origin, dir) = (origin.as_vec3a(), dir.as_vec3a());
+    pub(crate) fn new(origin: Vec3A, dir: Vec3A) -> FilterRay {
         FilterRay {
             origin,
             dir,
@@ -176,7 +175,8 @@ mod tests {
                     let mut block = Sphere4::EMPTY;
                     block.set(k % 4, &sphere);
                     let lane = 1 << (k % 4);
-                    let kept = block.may_hit(&FilterRay::new(ray.origin, ray.dir)) & lane != 0;
+                    let filter = FilterRay::new(ray.origin.as_vec3a(), ray.dir.as_vec3a());
+                    let kept = block.may_hit(&filter) & lane != 0;
                     let exact = sphere.intersect(&ray, f64::INFINITY, false).is_some()
                         || sphere.intersect(&ray, f64::INFINITY, true).is_some() && k % 3 == 1;
                     if exact {
@@ -207,9 +207,9 @@ mod tests {
             material: 0,
         };
         block.set(0, &huge);
-        let ray = FilterRay::new(DVec3::new(0.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0));
+        let ray = FilterRay::new(Vec3A::ZERO, Vec3A::X);
         assert_eq!(block.may_hit(&ray) & 1, 1);
-        let nan = FilterRay::new(DVec3::new(f64::NAN, 0.0, 0.0), DVec3::X);
+        let nan = FilterRay::new(Vec3A::new(f32::NAN, 0.0, 0.0), Vec3A::X);
         assert_eq!(block.may_hit(&nan) & 1, 1);
     }
 }
