@@ -38,7 +38,7 @@ static SRGB_BY_ROOT: std::sync::LazyLock<[f32; SRGB_TABLE_STEPS + 1]> =
 /// steps up ([`Srgb8Steps`]) instead of by a `powf` (which cost 13% of a quadric-grid frame).
 pub fn encode_srgb8(linear: f32) -> u8 {
     // NaN, negative values and zeros are code 0, as in `encode_srgb`; 1 and beyond code 255.
-    if !(linear > 0.0) {
+    if linear.is_nan() || linear <= 0.0 {
         return 0;
     }
     if linear >= 1.0 {

@@ -227,7 +227,7 @@ pub fn offset_origin(p: DVec3, geometric_normal: DVec3, offset: f64, dir: DVec3)
 #[inline(always)]
 pub fn floor(x: f64) -> f64 {
     // From 2⁵² on (and for NaN and infinities) every f64 is its own floor.
-    if !(x.abs() < 4_503_599_627_370_496.0) {
+    if x.is_nan() || x.abs() >= 4_503_599_627_370_496.0 {
         return x;
     }
     // Truncation toward zero is exact here; a negative non-integer steps down one.

@@ -205,9 +205,7 @@ impl AnalyticBvh {
         from: Option<LocalPrim>,
     ) -> Option<LocalPrim> {
         let mut best = None;
-        let Some((boxes, filter)) = f32_rays(ray) else {
-            return None;
-        };
+        let (boxes, filter) = f32_rays(ray)?;
         let mut limit = round_up(*best_t);
         with_stack(&STACK, |stack| {
             let mut current = 0u32;
