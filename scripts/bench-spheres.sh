@@ -49,18 +49,18 @@ for line in open(sys.argv[1]):
         fields = (num(r"load ([\d.]+) s", line), num(r"BVH build ([\d.]+) s", line),
                   num(r"render CPU ([\d.]+) s", line), wall, rss)
     else:
-        parse = num(r"Parse Time:.*\(([\d.]+) seconds\)", line)
-        trace = num(r"Trace Time:.*with ([\d.]+) CPU-seconds", line)
-        if trace != trace:
-            trace = num(r"Trace Time:.*\(([\d.]+) seconds\)", line)
-        fields = (parse, float("nan"), trace, wall, rss)
+        # The whole output is one line here: each field is read from its own section.
+        parse = num(r"Parse Time:[^(]*\(([\d.]+) seconds\)", line)
+        bounding = num(r"Bounding Time:[^(]*\(([\d.]+) seconds\)", line)
+        trace = num(r"Trace Time:[^(]*\([\d.]+ seconds\)\s+using \d+ thread\(s\) with ([\d.]+)", line)
+        fields = (parse + (bounding if bounding == bounding else 0.0), float("nan"), trace, wall, rss)
     rows.setdefault(key, []).append(fields)
 def cell(v, i, digits=3):
     xs = [x[i] for x in v if x[i] == x[i]]
     if not xs:
         return "-"
     return f"{statistics.median(xs):.{digits}f} ({min(xs):.{digits}f}-{max(xs):.{digits}f})"
-print("| run | load / parse s | BVH build s | render / trace CPU s | wall s | peak RSS MB | n |")
+print("| run | load / parse+bounding s | BVH build s | render / trace CPU s | wall s | peak RSS MB | n |")
 print("|---|---|---|---|---|---|---|")
 for k, v in rows.items():
     print(f"| {k} | {cell(v, 0)} | {cell(v, 1)} | {cell(v, 2)} | {cell(v, 3)} | {cell(v, 4, 0)} | {len(v)} |")

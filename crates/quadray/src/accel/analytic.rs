@@ -436,4 +436,37 @@ mod tests {
             }
         }
     }
+
+    /// Spheres at exponentially growing distances make a deep tree (obvhs' builder cannot
+    /// balance it), and rays still find what a brute-force scan finds.
+    #[test]
+    fn deep_trees_traverse() {
+        let spheres: Vec<Sphere> = (0..300)
+            .map(|i| {
+                let x = 1.2f64.powi(i);
+                Sphere {
+                    center: DVec3::new(x, 0.0, 0.0),
+                    radius: 0.1 * x,
+                    material: 0,
+                }
+            })
+            .collect();
+        let level = Level {
+            spheres: &spheres,
+            quadrics: &[],
+            meshes: &[],
+            instances: &[],
+        };
+        let bvh = AnalyticBvh::build(level, 1e25).unwrap();
+        for i in (0..300).step_by(7) {
+            let x = 1.2f64.powi(i);
+            let ray = Ray::new(DVec3::new(x, -5.0 * x, 0.05 * x), DVec3::Y);
+            let want = brute(level, &ray, None);
+            assert!(want.is_some());
+            let mut best_t = f64::INFINITY;
+            let got = bvh.closest(level, &ray, &mut best_t, None);
+            assert_eq!(got.map(|p| (best_t, p)), want);
+            assert!(bvh.occluded(level, &ray, f64::INFINITY, None));
+        }
+    }
 }
