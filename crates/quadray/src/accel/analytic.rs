@@ -21,7 +21,7 @@ use super::round_up;
 use super::sphere_clusters::{CLUSTER, CLUSTER_FROM, morton_order};
 use super::sphere4::{FilterRay, Sphere4};
 use super::stack::{Stacks, with_stack};
-use super::wide::{BoxRay, LEAF, LEAF_WEIGHT, Node4, collapse};
+use super::wide::{BoxRay, LEAF, LEAF_WEIGHT, Node4, collapse, pop_nearer};
 use crate::geometry::Level;
 use crate::math::Ray;
 use crate::shape::LocalPrim;
@@ -234,15 +234,9 @@ impl AnalyticBvh {
                     }
                 }
                 // Pop the next child that may still hold a nearer hit.
-                loop {
-                    match stack.pop() {
-                        None => return,
-                        Some((child, enter)) if enter <= limit => {
-                            current = child;
-                            break;
-                        }
-                        Some(_) => {}
-                    }
+                match pop_nearer(stack, limit) {
+                    Some(child) => current = child,
+                    None => return,
                 }
             }
         });

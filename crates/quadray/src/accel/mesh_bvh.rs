@@ -7,7 +7,7 @@
 //! an index into a table of (mesh, triangle).
 
 use super::tri4::Tri4;
-use super::wide::{BoxRay, LEAF, Node4, collapse, covering_boxes};
+use super::wide::{BoxRay, LEAF, Node4, collapse, covering_boxes, pop_nearer};
 use crate::mesh::Mesh;
 use crate::triangle::{ShearedRay, TriangleHit};
 use glam::{Vec3, Vec3A};
@@ -260,15 +260,9 @@ impl MeshBvh {
                     }
                 }
                 // Pop the next child that may still hold a nearer hit.
-                loop {
-                    match stack.pop() {
-                        None => return,
-                        Some((child, enter)) if enter <= limit => {
-                            current = child;
-                            break;
-                        }
-                        Some(_) => {}
-                    }
+                match pop_nearer(stack, limit) {
+                    Some(child) => current = child,
+                    None => return,
                 }
             }
         });

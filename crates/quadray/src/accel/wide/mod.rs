@@ -155,6 +155,18 @@ impl Node4 {
     }
 }
 
+/// The next pending child of a closest-hit traversal the ray enters no farther than `limit` (the
+/// best hit so far), dropping those beyond it; `None` when none is left.
+#[inline(always)]
+pub(super) fn pop_nearer(stack: &mut Vec<(u32, f32)>, limit: f32) -> Option<u32> {
+    loop {
+        match stack.pop()? {
+            (child, enter) if enter <= limit => return Some(child),
+            _ => {}
+        }
+    }
+}
+
 /// The boxes of the root's children's children (at most 16): their union holds every primitive,
 /// and they hug the content far closer than one box once rotated.
 pub(super) fn covering_boxes(nodes: &[Node4]) -> Vec<(glam::DVec3, glam::DVec3)> {
