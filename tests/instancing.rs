@@ -222,3 +222,65 @@ fn coordinates_beyond_the_limit_are_errors_and_tiny_instances_build() {
     // (documented): the world sphere behind it is hit.
     assert_eq!(hit.map(|h| h.prim.placement), Some(0));
 }
+
+/// A prototype scaled up by 10¹⁵ (its object-space rays have directions of length 10⁻¹⁵) is hit
+/// by rays running along one of its boxes' faces, from the analytic BVH's node test and from its
+/// level's top (a sphere and a mesh: two items tested box by box). The ray reciprocals are
+/// clamped relative to the direction's length: an absolute clamp left such a ray's exit from the
+/// slab it runs along before its entry on the other axes, and the copy was missed.
+#[test]
+fn hugely_scaled_instances_are_hit_along_their_faces() {
+    use quadray::*;
+    let triangle = Mesh::new(
+        vec![
+            glam::Vec3::new(5.0, 5.0, 0.0),
+            glam::Vec3::new(6.0, 5.0, 0.0),
+            glam::Vec3::new(5.0, 6.0, 0.0),
+        ],
+        vec![[0, 1, 2]],
+        None,
+        0,
+    )
+    .unwrap();
+    let unit_sphere = Sphere {
+        center: glam::DVec3::ZERO,
+        radius: 1.0,
+        material: 0,
+    };
+    for with_mesh in [false, true] {
+        let scale = glam::DAffine3::from_scale(glam::DVec3::splat(1e15));
+        let scene = Scene::new(SceneDescription {
+            camera: Camera::orbit(glam::DVec3::ZERO, 30.0, 20.0, 6e15, 40.0),
+            background: glam::Vec3::ZERO,
+            environment: None,
+            materials: vec![Material::default()],
+            lights: vec![],
+            geometry: Geometry {
+                prototypes: vec![Prototype {
+                    spheres: vec![unit_sphere.clone()],
+                    meshes: if with_mesh {
+                        vec![triangle.clone()]
+                    } else {
+                        vec![]
+                    },
+                    ..Prototype::default()
+                }],
+                instances: vec![Instance::new(0, Transform::new(scale).unwrap())],
+                ..Geometry::default()
+            },
+        })
+        .unwrap();
+        // Along z, just inside the sphere's box face x = 1 (the sphere's rim at x = 0.999999).
+        for x in [0.999_999, -0.999_999, 0.5] {
+            let ray = Ray::new(glam::DVec3::new(x * 1e15, 0.0, -2e15), glam::DVec3::Z);
+            let hit = scene.intersect(&ray);
+            let z = -(1.0f64 - x * x).sqrt() * 1e15;
+            let hit = hit.unwrap_or_else(|| panic!("missed at x = {x} (mesh {with_mesh})"));
+            assert!(
+                (hit.geometry.point.z - z).abs() < 1e-6 * 1e15,
+                "{:?}",
+                hit.geometry.point
+            );
+        }
+    }
+}

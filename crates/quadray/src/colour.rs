@@ -35,7 +35,8 @@ static SRGB_BY_ROOT: std::sync::LazyLock<[f32; SRGB_TABLE_STEPS + 1]> =
 
 /// The sRGB transfer function (IEC 61966-2-1) applied to a clamped linear value, as an 8-bit code:
 /// `(encode_srgb(linear) · 255 + 0.5)` truncated, found from the linear values where the code
-/// steps up ([`Srgb8Steps`]) instead of by a `powf` (which cost 13% of a quadric-grid frame).
+/// steps up ([`Srgb8Steps`]) instead of by a `powf` (13% of a quadric-grid frame's profile; the
+/// frame's wall time fell 8%).
 pub fn encode_srgb8(linear: f32) -> u8 {
     // NaN, negative values and zeros are code 0, as in `encode_srgb`; 1 and beyond code 255.
     if linear.is_nan() || linear <= 0.0 {
@@ -58,7 +59,7 @@ fn encode_srgb8_direct(linear: f32) -> u8 {
 }
 
 /// Positive f32s below 1 are bucketed by their bits above this one: a bucket spans 2¹⁶ ulps
-/// (under 1% of its values), where the code rises by at most one or two.
+/// (under 1% of its magnitude), where the code rises by at most one or two.
 const BUCKET_SHIFT: u32 = 16;
 
 /// Where the 8-bit sRGB code steps up, and the code at the start of each bucket of positive f32s

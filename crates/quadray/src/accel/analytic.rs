@@ -129,39 +129,7 @@ impl AnalyticBvh {
         };
         let mut blocks: Vec<Block> = Vec::new();
         let nodes = collapse(&bvh2, weight, |prims| {
-            let first = blocks.len() as u32;
-            let mut lane = 4;
-            for &p in prims.iter().filter(|&&p| is_sphere(p)) {
-                let (group, n) = spheres_of(p);
-                for &sphere in &group[..n] {
-                    if lane == 4 {
-                        blocks.push(Block {
-                            spheres: Sphere4::EMPTY,
-                            prims: [NO_PRIM; 4],
-                        });
-                        lane = 0;
-                    }
-                    let block = blocks.last_mut().expect("a block was pushed");
-                    block.spheres.set(lane, &level.spheres[sphere as usize]);
-                    block.prims[lane] = sphere;
-                    lane += 1;
-                }
-            }
-            for &p in prims.iter().filter(|&&p| !is_sphere(p)) {
-                let mut prims = [NO_PRIM; 4];
-                prims[0] = QUADRIC | (p - sphere_items as u32);
-                blocks.push(Block {
-                    spheres: Sphere4::EMPTY,
-                    prims,
-                });
-            }
-            let count = blocks.len() as u32 - first;
-            // A BVH2 leaf holds one item, and a leaf at most four spheres' weight: one block.
-            assert!(
-                count < 1 << LEAF_COUNT_BITS && blocks.len() < 1 << 27,
-                "an analytic BVH leaf holds at most 7 blocks, and a BVH 2^27 blocks"
-            );
-            (first << LEAF_COUNT_BITS) | count
+            pack_leaf(&mut blocks, level, prims, sphere_items, &spheres_of)
         });
         Some(AnalyticBvh {
             nodes: nodes.into_boxed_slice().into_vec(),
@@ -281,6 +249,51 @@ impl AnalyticBvh {
             }
         })
     }
+}
+
+/// Packs a leaf's items into blocks (the spheres of its sphere items four to a block, then one
+/// block per quadric) and returns the leaf's payload: its first block and their count.
+fn pack_leaf(
+    blocks: &mut Vec<Block>,
+    level: Level<'_>,
+    items: &[u32],
+    sphere_items: usize,
+    spheres_of: &impl Fn(u32) -> ([u32; CLUSTER], usize),
+) -> u32 {
+    let is_sphere = |p: u32| (p as usize) < sphere_items;
+    let first = blocks.len() as u32;
+    let mut lane = 4;
+    for &p in items.iter().filter(|&&p| is_sphere(p)) {
+        let (group, n) = spheres_of(p);
+        for &sphere in &group[..n] {
+            if lane == 4 {
+                blocks.push(Block {
+                    spheres: Sphere4::EMPTY,
+                    prims: [NO_PRIM; 4],
+                });
+                lane = 0;
+            }
+            let block = blocks.last_mut().expect("a block was pushed");
+            block.spheres.set(lane, &level.spheres[sphere as usize]);
+            block.prims[lane] = sphere;
+            lane += 1;
+        }
+    }
+    for &p in items.iter().filter(|&&p| !is_sphere(p)) {
+        let mut prims = [NO_PRIM; 4];
+        prims[0] = QUADRIC | (p - sphere_items as u32);
+        blocks.push(Block {
+            spheres: Sphere4::EMPTY,
+            prims,
+        });
+    }
+    let count = blocks.len() as u32 - first;
+    // A BVH2 leaf holds one item, and a leaf at most four spheres' weight: one block.
+    assert!(
+        count < 1 << LEAF_COUNT_BITS && blocks.len() <= 1 << 28,
+        "an analytic BVH leaf holds at most 7 blocks, and a BVH 2^28 blocks"
+    );
+    (first << LEAF_COUNT_BITS) | count
 }
 
 /// The ray in f32 for the node test and the sphere filter, or `None` when its origin or direction

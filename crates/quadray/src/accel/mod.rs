@@ -46,7 +46,7 @@ use crate::shape::{LocalPrim, PrimRef};
 use analytic::AnalyticBvh;
 use build::Bounds;
 pub use build::Layout;
-use glam::{DVec3, Vec3A};
+use glam::DVec3;
 use mesh_bvh::{MeshBvh, MeshRay};
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
 pub use simd::{SimdPath, simd_path};
@@ -540,17 +540,13 @@ thread_local! {
 
 /// The f32 ray obvhs traverses with. Built field by field: obvhs' constructor debug-asserts a
 /// finite origin, while a ray beyond f32's range (an origin at 10³⁹) must simply meet nothing.
-/// The reciprocal is obvhs' `safe_inverse` (components within f32::EPSILON of zero become
-/// ±1/EPSILON) computed for three lanes at once: one division instead of three, the same bits.
+/// The reciprocal is the wide nodes' ([`wide::safe_recip`]), clamped relative to the direction's
+/// length; obvhs' own `safe_inverse` clamps at ±1/f32::EPSILON, which made a ray of an instance
+/// scaled up by 10⁸ or more leave a box it was running along before entering it.
 #[inline]
 fn to_obvhs(ray: &Ray, t_max: f64) -> obvhs::ray::Ray {
     let direction = ray.dir.as_vec3a();
-    let tiny = direction.abs().cmple(Vec3A::splat(f32::EPSILON));
-    let inv_direction = Vec3A::select(
-        tiny,
-        direction.signum() * (1.0 / f32::EPSILON),
-        Vec3A::ONE / direction,
-    );
+    let inv_direction = wide::safe_recip(direction);
     obvhs::ray::Ray {
         origin: ray.origin.as_vec3a(),
         direction,

@@ -1,6 +1,7 @@
 //! Many spheres grouped four by four along a Morton curve before the BVH build, so the builder
-//! sees a quarter of the boxes: scenes of 10⁵–10⁷ spheres (particles, molecules) then build in a
-//! quarter of the time and memory, and every leaf block is full.
+//! sees a quarter of the boxes: scenes of more than [`CLUSTER_FROM`] spheres (particles,
+//! molecules) then build in well under half the time and memory, and every leaf block but the
+//! last is full.
 //!
 //! Consecutive spheres on the Morton (Z-order) curve of their centres are near each other, so a
 //! group's box is nearly as tight as the best four-sphere leaf a builder would find in dense

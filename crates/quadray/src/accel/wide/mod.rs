@@ -5,8 +5,9 @@
 //! A node holds its four children's boxes as six `Vec4`s, so one ray meets all four in a dozen
 //! SIMD operations (glam's `Vec4`: SSE2 on x86-64, NEON on aarch64). There is no entry clamp:
 //! hits at any distance count (obvhs' CWBVH node test clamps entry distances to 1e-4 world units,
-//! which breaks scale invariance). Reciprocal directions are clamped at ±1e20 and the near/far
-//! planes follow the reciprocal's sign, so a −0.0 direction component cannot invert a slab.
+//! which breaks scale invariance). Reciprocal directions are clamped relative to the direction's
+//! length ([`safe_recip`]) and the near/far planes follow the reciprocal's sign, so a −0.0
+//! direction component cannot invert a slab.
 //!
 //! A child reference is a node index, or a leaf ([`LEAF`] set) whose other 31 bits are a payload
 //! the owning BVH defines (which leaf block, or which primitive).
@@ -60,11 +61,19 @@ pub(crate) struct BoxRay {
 /// 1 + 2γ(3) in f32: the factor that makes a slab's exit distance conservative.
 const ROBUST_EXIT: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
-/// Reciprocals clamped to ±1e20, keeping the sign of zero: three lanes in one division.
+/// The reciprocal of a direction's components, three lanes in one division, keeping the sign of
+/// zero. A component below 2⁻⁶⁰ of the largest one (or zero) gets the reciprocal of that floor
+/// instead of its own. The floor is relative to the direction so the clamp is scale-invariant: a
+/// slab the ray runs along is left at a distance of at least 2⁶⁰ times the origin's offset from
+/// the slab's face, over the direction's length, which no padded box's entry on another axis
+/// reaches. An absolute clamp (±1e20) made a ray of an instance scaled by 10¹⁵ leave a box it was
+/// running along before entering it. The floor never drops below f32's smallest normal number.
 #[inline(always)]
-fn safe_recip(x: Vec3A) -> Vec3A {
-    let tiny = x.abs().cmplt(Vec3A::splat(1e-20));
-    Vec3A::select(tiny, Vec3A::splat(1e20).copysign(x), Vec3A::ONE / x)
+pub(super) fn safe_recip(x: Vec3A) -> Vec3A {
+    let magnitude = x.abs();
+    let floor = (magnitude.max_element() * (1.0 / (1u64 << 60) as f32)).max(f32::MIN_POSITIVE);
+    let tiny = magnitude.cmplt(Vec3A::splat(floor));
+    Vec3A::select(tiny, Vec3A::splat(1.0 / floor).copysign(x), Vec3A::ONE / x)
 }
 
 impl BoxRay {
