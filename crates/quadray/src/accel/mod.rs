@@ -540,9 +540,9 @@ thread_local! {
 
 /// The f32 ray obvhs traverses with. Built field by field: obvhs' constructor debug-asserts a
 /// finite origin, while a ray beyond f32's range (an origin at 10³⁹) must simply meet nothing.
-/// The reciprocal is the wide nodes' ([`wide::safe_recip`]), clamped relative to the direction's
-/// length; obvhs' own `safe_inverse` clamps at ±1/f32::EPSILON, which made a ray of an instance
-/// scaled up by 10⁸ or more leave a box it was running along before entering it.
+/// The reciprocal is the wide nodes' ([`wide::safe_recip`]), clamped only where it would be
+/// infinite; obvhs' own `safe_inverse` clamps components below f32::EPSILON to ±1/EPSILON, which
+/// can make a ray of a strongly scaled-up instance leave a box it runs along before entering it.
 #[inline]
 fn to_obvhs(ray: &Ray, t_max: f64) -> obvhs::ray::Ray {
     let direction = ray.dir.as_vec3a();

@@ -5,8 +5,8 @@
 //! A node holds its four children's boxes as six `Vec4`s, so one ray meets all four in a dozen
 //! SIMD operations (glam's `Vec4`: SSE2 on x86-64, NEON on aarch64). There is no entry clamp:
 //! hits at any distance count (obvhs' CWBVH node test clamps entry distances to 1e-4 world units,
-//! which breaks scale invariance). Reciprocal directions are clamped relative to the direction's
-//! length ([`safe_recip`]) and the near/far planes follow the reciprocal's sign, so a −0.0
+//! which breaks scale invariance). Reciprocal directions are clamped only where they would be
+//! infinite ([`safe_recip`]) and the near/far planes follow the reciprocal's sign, so a −0.0
 //! direction component cannot invert a slab.
 //!
 //! A child reference is a node index, or a leaf ([`LEAF`] set) whose other 31 bits are a payload
@@ -62,18 +62,20 @@ pub(crate) struct BoxRay {
 const ROBUST_EXIT: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// The reciprocal of a direction's components, three lanes in one division, keeping the sign of
-/// zero. A component below 2⁻⁶⁰ of the largest one (or zero) gets the reciprocal of that floor
-/// instead of its own. The floor is relative to the direction so the clamp is scale-invariant: a
-/// slab the ray runs along is left at a distance of at least 2⁶⁰ times the origin's offset from
-/// the slab's face, over the direction's length, which no padded box's entry on another axis
-/// reaches. An absolute clamp (±1e20) made a ray of an instance scaled by 10¹⁵ leave a box it was
-/// running along before entering it. The floor never drops below f32's smallest normal number.
+/// zero: only a zero or subnormal component is clamped, to ±2¹²⁶ (the largest reciprocal of a
+/// normal f32, so the slab distances stay free of ∞·0). A ray running along a slab then leaves it
+/// at 2¹²⁶ times its offset from the face, which no padded box's entry on another axis reaches
+/// for any direction longer than about 10⁻³⁰. The clamp at ±1e20 this replaces made a ray of an
+/// instance scaled by 10¹⁵ (a direction of length 10⁻¹⁵) leave a box it ran along before
+/// entering it.
 #[inline(always)]
 pub(super) fn safe_recip(x: Vec3A) -> Vec3A {
-    let magnitude = x.abs();
-    let floor = (magnitude.max_element() * (1.0 / (1u64 << 60) as f32)).max(f32::MIN_POSITIVE);
-    let tiny = magnitude.cmplt(Vec3A::splat(floor));
-    Vec3A::select(tiny, Vec3A::splat(1.0 / floor).copysign(x), Vec3A::ONE / x)
+    let tiny = x.abs().cmplt(Vec3A::splat(f32::MIN_POSITIVE));
+    Vec3A::select(
+        tiny,
+        Vec3A::splat(2f32.powi(126)).copysign(x),
+        Vec3A::ONE / x,
+    )
 }
 
 impl BoxRay {
