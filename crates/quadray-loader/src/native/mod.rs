@@ -175,7 +175,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<LoadedScene, LoadError> {
 /// The largest magnitude of any number in a scene file: quadray's coordinate limit
 /// ([`quadray::MAX_COORDINATE`], set by its f32 bounding boxes), applied to every number so that
 /// none becomes infinite later (as an f32, or once transformed) far from its line.
-const MAX_NUMBER: f64 = quadray::MAX_COORDINATE;
+pub(crate) const MAX_NUMBER: f64 = quadray::MAX_COORDINATE;
 
 /// The message for a number `x` beyond [`MAX_NUMBER`], in the scene or in a file it reads.
 pub(crate) fn beyond_limit(x: f64) -> String {

@@ -2,8 +2,35 @@
 //! latter take.
 
 use super::*;
-use crate::import::placed_sphere;
+use crate::import::{PlacedShape, placed_sphere};
 use quadray::Prototype;
+
+/// A sphere of `radius` at `center` into `out`, placed by `to_world` when given: a sphere, or the
+/// ellipsoid a non-uniform scale makes of it (a clipped quadric). `[[sphere]]` and every vertex
+/// of `[[spheres]]` are placed here.
+pub(super) fn push_sphere(
+    out: &mut Prototype,
+    to_world: Option<glam::DAffine3>,
+    center: DVec3,
+    radius: f64,
+    material: u32,
+) -> Result<(), String> {
+    let Some(to_world) = to_world else {
+        out.spheres.push(Sphere {
+            center,
+            radius,
+            material,
+        });
+        return Ok(());
+    };
+    let to_parent = to_world * glam::DAffine3::from_translation(center);
+    match placed_sphere(to_parent, radius, material)? {
+        PlacedShape::Sphere(s) => out.spheres.push(s),
+        PlacedShape::Quadric(q) => out.quadrics.push(*q),
+        PlacedShape::Plane(_) => return Err("a sphere was placed as a plane".into()),
+    }
+    Ok(())
+}
 
 impl Builder<'_> {
     pub(super) fn selector(
@@ -297,24 +324,14 @@ impl Builder<'_> {
         let center = self.vec3(&s.center, &format!("{key}.center"))?;
         let radius = self.positive(&s.radius, &format!("{key}.radius"))?;
         let material = self.material_id(names, &s.material, &format!("{key}.material"))?;
-        if local || s.transform.is_none() {
-            out.spheres.push(Sphere {
-                center,
-                radius,
-                material,
-            });
-            return Ok(());
-        }
-        let transform = self.transform(&s.transform, &format!("{key}.transform"))?;
-        let to_parent = transform.to_world * glam::DAffine3::from_translation(center);
-        match placed_sphere(to_parent, radius, material)
-            .map_err(|e| self.err(spec.span(), key, e))?
-        {
-            crate::import::PlacedShape::Sphere(s) => out.spheres.push(s),
-            crate::import::PlacedShape::Quadric(q) => out.quadrics.push(*q),
-            crate::import::PlacedShape::Plane(_) => unreachable!("a sphere is never a plane"),
-        }
-        Ok(())
+        let to_world = match &s.transform {
+            Some(_) if !local => {
+                Some((self.transform(&s.transform, &format!("{key}.transform"))?).to_world)
+            }
+            _ => None,
+        };
+        push_sphere(out, to_world, center, radius, material)
+            .map_err(|e| self.err(spec.span(), key, e))
     }
 
     /// A plane, through its `transform` (the normal by the inverse transpose).

@@ -7,6 +7,7 @@
 //! spheres in eight colours add eight materials.
 
 use super::groups::GraphState;
+use super::objects::push_sphere;
 use super::*;
 use crate::import::{PlacedShape, placed_sphere};
 use crate::ply::SphereFile;
@@ -72,21 +73,7 @@ impl Builder<'_> {
                         (materials.len() - 1) as u32
                     }),
             };
-            let Some(to_world) = to_world else {
-                out.spheres.push(Sphere {
-                    center: v.center,
-                    radius: v.radius,
-                    material,
-                });
-                return Ok(());
-            };
-            let to_parent = to_world * glam::DAffine3::from_translation(v.center);
-            match placed_sphere(to_parent, v.radius, material)? {
-                PlacedShape::Sphere(s) => out.spheres.push(s),
-                PlacedShape::Quadric(q) => out.quadrics.push(*q),
-                PlacedShape::Plane(_) => return Err("a sphere was placed as a plane".into()),
-            }
-            Ok(())
+            push_sphere(out, to_world, v.center, v.radius, material)
         })
         .map_err(|e| self.include_err(Some(&s.path), &path_key, e))
     }

@@ -28,10 +28,6 @@ mod tests;
 /// Largest PLY file of spheres read: 4 GiB (10^8 spheres of three floats).
 pub const MAX_SPHERE_FILE_BYTES: u64 = 4 << 30;
 
-/// Largest magnitude of a coordinate or radius: the scene file's limit for every number
-/// ([`quadray::MAX_COORDINATE`]).
-const MAX_NUMBER: f64 = quadray::MAX_COORDINATE;
-
 /// Most spheres reserved for before the vertices are read, when their count is only a claim.
 const MAX_GUESS: usize = 1 << 16;
 
@@ -263,47 +259,29 @@ impl SphereFile {
                     };
                     self.error(at, &key(), message)
                 };
-                let raw = match self.header.encoding {
-                    Encoding::Ascii => {
-                        text.clear();
-                        let n = rest.read_line(&mut text).map_err(|e| {
-                            self.error(at, &key(), format!("cannot read the line: {e}"))
-                        })?;
-                        if n == 0 {
-                            return Err(self.error(
-                                at,
-                                &key(),
-                                format!(
-                                    "the file ends before this element (the header declares {} `{}` elements)",
-                                    def.count, def.name
-                                ),
-                            ));
-                        }
-                        line += 1;
-                        if is_vertex {
-                            read.read_ascii_element(&text, def).map_err(unreadable)?
-                        } else {
-                            skip.read_ascii_element(&text, def).map_err(unreadable)?;
-                            continue;
-                        }
+                if self.header.encoding == Encoding::Ascii {
+                    text.clear();
+                    let n = rest.read_line(&mut text).map_err(|e| {
+                        self.error(at, &key(), format!("cannot read the line: {e}"))
+                    })?;
+                    if n == 0 {
+                        return Err(self.error(
+                            at,
+                            &key(),
+                            format!(
+                                "the file ends before this element (the header declares {} `{}` elements)",
+                                def.count, def.name
+                            ),
+                        ));
                     }
-                    Encoding::BinaryLittleEndian if is_vertex => read
-                        .read_little_endian_element(&mut rest, def)
-                        .map_err(unreadable)?,
-                    Encoding::BinaryBigEndian if is_vertex => read
-                        .read_big_endian_element(&mut rest, def)
-                        .map_err(unreadable)?,
-                    Encoding::BinaryLittleEndian => {
-                        skip.read_little_endian_element(&mut rest, def)
-                            .map_err(unreadable)?;
-                        continue;
-                    }
-                    Encoding::BinaryBigEndian => {
-                        skip.read_big_endian_element(&mut rest, def)
-                            .map_err(unreadable)?;
-                        continue;
-                    }
-                };
+                    line += 1;
+                }
+                let encoding = self.header.encoding;
+                if !is_vertex {
+                    read_row(&skip, encoding, &mut rest, &text, def).map_err(unreadable)?;
+                    continue;
+                }
+                let raw = read_row(&read, encoding, &mut rest, &text, def).map_err(unreadable)?;
                 let vertex = self.vertex(raw, i, at)?;
                 each(i, vertex).map_err(|m| self.error(at, &key(), m))?;
             }
@@ -324,7 +302,7 @@ impl SphereFile {
         let check = |value: f64, name: &str| -> Result<(), LoadError> {
             let message = if !value.is_finite() {
                 format!("must be a finite number, got {value}")
-            } else if value.abs() > MAX_NUMBER {
+            } else if value.abs() > crate::native::MAX_NUMBER {
                 crate::native::beyond_limit(value)
             } else {
                 return Ok(());
@@ -375,6 +353,22 @@ impl SphereFile {
     fn error(&self, line: Option<usize>, key: &str, message: String) -> LoadError {
         let location = line.map(|line| Location { line, column: 1 });
         LoadError::invalid(&self.path, location, key, message)
+    }
+}
+
+/// One row of `def` read by `parser`: from `rest` in a binary file, from the line `text` already
+/// taken from `rest` in an ASCII one.
+fn read_row<P: PropertyAccess>(
+    parser: &Parser<P>,
+    encoding: Encoding,
+    rest: &mut &[u8],
+    text: &str,
+    def: &ElementDef,
+) -> Result<P, ply_rs_bw::parser::ParseError> {
+    match encoding {
+        Encoding::Ascii => parser.read_ascii_element(text, def),
+        Encoding::BinaryLittleEndian => parser.read_little_endian_element(rest, def),
+        Encoding::BinaryBigEndian => parser.read_big_endian_element(rest, def),
     }
 }
 
