@@ -179,9 +179,10 @@ impl Mesh {
     }
 
     /// Makes the mesh single-sided (glTF's `doubleSided: false`) or two-sided (the default).
-    /// Camera and reflection rays pass through the back of a single-sided mesh's triangles, the
-    /// side from which their vertices turn clockwise; shadow rays still stop there, as glTF
-    /// viewers draw shadows.
+    /// Every ray (camera, reflection and shadow) passes through the back of a single-sided mesh's
+    /// triangles, the side from which their vertices turn clockwise: a culled face is not part of
+    /// the scene (glTF's NegativeScaleTest and TextureSettingsTest show shadows of culled faces
+    /// as the failure).
     pub fn with_single_sided(mut self, single_sided: bool) -> Mesh {
         self.single_sided = single_sided;
         self

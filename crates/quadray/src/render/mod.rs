@@ -7,6 +7,7 @@ mod context;
 mod error;
 mod progress;
 pub mod progressive;
+mod row_order;
 mod uniform;
 
 pub(crate) use context::SampleContext;

@@ -5,6 +5,7 @@ use crate::film::{Film, PixelEstimate};
 use crate::integrator::RayCounts;
 use crate::render::adaptive::SamplingStats;
 use crate::render::context::SampleContext;
+use crate::render::row_order::row_keys;
 use crate::render::{Progress, RenderError, Rendered};
 use crate::sampler::{PixelSampler, pixel_pattern};
 use glam::Vec3;
@@ -26,10 +27,16 @@ pub(super) fn render_uniform(
     let spp = settings.spp;
     let inv_spp = 1.0 / spp as f32;
     let cone = context.sample_cone(spp);
-    film.pixels_mut()
-        .par_chunks_mut(ww)
+    // Rows are taken up in interleaved blocks (row_order), so progress counts representative work.
+    let keys = row_keys(window.height() as usize);
+    let mut rows: Vec<_> = film
+        .pixels_mut()
+        .chunks_mut(ww)
         .zip(aov_rows)
         .enumerate()
+        .collect();
+    rows.sort_unstable_by_key(|(row_index, _)| keys[*row_index]);
+    rows.into_par_iter()
         .for_each(|(row_index, (row, mut aov_row))| {
             if progress.cancelled() {
                 return;

@@ -426,10 +426,38 @@ impl Scene {
     }
 
     /// [`Scene::occluded`] for a ray spawned on `from` (a shadow ray leaving a surface): that
-    /// primitive's own surface at the ray's origin does not block it.
+    /// primitive's own surface at the ray's origin does not block it. Back faces of single-sided
+    /// meshes block nothing: a culled face is not part of the scene for any ray.
     #[inline]
     pub fn occluded_from(&self, ray: &Ray, t_max: f64, from: Option<PrimRef>) -> bool {
+        if self.single_sided {
+            return self.occluded_culling(ray, t_max, from);
+        }
         self.accel.occluded(&self.geometry, ray, t_max, from)
+    }
+
+    /// [`Scene::occluded_from`] in a scene with single-sided meshes: nearest hits in turn, passing
+    /// back faces as [`Scene::past_back_faces`] does, until a front or both-sided surface (blocked)
+    /// or `t_max` (clear); after [`MAX_PASSED_FACES`] back faces the ray counts as blocked.
+    #[inline(never)]
+    fn occluded_culling(&self, ray: &Ray, t_max: f64, from: Option<PrimRef>) -> bool {
+        let (mut leg, mut leg_t_max, mut from) = (*ray, t_max, from);
+        for _ in 0..MAX_PASSED_FACES {
+            let Some((t, prim)) = self.accel.closest(&self.geometry, &leg, leg_t_max, from) else {
+                return false;
+            };
+            let path = self.path(prim);
+            if !self.geometry.passes_through(prim, &path, &leg) {
+                return true;
+            }
+            // Continue from just beyond the face, skipping it; t_max stays where it was on `ray`.
+            let g = self.geometry.surface(prim, &path, &leg, t);
+            let origin = offset_origin(g.point, g.geometric_normal, g.error, leg.dir);
+            leg_t_max = t_max - (origin - ray.origin).dot(ray.dir) / ray.dir.length_squared();
+            leg = Ray::new(origin, leg.dir);
+            from = Some(prim);
+        }
+        true
     }
 
     /// [`Scene::intersect`] for every ray of a slice, into `out` (one slot per ray), on the

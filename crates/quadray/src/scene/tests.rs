@@ -59,8 +59,8 @@ fn scene(single_sided: bool, placement: Option<DAffine3>) -> Scene {
 }
 
 /// A single-sided square hides what lies behind its front and lets rays through its back,
-/// for closest hits only: it still blocks shadow rays. Through a mirroring instance the same
-/// faces stay in front, which the mirror turns to face −z.
+/// shadow rays too. Through a mirroring instance the same faces stay in front, which the mirror
+/// turns to face −z.
 #[test]
 fn single_sided_meshes_are_seen_from_the_front_only() {
     let up = Ray::new(DVec3::new(0.1, 0.2, -5.0), DVec3::Z);
@@ -75,11 +75,15 @@ fn single_sided_meshes_are_seen_from_the_front_only() {
     let bottom = 2.0 - 0.2f64.sqrt();
     let t = hit_t(&one_sided, &up).unwrap();
     assert!((t - (5.0 + bottom)).abs() < 1e-9, "{t}");
-    assert!(one_sided.occluded(&up, 6.0), "the back still casts shadows");
+    assert!(!one_sided.occluded(&up, 6.0), "the back casts no shadow");
+    assert!(one_sided.occluded(&up, 7.0), "the sphere beyond it does");
+    assert!(two_sided.occluded(&up, 6.0));
     // From above, its front: the sphere's top, then nothing behind it.
     assert!((hit_t(&one_sided, &down).unwrap() - (5.0 - (4.0 - bottom))).abs() < 1e-9);
     let beside = Ray::new(DVec3::new(0.9, 0.9, 5.0), -DVec3::Z);
     assert_eq!(hit_t(&one_sided, &beside), Some(5.0));
+    assert!(one_sided.occluded(&beside, 5.5), "the front casts a shadow");
+    assert!(!one_sided.occluded(&beside, 4.5));
 
     // Moved up by 1 as an instance: the same, with the mirror swapping the seen side.
     let lift = DAffine3::from_translation(DVec3::Z);
@@ -92,5 +96,11 @@ fn single_sided_meshes_are_seen_from_the_front_only() {
     );
     // Its front now faces −z: rays from below stop at it, rays from above pass.
     assert_eq!(hit_t(&mirrored, &up), Some(6.0));
+    assert!(mirrored.occluded(&up, 6.5));
     assert_eq!(hit_t(&mirrored, &beside), None);
+    assert!(!mirrored.occluded(&beside, 100.0));
+    assert!(
+        !placed.occluded(&up, 6.0),
+        "an instance's back face casts no shadow"
+    );
 }
