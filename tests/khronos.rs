@@ -1,5 +1,5 @@
 //! The twenty Khronos glTF sample models of `../shared/assets/gltf/khronos`, each rendered on its
-//! own at 160x120 with one sample per pixel (as `quadray render FILE --res 160x120` does: the
+//! own at 160x120 with one sample per pixel (as `quadray render FILE --res 160x120 --spp 1` does: the
 //! file's camera, or one framing it, and the default lighting when it brings none), compared with
 //! `tests/khronos/<name>.png` under the rule of `quadray compare`, plus the analytic facts that
 //! single out what each feature must do: a rough red metal reflects no green or blue, a culled
@@ -80,7 +80,11 @@ fn load(root: &std::path::Path, name: &str) -> LoadedScene {
 }
 
 fn render(loaded: LoadedScene) -> Film {
-    let settings = loaded.settings.render_settings();
+    // One sample at each pixel centre: the facts below are about surfaces, not edges.
+    let settings = quadray::RenderSettings {
+        spp: 1,
+        ..loaded.settings.render_settings()
+    };
     let scene = Scene::new(loaded.description).unwrap();
     quadray::render(&scene, &settings, &quadray::NoProgress)
         .unwrap()

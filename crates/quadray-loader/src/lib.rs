@@ -12,7 +12,8 @@
 //! - Around every format: [`read_limited`] (the sizes files are read within), [`image_file`]
 //!   (texture decoding and its budget), [`atomic_file`] (outputs written whole or not at all),
 //!   [`confine`] (reads and writes kept inside one folder), [`framing`] (a camera for a scene
-//!   without one) and [`suggest`] ("did you mean").
+//!   without one), [`suggest`] ("did you mean") and `plain_words` (serde's type errors in a scene
+//!   author's terms).
 //!
 //! One folder a format: `native/`, `obj/`, `gltf/`, `ply/`, `export/`.
 
@@ -27,6 +28,7 @@ mod import;
 mod include;
 pub mod native;
 pub mod obj;
+mod plain_words;
 mod ply;
 pub mod read_limited;
 pub mod standalone;

@@ -3,7 +3,7 @@
 //! default key light), and a note for every assumption.
 
 use crate::error::{LoadError, LoadErrorKind};
-use crate::framing::{default_key_light, framing_camera};
+use crate::framing::{aimed_into, default_key_light, framing_camera, framing_points};
 use crate::import::{Imported, Selector};
 use crate::native::{LoadedScene, SceneSettings};
 use glam::Vec3;
@@ -79,15 +79,18 @@ pub fn scene_from_import(
                 settings.height = ((settings.width as f64 / aspect).round() as u32)
                     .clamp(1, quadray::render::MAX_SIDE);
             }
-            c.fitted(settings.width as f64 / settings.height as f64)
+            aimed_into(
+                c.fitted(settings.width as f64 / settings.height as f64),
+                imported.bounds(),
+            )
         }
         None => {
             notes.push(
-                "no camera in the file: using one that fits its bounds to the image from the front-right, above"
+                "no camera in the file: using one that fits what it holds to the image from the front-right, above"
                     .into(),
             );
             framing_camera(
-                imported.bounds(),
+                &framing_points(&imported.geometry),
                 settings.width as f64 / settings.height as f64,
             )
         }

@@ -109,7 +109,10 @@ pub fn open_bytes(bytes: &[u8], path: &Path) -> Result<GltfFile, LoadError> {
             path,
             None,
             e.path().to_string(),
-            format!("not valid glTF 2.0: {}", e.inner()),
+            format!(
+                "not valid glTF 2.0: {}",
+                crate::plain_words::in_plain_words(&e.inner().to_string())
+            ),
         )
     })?;
     let document = gltf::Document::from_json(root).map_err(|e| validation_error(path, e))?;

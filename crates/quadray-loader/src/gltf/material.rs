@@ -198,8 +198,10 @@ impl<'a> Materials<'a> {
         };
         let mask = coverage(m, alpha.clamp(0.0, 1.0), &map);
         let material = if let Some(ext) = m.extension_value(quadrics_ext::EXTENSION) {
-            let ext: MaterialExtension = serde_json::from_value(ext.clone())
-                .map_err(|e| format!("{label}: extensions.{}: {e}", quadrics_ext::EXTENSION))?;
+            let ext: MaterialExtension = serde_json::from_value(ext.clone()).map_err(|e| {
+                let e = crate::plain_words::in_plain_words(&e.to_string());
+                format!("{label}: extensions.{}: {e}", quadrics_ext::EXTENSION)
+            })?;
             quadrics_ext::whitted_material(&ext.whitted, texture)
                 .map_err(|e| format!("{label}: extensions.{}: {e}", quadrics_ext::EXTENSION))?
         } else if m.unlit() {

@@ -55,8 +55,12 @@ pub fn convert(
         .and_then(|s| file.scene_extras.get(s.index()))
         .and_then(Option::as_ref)
     {
-        hints = serde_json::from_value(extras.clone())
-            .map_err(|e| invalid("scenes[].extras.quadray".into(), e.to_string()))?;
+        hints = serde_json::from_value(extras.clone()).map_err(|e| {
+            invalid(
+                "scenes[].extras.quadray".into(),
+                crate::plain_words::in_plain_words(&e.to_string()),
+            )
+        })?;
     }
     let roots = scene_roots(doc, scene.as_ref(), &mut notes, path)?;
 
@@ -64,7 +68,7 @@ pub fn convert(
         Some(v) => serde_json::from_value(v.clone()).map_err(|e| {
             invalid(
                 format!("extensions.{}", quadrics_ext::EXTENSION),
-                e.to_string(),
+                crate::plain_words::in_plain_words(&e.to_string()),
             )
         })?,
         None => RootExtension::default(),

@@ -40,7 +40,7 @@ fn node_shape(node: &gltf::Node<'_>, path: &Path) -> Result<Option<NodeExtension
                         node.index(),
                         quadrics_ext::EXTENSION
                     ),
-                    e.to_string(),
+                    crate::plain_words::in_plain_words(&e.to_string()),
                 )
             })
         })

@@ -6,7 +6,7 @@
 //! flat table rather than serde-tagged enums, because tagged enums lose spans (toml-rs #535).
 
 use crate::error::{LoadError, LoadErrorKind, Location};
-use crate::framing::{framing_camera, geometry_bounds};
+use crate::framing::{aimed_into, framing_camera, framing_points, geometry_bounds};
 use crate::import::ImportedCamera;
 use crate::import::{ImportOptions, Selector, UpAxis, select_camera};
 use crate::include;
@@ -75,12 +75,17 @@ impl SceneSettings {
     }
 }
 
+/// Samples per pixel of a file that names none (a scene without `render.spp`, an OBJ or glTF
+/// file): 4, as the bundled scenes, `quadray quadric` and `quadray gallery` use, enough to smooth
+/// edges that one sample at each pixel centre leaves jagged.
+pub const DEFAULT_SPP: u32 = 4;
+
 impl Default for SceneSettings {
     fn default() -> Self {
         SceneSettings {
             width: 640,
             height: 480,
-            spp: 1,
+            spp: DEFAULT_SPP,
             max_depth: 8,
             adaptive: None,
         }
@@ -159,7 +164,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<LoadedScene, LoadError> {
             location,
             LoadErrorKind::Syntax(format!(
                 "{}{}",
-                e.message().trim(),
+                crate::plain_words::in_plain_words(e.message().trim()),
                 crate::suggest::for_unknown_field(e.message())
             )),
         )
@@ -478,7 +483,7 @@ impl Builder<'_> {
 
     /// The scene's camera: its `[camera]`, else the first included camera (fitted to the image,
     /// whose height follows that camera's aspect when the file sets no resolution), else one
-    /// that frames the scene's bounds; the last two with a note.
+    /// that frames what the scene holds; the last two with a note.
     fn scene_camera(
         &self,
         file: &SceneFile,
@@ -502,12 +507,15 @@ impl Builder<'_> {
                         settings.height =
                             ((settings.width as f64 / aspect).round() as u32).clamp(1, MAX_SIDE);
                     }
-                    c.fitted(settings.width as f64 / settings.height as f64)
+                    aimed_into(
+                        c.fitted(settings.width as f64 / settings.height as f64),
+                        geometry_bounds(geometry),
+                    )
                 }
                 None => {
-                    notes.push("no [camera] and no included camera: using one that frames the scene's bounds".into());
+                    notes.push("no [camera] and no included camera: using one that frames what the scene holds".into());
                     framing_camera(
-                        geometry_bounds(geometry),
+                        &framing_points(geometry),
                         settings.width as f64 / settings.height as f64,
                     )
                 }
