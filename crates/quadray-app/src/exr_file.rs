@@ -4,6 +4,7 @@
 //! distributed render), and reading such files back into a film and passes.
 
 use anyhow::{Context, Result, bail};
+use exr::meta::attribute::Chromaticities;
 use exr::prelude::*;
 use quadray::{AovSample, AovSelection, Aovs, Film, PixelWindow};
 use std::collections::HashMap;
@@ -66,8 +67,10 @@ fn write_image(
 pub const CAMERA_POSITION: &str = "cameraPosition";
 
 /// The camera of a render, as an EXR stores it: OpenEXR's standard `worldToCamera` and
-/// `worldToNDC` matrices, the `fieldOfViewHorizontal` and `fieldOfViewVertical` attributes the
-/// exr crate defines, and quadray's `cameraPosition`.
+/// `worldToNDC` matrices (the field of view is in the latter) and quadray's `cameraPosition`.
+/// The exr crate's `fieldOfViewHorizontal` and `fieldOfViewVertical` are not written: they are
+/// not OpenEXR standard attributes, and no reader we know of (OpenImageIO, Nuke, Blender) uses
+/// them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExrCamera {
     /// `worldToCamera`, in the file's order: Imath's row-vector matrix, row by row.
@@ -76,8 +79,6 @@ pub struct ExrCamera {
     pub world_to_ndc: [f32; 16],
     /// The eye (the image plane's centre for an orthographic camera), world space.
     pub position: [f32; 3],
-    /// Horizontal and vertical field of view in degrees; `None` for an orthographic camera.
-    pub fov_deg: Option<[f32; 2]>,
 }
 
 impl ExrCamera {
@@ -93,15 +94,6 @@ impl ExrCamera {
             world_to_camera: imath(frame.world_to_camera()),
             world_to_ndc: imath(frame.world_to_ndc()),
             position: camera.from.as_vec3().to_array(),
-            fov_deg: match camera.projection {
-                quadray::Projection::Perspective { vfov_deg } => {
-                    let aspect = width as f64 / height as f64;
-                    let half_width = (vfov_deg.to_radians() * 0.5).tan() * aspect;
-                    let hfov_deg = 2.0 * half_width.atan().to_degrees();
-                    Some([hfov_deg as f32, vfov_deg as f32])
-                }
-                quadray::Projection::Orthographic { .. } => None,
-            },
         })
     }
 
@@ -109,10 +101,6 @@ impl ExrCamera {
     fn write(&self, attributes: &mut LayerAttributes) {
         attributes.world_to_camera = Some(self.world_to_camera);
         attributes.world_to_normalized_device = Some(self.world_to_ndc);
-        if let Some([horizontal, vertical]) = self.fov_deg {
-            attributes.horizontal_field_of_view = Some(horizontal);
-            attributes.vertical_field_of_view = Some(vertical);
-        }
         // The only custom attribute of a part: the writer stores custom attributes in hash-map
         // order, which changes from run to run, so two of them would change the file's bytes.
         let [x, y, z] = self.position;
@@ -128,15 +116,10 @@ impl ExrCamera {
             Some(AttributeValue::FloatVec3((x, y, z))) => [*x, *y, *z],
             _ => return None,
         };
-        let fov_deg = attributes
-            .horizontal_field_of_view
-            .zip(attributes.vertical_field_of_view)
-            .map(|(h, v)| [h, v]);
         Some(ExrCamera {
             world_to_camera: attributes.world_to_camera?,
             world_to_ndc: attributes.world_to_normalized_device?,
             position,
-            fov_deg,
         })
     }
 }
@@ -237,10 +220,23 @@ pub fn write_exr_parts(
     write_image(path, |out| image.write().to_buffered(out))
 }
 
-/// The attributes every part shares: the display window and `attributes` as text.
+/// The colour space of quadray's colour channels (`R, G, B` and `ViewLayer.Combined`,
+/// `ViewLayer.DiffCol`): linear Rec. 709 / sRGB primaries with a D65 white, as OpenEXR's
+/// `chromaticities` attribute gives them (CIE 1931 xy), so that OpenImageIO, Nuke and Blender
+/// read the space instead of assuming one.
+pub const REC709_D65: Chromaticities = Chromaticities {
+    red: Vec2(0.64, 0.33),
+    green: Vec2(0.30, 0.60),
+    blue: Vec2(0.15, 0.06),
+    white: Vec2(0.3127, 0.3290),
+};
+
+/// The attributes every part shares: the display window, the colour space and `attributes` as
+/// text.
 fn display_attributes(frame: &ExrFrame, attributes: &[(&str, String)]) -> ImageAttributes {
     let display = IntegerBounds::from_dimensions((frame.width as usize, frame.height as usize));
     let mut shared = ImageAttributes::new(display);
+    shared.chromaticities = Some(REC709_D65);
     for (key, value) in attributes {
         shared.other.insert(
             Text::new_or_panic(*key),
@@ -542,15 +538,12 @@ mod tests {
         write_exr_parts(&[part], true, (4, 2, Some(exr_camera)), &[], &piece).unwrap();
         for path in [&single, &piece] {
             let image = exr::prelude::read_all_flat_layers_from_file(path).unwrap();
+            assert_eq!(image.attributes.chromaticities, Some(REC709_D65));
             let channels = &image.layer_data[0].channel_data.list;
             assert_eq!(channels.len(), 8);
             assert!(channels.iter().all(|c| !c.quantize_linearly));
             assert_eq!(read_exr(path).unwrap().camera, Some(exr_camera));
         }
-        // The horizontal field of view of a 2:1 image: 2·atan(2·tan(17.5°)).
-        let [h, v] = exr_camera.fov_deg.unwrap();
-        let expected = 2.0 * (2.0 * 17.5f64.to_radians().tan()).atan().to_degrees();
-        assert!((h as f64 - expected).abs() < 1e-4 && v == 35.0, "{h} {v}");
         assert_eq!(exr_camera.position, [1.0, -4.0, 2.0]);
     }
 }
