@@ -18,7 +18,7 @@ pub const MAX_THREADS: usize = 1024;
 
 /// quadray: a ray tracer with clipped quadric surfaces, spheres, planes and meshes.
 #[derive(Parser, Debug)]
-#[command(name = "quadray", version, about, after_help = EXIT_STATUS)]
+#[command(name = "quadray", version, about, after_help = EXIT_STATUS, allow_negative_numbers = true)]
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]
@@ -61,6 +61,7 @@ pub enum Command {
 
 /// Arguments of `quadray render`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
     /// The scene file.
     pub scene: PathBuf,
@@ -156,6 +157,7 @@ pub fn numbered_output(path: &Path, frame: u32) -> Option<PathBuf> {
 
 /// Arguments of `quadray convert`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct ConvertArgs {
     /// The scene file (.toml, .obj, .gltf or .glb).
     pub scene: PathBuf,
@@ -169,6 +171,7 @@ pub struct ConvertArgs {
 
 /// Arguments of `quadray check`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct CheckArgs {
     /// The scene file.
     pub scene: PathBuf,
@@ -307,6 +310,45 @@ mod tests {
         );
         assert_eq!(at("t#.exr", 1234), Some(PathBuf::from("t1234.exr")));
         assert_eq!(at("#a/turn.png", 1), None, "only the file name counts");
+    }
+
+    /// Every option that takes a value, of every subcommand, reads `-1` as a value: the error is
+    /// the option's own (its range or its parse), never clap's "unexpected argument '-1'", whose
+    /// tip (`-- -1`) fails too.
+    #[test]
+    fn negative_numbers_reach_every_options_own_check() {
+        use clap::CommandFactory;
+        fn walk(command: &clap::Command, path: &mut Vec<String>, checked: &mut usize) {
+            for sub in command.get_subcommands() {
+                path.push(sub.get_name().to_string());
+                walk(sub, path, checked);
+                path.pop();
+            }
+            for arg in command.get_arguments() {
+                let Some(long) = arg.get_long() else { continue };
+                if !arg.get_action().takes_values() || long == "help" {
+                    continue;
+                }
+                let mut argv = vec!["quadray".to_string()];
+                argv.extend(path.iter().cloned());
+                argv.extend([format!("--{long}"), "-1".to_string()]);
+                let message = match Cli::try_parse_from(&argv) {
+                    Ok(_) => continue,
+                    Err(e) => e.to_string(),
+                };
+                assert!(
+                    !message.contains("unexpected argument '-1'"),
+                    "{}: {message}",
+                    argv.join(" ")
+                );
+                *checked += 1;
+            }
+        }
+        let mut checked = 0;
+        walk(&Cli::command(), &mut Vec::new(), &mut checked);
+        assert!(checked > 20, "only {checked} options checked");
+        let spp = Cli::try_parse_from(["quadray", "render", "s.toml", "--spp", "-1"]).unwrap_err();
+        assert!(spp.to_string().contains("not in 1..="), "{spp}");
     }
 
     #[test]

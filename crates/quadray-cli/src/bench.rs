@@ -31,6 +31,7 @@ pub enum BenchCommand {
 
 /// Arguments of `quadray bench accuracy`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct AccuracyArgs {
     /// Directory for accuracy.md (the table) and accuracy.svg (the plot); created if missing.
     #[arg(long, value_name = "DIR", default_value = ".")]

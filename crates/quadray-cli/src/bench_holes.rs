@@ -25,6 +25,7 @@ pub const DEFAULT_SCENES: [&str; 4] = [
 
 /// Arguments of `quadray bench holes`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct HolesArgs {
     /// Directory for holes.md and the PNGs; created if missing.
     #[arg(long, value_name = "DIR", default_value = ".")]

@@ -16,6 +16,7 @@ use std::time::Instant;
 
 /// Arguments of `quadray bench rays`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct RaysArgs {
     /// The mesh: an OBJ or glTF file, read in its own coordinates.
     pub mesh: PathBuf,

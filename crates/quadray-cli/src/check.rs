@@ -1,6 +1,7 @@
 //! `quadray check`: load and validate a scene without rendering it.
 
 use crate::args::CheckArgs;
+use crate::counted;
 use anyhow::{Context, Result};
 use quadray::Scene;
 use std::time::Instant;
@@ -63,14 +64,14 @@ pub(crate) fn contents_line(scene: &Scene) -> String {
     let g = scene.geometry();
     let triangles: usize = g.meshes.iter().map(|m| m.triangle_count()).sum();
     format!(
-        "{} spheres, {} planes, {} quadrics, {} meshes ({} triangles), {} lights, {} materials",
-        g.spheres.len(),
-        g.planes.len(),
-        g.quadrics.len(),
-        g.meshes.len(),
-        triangles,
-        scene.lights().len(),
-        scene.materials().len(),
+        "{}, {}, {}, {} ({}), {}, {}",
+        counted(g.spheres.len(), "sphere"),
+        counted(g.planes.len(), "plane"),
+        counted(g.quadrics.len(), "quadric"),
+        counted(g.meshes.len(), "mesh"),
+        counted(triangles, "triangle"),
+        counted(scene.lights().len(), "light"),
+        counted(scene.materials().len(), "material"),
     )
 }
 
@@ -89,13 +90,13 @@ pub(crate) fn log_built(scene: &Scene, since: Instant) {
 pub(crate) fn structure_line(scene: &Scene) -> String {
     let s = scene.accel().stats(scene.geometry());
     format!(
-        "structure: {} prototypes, {} instances ({} placements); {} shapes stored ({} triangles), {} triangles instanced; BVH bottom level {:.1} MB, top level {:.3} MB",
-        s.prototypes,
-        s.instances,
-        s.placements,
-        s.primitives_stored,
-        s.triangles_stored,
-        s.triangles_instanced,
+        "structure: {}, {} ({}); {} stored ({}), {} instanced; BVH bottom level {:.1} MB, top level {:.3} MB",
+        counted(s.prototypes, "prototype"),
+        counted(s.instances, "instance"),
+        counted(s.placements, "placement"),
+        counted(s.primitives_stored, "shape"),
+        counted(s.triangles_stored, "triangle"),
+        counted(s.triangles_instanced, "triangle"),
         s.bottom_bytes as f64 / 1e6,
         s.top_bytes as f64 / 1e6,
     )

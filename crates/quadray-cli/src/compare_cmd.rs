@@ -9,6 +9,7 @@ use std::path::PathBuf;
 
 /// Arguments of `quadray compare`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct CompareArgs {
     /// The reference image (.png or .exr).
     pub reference: PathBuf,
@@ -19,31 +20,16 @@ pub struct CompareArgs {
     pub diff: Option<PathBuf>,
     /// A pixel counts as different when a channel differs by more than this many 8-bit display
     /// steps (1 = 1/255).
-    #[arg(
-        long,
-        value_name = "STEPS",
-        default_value_t = 2.0,
-        allow_negative_numbers = true
-    )]
+    #[arg(long, value_name = "STEPS", default_value_t = 2.0)]
     pub threshold: f32,
     /// Fail when more than this percentage of pixels differ.
-    #[arg(
-        long,
-        value_name = "PERCENT",
-        default_value_t = 0.1,
-        allow_negative_numbers = true
-    )]
+    #[arg(long, value_name = "PERCENT", default_value_t = 0.1)]
     pub max_percent: f64,
     /// Fail when any channel differs by more than this many 8-bit display steps.
-    #[arg(
-        long,
-        value_name = "STEPS",
-        default_value_t = 32.0,
-        allow_negative_numbers = true
-    )]
+    #[arg(long, value_name = "STEPS", default_value_t = 32.0)]
     pub max_diff: f32,
     /// Fail when the mean FLIP error exceeds this (not judged unless given).
-    #[arg(long, value_name = "FLIP", allow_negative_numbers = true)]
+    #[arg(long, value_name = "FLIP")]
     pub max_flip: Option<f32>,
 }
 

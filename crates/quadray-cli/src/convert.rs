@@ -23,14 +23,14 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
         }
         let g = &loaded.description.geometry;
         eprintln!(
-            "wrote {}: {} meshes, {} quadrics, {} spheres, {} planes, {} lights, {} materials",
+            "wrote {}: {}, {}, {}, {}, {}, {}",
             args.output.display(),
-            g.meshes.len(),
-            g.quadrics.len(),
-            g.spheres.len(),
-            g.planes.len(),
-            loaded.description.lights.len(),
-            loaded.description.materials.len()
+            crate::counted(g.meshes.len(), "mesh"),
+            crate::counted(g.quadrics.len(), "quadric"),
+            crate::counted(g.spheres.len(), "sphere"),
+            crate::counted(g.planes.len(), "plane"),
+            crate::counted(loaded.description.lights.len(), "light"),
+            crate::counted(loaded.description.materials.len(), "material")
         );
     }
     Ok(())

@@ -20,15 +20,18 @@ const CAPTION_BAND: u32 = 30;
 
 /// Arguments of `quadray gallery`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct GalleryArgs {
     /// Output contact sheet (.png).
-    #[arg(short, long, value_name = "OUT.png", value_parser = crate::args::parse_png_output)]
+    #[arg(short, long, value_name = "OUT.png", default_value = "gallery.png",
+          value_parser = crate::args::parse_png_output)]
     pub output: PathBuf,
     /// Size of one tile (picture and caption) as WIDTHxHEIGHT.
     #[arg(long, value_name = "WxH", value_parser = crate::args::parse_resolution, default_value = "440x400")]
     pub tile: (u32, u32),
     /// Samples per pixel.
-    #[arg(long, value_name = "N", default_value_t = 4)]
+    #[arg(long, value_name = "N", default_value_t = 4,
+          value_parser = clap::value_parser!(u32).range(1..=quadray::render::MAX_SPP as i64))]
     pub spp: u32,
     /// Surface texture of every tile.
     #[arg(long, value_enum, default_value = "ramp")]

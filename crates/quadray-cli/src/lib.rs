@@ -42,6 +42,19 @@ mod warnings;
 
 use clap::Parser;
 
+/// `n` and the noun, in the plural unless `n` is 1: "1 plane", "2 planes", "3 meshes".
+pub fn counted(n: impl std::fmt::Display, noun: &str) -> String {
+    let n = n.to_string();
+    let ending = if n == "1" {
+        ""
+    } else if noun.ends_with("sh") || noun.ends_with("ch") || noun.ends_with('s') {
+        "es"
+    } else {
+        "s"
+    };
+    format!("{n} {noun}{ending}")
+}
+
 /// An error that sets the exit status itself (see [`args::EXIT_STATUS`]); all others exit 1.
 #[derive(Debug)]
 pub struct StatusError {
@@ -178,4 +191,15 @@ where
     let argv = std::iter::once(std::ffi::OsString::from("quadray"))
         .chain(args.into_iter().map(Into::into));
     run(args::Cli::try_parse_from(argv)?)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn counts_agree_with_their_nouns() {
+        assert_eq!(super::counted(1, "plane"), "1 plane");
+        assert_eq!(super::counted(0, "plane"), "0 planes");
+        assert_eq!(super::counted(3, "mesh"), "3 meshes");
+        assert_eq!(super::counted(1, "mesh"), "1 mesh");
+    }
 }

@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `quadray merge`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct MergeArgs {
     /// The pieces (`render --tile I/N` outputs), in any order.
     #[arg(required = true, value_name = "PIECE.exr")]
@@ -142,7 +143,8 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     }
     if !args.quiet {
         eprintln!(
-            "{width}x{height} from {count} pieces -> {}",
+            "{width}x{height} from {} -> {}",
+            crate::counted(count, "piece"),
             output.display()
         );
     }

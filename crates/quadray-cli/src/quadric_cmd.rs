@@ -2,46 +2,38 @@
 //! cube under the orbit camera, every option with a sensible default; `--list` prints the kinds.
 
 use crate::output::{check_writable, write_film};
-use crate::showcase::{GENERAL_EQUATION, Showcase, TextureChoice};
+use crate::showcase::{GENERAL, GENERAL_EQUATION, Showcase, TextureChoice};
 use crate::{StatusError, usage_ensure};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use quadray::{Coefficients, QuadricKind, QuadricSurface, RenderSettings, Scene};
 use std::path::PathBuf;
 
 /// Arguments of `quadray quadric`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct QuadricArgs {
-    /// The kind (see --list), or `general` with --coeffs.
+    /// The kind (see --list), or `general` (with --coeffs, else the gallery's general quadric).
     #[arg(required_unless_present = "list")]
     pub kind: Option<String>,
     /// Print the kinds with their canonical equations and exit.
     #[arg(long)]
     pub list: bool,
     /// Parameter a (default: the kind's textbook value).
-    #[arg(short = 'a', value_name = "A", allow_negative_numbers = true)]
+    #[arg(short = 'a', value_name = "A")]
     pub a: Option<f64>,
     /// Parameter b.
-    #[arg(short = 'b', value_name = "B", allow_negative_numbers = true)]
+    #[arg(short = 'b', value_name = "B")]
     pub b: Option<f64>,
     /// Parameter c.
-    #[arg(short = 'c', value_name = "C", allow_negative_numbers = true)]
+    #[arg(short = 'c', value_name = "C")]
     pub c: Option<f64>,
-    /// The ten coefficients A..J of a general quadric (POV-Ray's order), comma-separated.
-    #[arg(
-        long,
-        value_name = "A,B,..,J",
-        value_delimiter = ',',
-        allow_negative_numbers = true
-    )]
+    /// The ten coefficients A..J of a general quadric (POV-Ray's order), comma-separated
+    /// (default: the gallery's, a turned and shifted one-sheet hyperboloid using all ten).
+    #[arg(long, value_name = "A,B,..,J", value_delimiter = ',')]
     pub coeffs: Vec<f64>,
     /// Half-size R of the clip cube [-R, R]³.
-    #[arg(
-        long,
-        value_name = "R",
-        default_value_t = 1.0,
-        allow_negative_numbers = true
-    )]
+    #[arg(long, value_name = "R", default_value_t = 1.0)]
     pub clip: f64,
     /// Surface texture.
     #[arg(long, value_enum, default_value = "ramp")]
@@ -50,13 +42,13 @@ pub struct QuadricArgs {
     #[arg(long)]
     pub no_lighting: bool,
     /// Orbit azimuth about +z from +x, degrees (default: the kind's textbook view).
-    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    #[arg(long, value_name = "DEG")]
     pub yaw: Option<f64>,
     /// Orbit elevation above the xy plane, degrees, in [-90, 90].
-    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    #[arg(long, value_name = "DEG")]
     pub pitch: Option<f64>,
     /// Orbit distance from the centre (default: 5 × the clip size).
-    #[arg(long, value_name = "D", allow_negative_numbers = true)]
+    #[arg(long, value_name = "D")]
     pub distance: Option<f64>,
     /// Resolution as WIDTHxHEIGHT.
     #[arg(long, value_name = "WxH", value_parser = crate::args::parse_resolution, default_value = "640x480")]
@@ -65,12 +57,11 @@ pub struct QuadricArgs {
     #[arg(long, value_name = "N", default_value_t = 4,
           value_parser = clap::value_parser!(u32).range(1..=quadray::render::MAX_SPP as i64))]
     pub spp: u32,
-    /// Output image (.png or .exr).
+    /// Output image (.png or .exr). Default: `quadric-KIND.png` in the current folder.
     #[arg(
         short,
         long,
         value_name = "OUT",
-        required_unless_present = "list",
         value_parser = crate::args::parse_image_output
     )]
     pub output: Option<PathBuf>,
@@ -100,16 +91,20 @@ pub fn showcase(args: &QuadricArgs) -> Result<Showcase> {
             args.a.is_none() && args.b.is_none() && args.c.is_none(),
             "-a, -b and -c belong to the named kinds; a general quadric takes only --coeffs",
         )?;
-        usage_ensure(
-            args.coeffs.len() == 10,
-            &format!(
-                "a general quadric needs --coeffs with exactly 10 numbers A..J, got {}",
-                args.coeffs.len()
-            ),
-        )?;
-        let mut k = [0.0; 10];
-        k.copy_from_slice(&args.coeffs);
-        Showcase::general(Coefficients(k))
+        if args.coeffs.is_empty() {
+            Showcase::general(GENERAL)
+        } else {
+            usage_ensure(
+                args.coeffs.len() == 10,
+                &format!(
+                    "a general quadric needs --coeffs with exactly 10 numbers A..J, got {}",
+                    args.coeffs.len()
+                ),
+            )?;
+            let mut k = [0.0; 10];
+            k.copy_from_slice(&args.coeffs);
+            Showcase::general(Coefficients(k))
+        }
     } else {
         let Some(kind) = QuadricKind::from_name(name) else {
             let names = QuadricKind::ALL.map(|k| k.name());
@@ -167,15 +162,25 @@ pub fn showcase(args: &QuadricArgs) -> Result<Showcase> {
     Ok(show)
 }
 
+/// Where `quadray quadric KIND` writes without `-o`: `quadric-KIND.png` in the current folder,
+/// as POV-Ray writes a scene's image beside where it runs.
+pub fn default_output(kind: &str) -> PathBuf {
+    PathBuf::from(format!("quadric-{kind}.png"))
+}
+
 /// Runs the explorer.
 pub fn run(args: &QuadricArgs) -> Result<()> {
     if args.list {
         outln!("{}", list().trim_end())?;
         return Ok(());
     }
-    let output = args.output.as_ref().context("-o OUT is required")?;
-    check_writable(output)?;
     let show = showcase(args)?;
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(show.name()));
+    let output = &output;
+    check_writable(output)?;
     let scene = Scene::new(show.scene(args.texture.texture(), !args.no_lighting)?)?;
     let settings = RenderSettings {
         width: args.res.0,

@@ -61,9 +61,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let render_cpu = cpu_start.and_then(|t| t.try_elapsed().ok());
     let rows: u32 = windows.iter().map(|w| w.height()).sum();
     log::info!(
-        "rendered {rows} rows of {} spp on {} threads in {:.3} s",
+        "rendered {} of {} spp on {} in {:.3} s",
+        crate::counted(rows, "row"),
         settings.spp,
-        pool.current_num_threads(),
+        crate::counted(pool.current_num_threads(), "thread"),
         render_time.as_secs_f64()
     );
     let write_start = Instant::now();

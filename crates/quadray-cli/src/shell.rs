@@ -8,6 +8,7 @@ use std::io::Write;
 
 /// Arguments of `quadray completions`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct CompletionsArgs {
     /// The shell to complete for.
     #[arg(value_enum)]

@@ -358,7 +358,7 @@ fn check_validates_without_rendering() {
     assert!(o.status.success());
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(
-        text.contains("ok: 2 spheres, 1 planes, 4 quadrics, 1 meshes (20 triangles), 2 lights"),
+        text.contains("ok: 2 spheres, 1 plane, 4 quadrics, 1 mesh (20 triangles), 2 lights"),
         "{text}"
     );
     assert!(

@@ -326,3 +326,39 @@ fn pieces_are_reproducible_and_never_merged_over() {
         );
     }
 }
+
+/// A glTF camera has a direction but no target: the turntable turns about the scene, so every
+/// frame shows it (each turned about a point one unit in front of the lens, frames 1 to 3 of 4
+/// showed only background).
+#[test]
+fn orbit_frames_of_a_gltf_camera_keep_the_scene_in_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene("gltf-quadrics.gltf");
+    let pattern = tmp(&dir, "turn-#.png");
+    for frame in 0..4 {
+        ok(quadray(&[
+            "render",
+            &s,
+            "-o",
+            pattern.to_str().unwrap(),
+            "--orbit-frames",
+            "4",
+            "--frame",
+            &frame.to_string(),
+            "--res",
+            "64x36",
+            "--spp",
+            "1",
+            "-q",
+        ]));
+        let img = image::open(tmp(&dir, &format!("turn-{frame}.png")))
+            .unwrap()
+            .to_rgb8();
+        let background = *img.get_pixel(0, 0);
+        let shown = img.pixels().filter(|p| **p != background).count();
+        assert!(
+            shown > 64 * 36 / 10,
+            "frame {frame}: {shown} pixels show the scene"
+        );
+    }
+}

@@ -112,7 +112,7 @@ fn convert_writes_gltf_and_glb_that_render_like_the_native_scene() {
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(
-            stderr(&o).contains("4 quadrics, 2 spheres, 1 planes"),
+            stderr(&o).contains("4 quadrics, 2 spheres, 1 plane"),
             "{}",
             stderr(&o)
         );

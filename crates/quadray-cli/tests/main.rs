@@ -4,6 +4,7 @@ mod adaptive;
 mod cli;
 mod common;
 mod distributed;
+mod farm;
 mod hostile;
 mod import;
 mod kill;

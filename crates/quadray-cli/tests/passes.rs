@@ -172,7 +172,8 @@ fn attribute_numbers(info: &str, name: &str) -> Option<Vec<f64>> {
 /// camera's own geometry: for the pass scene's orthographic camera (at z = 10 looking down, +y up
 /// in the image, 4 units tall) camera space is (x, y, 10 − z), and NDC is
 /// (0.5 + x/4, 0.5 − y/4); for the defense scene's perspective camera the point it looks at
-/// lands at the image centre, and the fields of view are the scene's and the one its aspect gives.
+/// lands at the image centre and a point half its field of view above the axis on the top edge.
+/// The colour space is in the standard `chromaticities` attribute.
 #[test]
 fn exr_files_carry_the_camera() {
     let dir = tempfile::tempdir().unwrap();
@@ -228,10 +229,31 @@ fn exr_files_carry_the_camera() {
         (x - 0.5).abs() < 1e-4 && (y - 0.5).abs() < 1e-4,
         "{x} {y} {m:?}"
     );
-    let fov = |name| attribute_numbers(&info, name).expect(name)[0];
-    assert_eq!(fov("fieldOfViewVertical"), 42.0);
-    // 2·atan(tan(21°)·32/18), to oiiotool's six digits.
-    assert!((fov("fieldOfViewHorizontal") - 68.6212).abs() < 1e-4);
+    // The field of view is in worldToNDC: a point 21° (half the scene's vfov 42°) above the view
+    // axis lands on the top edge, y = 0. Camera space: +z along the view, +y up.
+    let to_camera = attribute_numbers(&info, "worldToCamera").expect("worldToCamera");
+    let to_world = glam::DMat4::from_cols_array(&to_camera.clone().try_into().unwrap()).inverse();
+    let edge = to_world.transform_point3(glam::DVec3::new(0.0, 21f64.to_radians().tan(), 1.0));
+    let p = [edge.x, edge.y, edge.z, 1.0];
+    let column = |c: usize| (0..4).map(|r| p[r] * m[r * 4 + c]).sum::<f64>();
+    assert!(
+        (column(1) / column(3)).abs() < 1e-4,
+        "{}",
+        column(1) / column(3)
+    );
+    assert!(
+        !info.contains("fieldOfView"),
+        "no non-standard field of view attributes"
+    );
+    // Linear Rec. 709 primaries, D65 white, in OpenEXR's standard attribute.
+    let chromaticities = attribute_numbers(&info, "chromaticities").expect("chromaticities");
+    assert!(
+        close(
+            &chromaticities,
+            &[0.64, 0.33, 0.3, 0.6, 0.15, 0.06, 0.3127, 0.329]
+        ),
+        "{chromaticities:?}"
+    );
 }
 
 #[test]

@@ -4,6 +4,40 @@
 use crate::common;
 use common::{pass_scene, quadray, tmp};
 
+/// Without `-o`, `quadric KIND` writes `quadric-KIND.png` and `gallery` writes `gallery.png` in the
+/// current folder, as `render` has a default output; `general` without `--coeffs` is the gallery's.
+#[test]
+fn explorer_and_gallery_have_default_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_quadray"))
+            .args(args)
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let said = run(&["quadric", "cone", "--res", "32x24", "--spp", "1"]);
+    assert!(said.contains("-> quadric-cone.png"), "{said}");
+    run(&["quadric", "general", "--res", "32x24", "--spp", "1"]);
+    run(&["gallery", "--tile", "64x62", "--spp", "1", "-q"]);
+    for (name, size) in [
+        ("quadric-cone.png", (32, 24)),
+        ("quadric-general.png", (32, 24)),
+    ] {
+        let img = image::open(dir.path().join(name)).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), size, "{name}");
+        let bg = img.get_pixel(0, 0);
+        assert!(img.pixels().any(|p| p != bg), "{name} shows its quadric");
+    }
+    assert!(dir.path().join("gallery.png").is_file());
+}
+
 #[test]
 fn quadric_explorer_lists_renders_and_refuses_bad_input() {
     let o = quadray(&["quadric", "--list"]);
@@ -72,7 +106,7 @@ fn quadric_explorer_lists_renders_and_refuses_bad_input() {
             2,
         ),
         (
-            vec!["quadric", "general", "-o", "x.png"],
+            vec!["quadric", "general", "--coeffs", "1,2", "-o", "x.png"],
             "exactly 10 numbers",
             2,
         ),

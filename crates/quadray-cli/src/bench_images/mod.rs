@@ -39,6 +39,7 @@ pub const CHECK_SEED: u32 = 2;
 
 /// Arguments of `quadray bench images`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct ImagesArgs {
     /// The scene to render.
     #[arg(long, value_name = "FILE", default_value = "scenes/defense.toml")]

@@ -27,7 +27,8 @@ pub fn tmp(dir: &tempfile::TempDir, name: &str) -> PathBuf {
 }
 
 /// A unit sphere (material colour 0.2, 0.4, 0.6) over a plane at z = -2, seen straight down by an
-/// orthographic camera 10 units up: every pass value at the centre and corner follows by hand.
+/// orthographic camera 10 units up, one sample at each pixel's centre: every pass value at the
+/// centre and corner follows by hand.
 const PASS_SCENE: &str = r#"version = 1
 [camera]
 projection = "orthographic"
@@ -37,6 +38,7 @@ up = [0, 1, 0]
 height = 4.0
 [render]
 resolution = [9, 9]
+spp = 1
 background = [0.5, 0.5, 0.5]
 [[material]]
 name = "ball"
