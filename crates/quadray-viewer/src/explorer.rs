@@ -183,20 +183,31 @@ impl Explorer {
         Ok(scene)
     }
 
-    /// The output file the Render button suggests.
+    /// The output file the Render button suggests: `quadric-KIND.png` in the viewer's outputs
+    /// folder, `renders/` (which git ignores).
     pub fn output_name(&self) -> String {
-        format!("quadric-{}.png", self.kind.name())
+        format!(
+            "{}/quadric-{}.png",
+            crate::app::OUTPUT_FOLDER,
+            self.kind.name()
+        )
     }
 
-    /// The panel: kind, parameters, clip box, texture, lighting, reflectivity; returns whether
-    /// anything changed (a new kind also resets the parameters to its textbook ones).
-    pub fn ui(&mut self, ui: &mut egui::Ui) -> bool {
+    /// The upper half of the panel, what is changed most: the kind (two columns of radio
+    /// buttons), its equation and parameters; returns whether anything changed (a new kind also
+    /// resets the parameters to its textbook ones).
+    pub fn surface_ui(&mut self, ui: &mut egui::Ui) -> bool {
         let before = self.clone();
         ui.heading("Quadric");
         let mut kind = self.kind;
-        for k in Kind::all() {
-            ui.radio_value(&mut kind, k, k.name());
-        }
+        egui::Grid::new("kinds").num_columns(2).show(ui, |ui| {
+            for (i, k) in Kind::all().enumerate() {
+                ui.radio_value(&mut kind, k, k.name());
+                if i % 2 == 1 {
+                    ui.end_row();
+                }
+            }
+        });
         if kind != self.kind {
             self.kind = kind;
             self.textbook_parameters();
@@ -228,7 +239,14 @@ impl Explorer {
                     });
             }
         }
-        ui.separator();
+        *self != before
+    }
+
+    /// The lower half of the panel: clip box, texture, lighting, reflectivity; returns whether
+    /// anything changed.
+    pub fn look_ui(&mut self, ui: &mut egui::Ui) -> bool {
+        let before = self.clone();
+        ui.heading("Clip box and look");
         ui.add_enabled(
             !self.min_max_box,
             egui::Slider::new(&mut self.clip_radius, 0.1..=5.0)

@@ -6,11 +6,12 @@
 //! - [`worker`]: the render thread, with cancellation and progressive refinement.
 //! - [`orbit`]: the orbit camera and its mouse controls; [`explorer`]: the quadric panel;
 //!   [`source`]: loading and watching files; [`pick`]: the object under a pixel;
-//!   [`final_render`]: the Render button.
+//!   [`final_render`]: the Render button; [`open_dialog`]: the Open window.
 
 pub mod app;
 pub mod explorer;
 pub mod final_render;
+pub mod open_dialog;
 pub mod orbit;
 pub mod pick;
 pub mod source;

@@ -26,13 +26,10 @@ fn run(args: Args) -> Result<()> {
     }
     let viewer = quadray_viewer::Viewer::new(args.scene.clone(), args.threads)
         .context("starting the render thread")?;
-    let title = match &args.scene {
-        Some(path) => format!("quadray-view: {}", path.display()),
-        None => "quadray-view: quadric explorer".to_string(),
-    };
+    // The viewer sets the title to what it shows.
     let options = eframe::NativeOptions {
         viewport: eframe::egui::ViewportBuilder::default()
-            .with_title(title)
+            .with_title("quadray-view")
             .with_inner_size([1000.0, 600.0]),
         ..Default::default()
     };

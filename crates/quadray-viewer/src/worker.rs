@@ -66,6 +66,8 @@ struct Shared {
     generation: AtomicU64,
     /// Whether the request being worked on has frames still to come.
     busy: AtomicBool,
+    /// The newest request that failed, with why, for the window to show.
+    failure: Mutex<Option<(u64, String)>>,
     quit: AtomicBool,
 }
 
@@ -85,6 +87,7 @@ impl Worker {
             wake: Condvar::new(),
             generation: AtomicU64::new(0),
             busy: AtomicBool::new(false),
+            failure: Mutex::new(None),
             quit: AtomicBool::new(false),
         });
         let pool = rayon::ThreadPoolBuilder::new()
@@ -126,6 +129,12 @@ impl Worker {
     /// The newest frame sent since the last call, if any (older ones are dropped).
     pub fn latest_frame(&self) -> Option<Frame> {
         self.frames.try_iter().last()
+    }
+
+    /// Why a request failed, with its number, once (the window shows it; `quadray render`
+    /// would have printed the same).
+    pub fn failure(&self) -> Option<(u64, String)> {
+        lock(&self.shared.failure).take()
     }
 
     /// Whether frames of the newest request are still to come.
@@ -201,6 +210,8 @@ impl Looper {
             if !stale.cancelled() {
                 if let Err(e) = result {
                     log::error!("rendering the view failed: {e:#}");
+                    *lock(&self.shared.failure) =
+                        Some((generation, format!("error: rendering the view: {e:#}")));
                 }
                 self.shared.busy.store(false, Ordering::SeqCst);
                 (self.notify)();
@@ -243,6 +254,7 @@ impl Looper {
         };
         if request.pass != Pass::Combined {
             // Passes come from each pixel's first hit: one sample is the whole pass.
+            let pass_start = Instant::now();
             let (rendered, aovs) = quadray::render_with_aovs(
                 &request.scene,
                 &settings,
@@ -251,8 +263,10 @@ impl Looper {
             )?;
             let planes = request.scene.geometry().plane_object_indices();
             let rgb = pass_rgb8(request.pass, &rendered.film, aovs.as_ref(), &planes)?;
+            let seconds = pass_start.elapsed().as_secs_f64().max(1e-9);
             send(Frame {
                 done: true,
+                mrays_per_s: rendered.counts.total() as f64 / seconds / 1e6,
                 ..frame(width, height, &rgb)
             });
             return Ok(());

@@ -191,3 +191,180 @@ fn a_broken_scene_on_reload_shows_the_error_and_keeps_the_old_frame() {
         v.error().is_none() && !std::sync::Arc::ptr_eq(&v.shown().unwrap().scene, &scene)
     });
 }
+
+/// The Render button's file follows the kind (`renders/quadric-KIND.png`, where git ignores
+/// it) until the user types one; from then on it stays.
+#[test]
+fn the_output_name_follows_the_kind_until_edited() {
+    let mut harness = harness(Viewer::new(None, 2).unwrap());
+    harness.step();
+    assert_eq!(harness.state().output(), "renders/quadric-hyperboloid1.png");
+    harness.get_by_label("cone").click();
+    harness.step();
+    assert_eq!(harness.state().output(), "renders/quadric-cone.png");
+    let field = harness.get_by_role_and_label(Role::TextInput, "output");
+    field.focus();
+    field.type_text("x");
+    harness.step();
+    let typed = harness.state().output().to_string();
+    assert_ne!(typed, "renders/quadric-cone.png");
+    harness.get_by_label("ellipsoid").click();
+    harness.step();
+    assert_eq!(harness.state().output(), typed, "a typed name stays");
+}
+
+/// At the default 1000x600 window the most used controls (the kind, its parameters, the camera
+/// sliders and the pass menu) are in sight, and the image is centred in the space it has.
+#[test]
+fn the_panel_fits_the_window_and_the_image_is_centred() {
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1000.0, 600.0))
+        .build_ui_state(
+            |ui, viewer: &mut Viewer| viewer.ui(ui),
+            Viewer::new(None, 2).unwrap(),
+        );
+    harness.step();
+    harness.step();
+    for (role, label) in [
+        (Role::RadioButton, "cone"),
+        (Role::Slider, "a"),
+        (Role::Slider, "yaw"),
+        (Role::Slider, "distance"),
+    ] {
+        let rect = harness.get_by_role_and_label(role, label).rect();
+        assert!(rect.max.y <= 600.0, "{label} at {rect:?}, below the window");
+    }
+    let pass = harness.get_by_label("pass").rect();
+    assert!(pass.max.y <= 600.0, "pass menu at {pass:?}");
+    // The image: 16:9, as wide as the area left of the panel, with equal bands above and below.
+    let image = harness.state().image_rect().unwrap();
+    let status_top = 600.0 - 30.0;
+    let (above, below) = (image.min.y, status_top - image.max.y);
+    assert!(image.width() > 650.0, "{image:?}");
+    assert!(
+        (above - below).abs() < 16.0,
+        "{above} above, {below} below: {image:?}"
+    );
+}
+
+/// A file dropped on the window, as the Open window does.
+#[derive(Debug)]
+struct Dropped(std::path::PathBuf);
+
+impl egui::DroppedFile for Dropped {
+    fn path(&self) -> &Path {
+        &self.0
+    }
+
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        std::fs::read(&self.0).map_err(|e| e.to_string())
+    }
+}
+
+fn bundled(name: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(name)
+}
+
+/// Open: the window's file field opens a scene; Explorer goes back; a dropped file opens too,
+/// and a file of another kind is refused with a message. A glTF file's camera is orbited about
+/// the scene, not a point one unit in front of the lens.
+#[test]
+fn scenes_open_from_the_window_and_by_dropping() {
+    let mut harness = harness(Viewer::new(None, 2).unwrap());
+    harness.step();
+    harness.get_by_label("Open…").click();
+    harness.run();
+    let gltf = bundled("gltf-quadrics.gltf");
+    let field = harness.get_by_role_and_label(Role::TextInput, "file");
+    field.focus();
+    field.type_text(gltf.to_str().unwrap());
+    harness.step();
+    harness.get_by_label("Open file").click();
+    harness.step();
+    assert_eq!(harness.state().file(), Some(gltf.as_path()));
+    assert_eq!(harness.state().output(), "renders/gltf-quadrics.png");
+    step_until(&mut harness, "the glTF scene", refined);
+    let orbit = *harness.state().orbit();
+    assert!(orbit.distance > 2.0, "orbits about the scene: {orbit:?}");
+
+    harness.get_by_label("Explorer").click();
+    harness.step();
+    assert!(harness.state().explorer().is_some());
+    assert_eq!(harness.state().output(), "renders/quadric-hyperboloid1.png");
+
+    let toml = bundled("defense.toml");
+    harness
+        .input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(toml.clone())));
+    harness.step();
+    assert_eq!(harness.state().file(), Some(toml.as_path()));
+    step_until(&mut harness, "the dropped scene", |v| v.shown().is_some());
+    harness
+        .input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(bundled("README.md"))));
+    harness.step();
+    assert_eq!(harness.state().file(), Some(toml.as_path()), "still shown");
+    let message = harness.state().message().unwrap();
+    assert!(message.contains("is not a scene file"), "{message}");
+}
+
+/// A view the renderer refuses (zoomed out beyond the coordinate limit) shows the render's
+/// error in the window, not only in the log.
+#[test]
+fn a_render_error_shows_in_the_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("far.toml");
+    std::fs::write(
+        &path,
+        "version = 1\n[camera]\nfrom = [0, -4e29, 0]\nto = [0, 0, 0]\nup = [0, 0, 1]\nvfov = 40\n\
+         [[material]]\nname = \"white\"\n\
+         [[sphere]]\ncenter = [0, 0, 0]\nradius = 1e29\nmaterial = \"white\"\n\
+         [render]\nresolution = [320, 180]\nspp = 1\n",
+    )
+    .unwrap();
+    let mut harness = harness(Viewer::new(Some(path), 2).unwrap());
+    step_until(&mut harness, "the scene", refined);
+    assert!(harness.state().error().is_none());
+    harness
+        .get_by_role_and_label(Role::Slider, "distance")
+        .set_value_accesskit(7e30);
+    harness.step();
+    step_until(&mut harness, "the render's error", |v| v.error().is_some());
+    let error = harness.state().error().unwrap().to_string();
+    assert!(error.contains("rendering the view"), "{error}");
+    assert!(error.contains("1e30"), "says the limit: {error}");
+    assert!(
+        harness
+            .query_by_label_contains("rendering the view")
+            .is_some()
+    );
+}
+
+/// A pass is one sample of each pixel's first hit: the status line says so, with its real ray
+/// rate, not "1/16 spp, 0.0 Mrays/s".
+#[test]
+fn the_status_line_of_a_pass_says_what_it_is() {
+    let mut harness = harness(Viewer::new(None, 2).unwrap());
+    step_until(&mut harness, "the first refined frame", refined);
+    harness.get_by_label("pass").click();
+    harness.run();
+    harness.get_by_label("normal").click();
+    harness.step();
+    step_until(&mut harness, "the normal pass", |v| {
+        refined(v)
+            && v.last_request()
+                .is_some_and(|r| r.pass == quadray_app::passes::Pass::Normal)
+    });
+    assert!(
+        harness
+            .query_by_label_contains("normal pass: each pixel's first hit")
+            .is_some(),
+        "the status line names the pass"
+    );
+    assert!(harness.query_by_label_contains("/16 spp").is_none());
+    assert!(harness.query_by_label_contains(" 0.0 Mrays/s").is_none());
+}

@@ -3,6 +3,7 @@
 
 use crate::explorer::Explorer;
 use crate::final_render::FinalRender;
+use crate::open_dialog::{Choice, OpenDialog};
 use crate::orbit::Orbit;
 use crate::pick::Picked;
 use crate::source::{FileSource, LoadedFile};
@@ -23,6 +24,8 @@ const EXPLORER_SPP: u32 = 16;
 const ADAPTIVE_VIEW_SPP: u32 = 16;
 /// Width of the settings panel, points.
 const PANEL_WIDTH: f32 = 300.0;
+/// The folder the viewer's default outputs go to, relative to where it runs (git ignores it).
+pub const OUTPUT_FOLDER: &str = "renders";
 
 /// The passes the view can show, as the CLI's `--pass` names them.
 const PASSES: [(Pass, &str); 5] = [
@@ -55,6 +58,16 @@ fn located(error: &anyhow::Error) -> String {
         text += &snippet;
     }
     text
+}
+
+/// Where the Render button writes a scene file's view unless told otherwise: the file's name
+/// with .png in the viewer's outputs folder (beside the scene, the image would land among the
+/// scene files, in a repository untracked).
+fn file_output(scene: &std::path::Path) -> PathBuf {
+    let name = scene.file_stem().unwrap_or(scene.as_os_str());
+    PathBuf::from(OUTPUT_FOLDER)
+        .join(name)
+        .with_extension("png")
 }
 
 /// What the viewer shows: the quadric explorer, or a scene file.
@@ -105,6 +118,14 @@ pub struct Viewer {
     error: Option<String>,
     picked: Option<Option<Picked>>,
     output: String,
+    /// Whether the user typed the output name: until then it follows the kind or the file.
+    output_edited: bool,
+    /// The Open window, while it is open.
+    open_dialog: Option<OpenDialog>,
+    /// Where the image was drawn at the last layout, in points.
+    image_rect: Option<egui::Rect>,
+    /// The window title last set.
+    title: String,
     final_render: Option<FinalRender>,
     message: Option<String>,
     saved_view: Option<String>,
@@ -126,7 +147,7 @@ impl Viewer {
         let (source, output) = match scene {
             Some(path) => {
                 let waker = waker.clone();
-                let output = quadray_app::scene_file::default_output(&path);
+                let output = file_output(&path);
                 (
                     Source::File(FileSource::open(path, move || waker.wake())),
                     output,
@@ -152,6 +173,10 @@ impl Viewer {
             error: None,
             picked: None,
             output: output.display().to_string(),
+            output_edited: false,
+            open_dialog: None,
+            image_rect: None,
+            title: String::new(),
             final_render: None,
             message: None,
             saved_view: None,
@@ -206,14 +231,76 @@ impl Viewer {
         }
     }
 
-    /// Sets the file the Render button writes.
+    /// Sets the file the Render button writes, as typing it in the output field does.
     pub fn set_output(&mut self, output: &str) {
         self.output = output.to_string();
+        self.output_edited = true;
+    }
+
+    /// The file the Render button writes.
+    pub fn output(&self) -> &str {
+        &self.output
+    }
+
+    /// Where the image was drawn at the last layout, in points.
+    pub fn image_rect(&self) -> Option<egui::Rect> {
+        self.image_rect
+    }
+
+    /// The scene file shown, if any (none in the explorer).
+    pub fn file(&self) -> Option<&std::path::Path> {
+        match &self.source {
+            Source::File(file) => Some(file.path()),
+            Source::Explorer(_) => None,
+        }
+    }
+
+    /// Shows the scene file at `path` instead of what is shown (the Open window and a dropped
+    /// file call this). Until it loads the window says so; an error shows in the panel.
+    pub fn open(&mut self, path: PathBuf) {
+        let waker = self.waker.clone();
+        if !self.output_edited {
+            self.output = file_output(&path).display().to_string();
+        }
+        self.source = Source::File(FileSource::open(path, move || waker.wake()));
+        self.forget_scene();
+    }
+
+    /// Back to the quadric explorer, at its first kind's textbook view.
+    pub fn show_explorer(&mut self) {
+        let explorer = Explorer::default();
+        self.orbit = explorer.textbook_view();
+        if !self.output_edited {
+            self.output = explorer.output_name();
+        }
+        self.source = Source::Explorer(explorer);
+        self.forget_scene();
+        self.rebuild_explorer();
+    }
+
+    /// Drops what belongs to the scene shown before (its frame, its picked object, its error).
+    fn forget_scene(&mut self) {
+        self.shown = None;
+        self.frame = None;
+        self.texture = None;
+        self.requested = None;
+        self.picked = None;
+        self.error = None;
+        self.message = None;
     }
 
     /// The whole window, inside `ui` (eframe's root, or a test harness).
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         let _ = self.waker.0.set(ui.ctx().clone());
+        let title = match self.file() {
+            Some(path) => format!("quadray-view: {}", path.display()),
+            None => "quadray-view: quadric explorer".to_string(),
+        };
+        if title != self.title {
+            ui.ctx()
+                .send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
+            self.title = title;
+        }
         self.poll();
         self.keys(ui.ctx());
         egui::Panel::bottom("status").show(ui, |ui| self.status_line(ui));
@@ -230,6 +317,53 @@ impl Viewer {
         if let Some(text) = self.saved_view.clone() {
             self.saved_view_window(ui.ctx(), text);
         }
+        self.open_window(ui.ctx());
+        self.take_dropped_file(ui.ctx());
+    }
+
+    /// The Open window, while open: opens what the user picks.
+    fn open_window(&mut self, ctx: &egui::Context) {
+        let Some(dialog) = &mut self.open_dialog else {
+            return;
+        };
+        match dialog.show(ctx) {
+            Choice::Pending => {}
+            Choice::Cancel => self.open_dialog = None,
+            Choice::Open(path) => {
+                self.open_dialog = None;
+                self.open(path);
+            }
+        }
+    }
+
+    /// Opens the first scene file dropped on the window; other files get a message.
+    fn take_dropped_file(&mut self, ctx: &egui::Context) {
+        let dropped = ctx.input(|i| i.raw.dropped_files.clone());
+        let Some(path) = dropped
+            .iter()
+            .map(|f| f.path().to_path_buf())
+            .find(|p| !p.as_os_str().is_empty())
+        else {
+            return;
+        };
+        if crate::open_dialog::is_scene_file(&path) {
+            self.open(path);
+        } else {
+            self.message = Some(format!(
+                "error: {} is not a scene file (.toml, .obj, .gltf, .glb)",
+                path.display()
+            ));
+        }
+    }
+
+    /// Opens the Open window at the shown file's folder (or the current one).
+    pub fn show_open_dialog(&mut self) {
+        let folder = self
+            .file()
+            .and_then(|p| p.parent())
+            .filter(|p| !p.as_os_str().is_empty())
+            .map_or_else(|| PathBuf::from("."), std::path::Path::to_path_buf);
+        self.open_dialog = Some(OpenDialog::new(folder));
     }
 
     /// Takes in what the background threads finished: a load, frames, a written render.
@@ -248,6 +382,11 @@ impl Viewer {
         }
         if let Some(frame) = self.worker.latest_frame() {
             self.take_frame(frame);
+        }
+        if let Some((generation, failure)) = self.worker.failure()
+            && generation == self.generation
+        {
+            self.error = Some(failure);
         }
         if let Some(result) = self.final_render.as_mut().and_then(FinalRender::finished) {
             self.message = Some(match result {
@@ -283,6 +422,9 @@ impl Viewer {
         let Source::Explorer(explorer) = &self.source else {
             return;
         };
+        if !self.output_edited {
+            self.output = explorer.output_name();
+        }
         let built = explorer.scene(&self.orbit).and_then(|d| Ok(Scene::new(d)?));
         match built {
             Ok(scene) => {
@@ -393,12 +535,16 @@ impl Viewer {
             ..shown.settings
         };
         let waker = self.waker.clone();
-        match FinalRender::start(
-            shown.scene.clone(),
-            settings,
-            PathBuf::from(&self.output),
-            move || waker.wake(),
-        ) {
+        let output = PathBuf::from(&self.output);
+        // The default outputs folder is made when first needed; a folder the user typed must exist.
+        if !self.output_edited
+            && let Some(folder) = output.parent().filter(|f| !f.as_os_str().is_empty())
+            && let Err(e) = std::fs::create_dir_all(folder)
+        {
+            self.message = Some(format!("error: cannot make {}: {e}", folder.display()));
+            return;
+        }
+        match FinalRender::start(shown.scene.clone(), settings, output, move || waker.wake()) {
             Ok(render) => {
                 self.message = None;
                 self.final_render = Some(render);

@@ -4,7 +4,16 @@
 use super::{PASSES, Source, Viewer};
 use crate::pick::pick;
 use eframe::egui;
+use quadray_app::passes::Pass;
 use std::time::Duration;
+
+/// The name the pass menu gives `pass`.
+fn pass_name(pass: Pass) -> &'static str {
+    PASSES
+        .iter()
+        .find(|(p, _)| *p == pass)
+        .map_or("", |(_, n)| n)
+}
 
 /// Aspect of the view when no scene is shown.
 const DEFAULT_ASPECT: f32 = 16.0 / 9.0;
@@ -30,8 +39,9 @@ impl Viewer {
         }
     }
 
-    /// The image, as large as fits at the scene's aspect: drag to orbit, Shift+drag or the right
-    /// button to pan, the wheel to zoom, a click to name the object under the cursor.
+    /// The image, as large as fits at the scene's aspect, centred (letterboxed): drag to orbit,
+    /// Shift+drag or the right button to pan, the wheel to zoom, a click to name the object
+    /// under the cursor.
     pub(super) fn image_area(&mut self, ui: &mut egui::Ui) {
         let ppp = ui.ctx().pixels_per_point();
         let aspect = self.shown.as_ref().map_or(DEFAULT_ASPECT, |s| {
@@ -43,14 +53,23 @@ impl Viewer {
         } else {
             egui::vec2(available.x, available.x / aspect)
         };
-        // Whole pixels, so a refined frame is shown pixel for pixel.
+        // Whole pixels, so a refined frame is shown pixel for pixel; rounding down must not take
+        // a scene at the renderer's widest aspect past it (640x10 shown 700x10 was refused).
         let (width, height) = (
             (points.x * ppp).floor().max(1.0) as u32,
             (points.y * ppp).floor().max(1.0) as u32,
         );
+        let limit = quadray::render::MAX_ASPECT;
+        let height = height.max((width as f64 / limit).ceil() as u32);
+        let width = width.max((height as f64 / limit).ceil() as u32);
         self.view_size = (width, height);
         let size = egui::vec2(width as f32, height as f32) / ppp;
-        let (rect, response) = ui.allocate_exact_size(size, egui::Sense::click_and_drag());
+        let area = ui.available_rect_before_wrap();
+        // Centred, and on whole pixels so a refined frame is shown pixel for pixel.
+        let corner = ((area.center() - size * 0.5) * ppp).round() / ppp;
+        let rect = egui::Rect::from_min_size(corner, size);
+        let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+        self.image_rect = Some(rect);
         let painter = ui.painter_at(rect);
         match &self.texture {
             Some(texture) => {
@@ -133,6 +152,13 @@ impl Viewer {
                 "preview {}x{} of {}x{}, 1 spp",
                 shown.frame.width, shown.frame.height, shown.view.0, shown.view.1
             ),
+            Some(shown) if self.pass != Pass::Combined => format!(
+                "{}x{}, {} pass: each pixel's first hit, {:.1} Mrays/s",
+                shown.frame.width,
+                shown.frame.height,
+                pass_name(self.pass),
+                shown.frame.mrays_per_s
+            ),
             Some(shown) => {
                 let f = &shown.frame;
                 let target = self.requested.as_ref().map_or(f.spp, |r| r.settings.spp);
@@ -152,7 +178,8 @@ impl Viewer {
         ui.label(text);
     }
 
-    /// The settings: the explorer's panel (or the file's name), camera, pass, buttons, and what
+    /// The settings, most used first: an error, the explorer's kind and parameters (or the
+    /// file's name), the camera and the pass, then the explorer's clip box and look, and what
     /// was clicked.
     pub(super) fn settings_panel(&mut self, ui: &mut egui::Ui) {
         if let Some(error) = &self.error {
@@ -160,8 +187,8 @@ impl Viewer {
             ui.colored_label(colour, egui::RichText::new(error).monospace());
             ui.separator();
         }
-        let explorer_changed = match &mut self.source {
-            Source::Explorer(explorer) => explorer.ui(ui),
+        let surface_changed = match &mut self.source {
+            Source::Explorer(explorer) => explorer.surface_ui(ui),
             Source::File(file) => {
                 ui.heading("Scene");
                 ui.label(file.path().display().to_string());
@@ -171,24 +198,24 @@ impl Viewer {
                 false
             }
         };
-        if explorer_changed {
+        if surface_changed {
             self.rebuild_explorer();
         }
         ui.separator();
         self.camera_controls(ui);
-        ui.separator();
         egui::ComboBox::from_label("pass")
-            .selected_text(
-                PASSES
-                    .iter()
-                    .find(|(p, _)| *p == self.pass)
-                    .map_or("", |(_, n)| n),
-            )
+            .selected_text(pass_name(self.pass))
             .show_ui(ui, |ui| {
                 for (pass, name) in PASSES {
                     ui.selectable_value(&mut self.pass, pass, name);
                 }
             });
+        if let Source::Explorer(explorer) = &mut self.source {
+            ui.separator();
+            if explorer.look_ui(ui) {
+                self.rebuild_explorer();
+            }
+        }
         if let Some(picked) = &self.picked {
             ui.separator();
             match picked {
@@ -226,12 +253,27 @@ impl Viewer {
         }
     }
 
-    /// Render (with its output and progress), Sample, Save view, Quit.
+    /// Open and Explorer, Render (with its output and progress), Sample, Save view, Quit.
     pub(super) fn buttons(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
+            if ui.button("Open…").clicked() {
+                self.show_open_dialog();
+            }
+            if let Source::File(_) = self.source
+                && ui.button("Explorer").clicked()
+            {
+                self.show_explorer();
+            }
+            ui.label("or drop a scene file on the window");
+        });
+        ui.horizontal(|ui| {
             let label = ui.label("output");
-            ui.text_edit_singleline(&mut self.output)
+            let field = ui
+                .text_edit_singleline(&mut self.output)
                 .labelled_by(label.id);
+            if field.changed() {
+                self.output_edited = true;
+            }
         });
         ui.horizontal(|ui| {
             let idle = self.final_render.is_none();
