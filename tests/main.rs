@@ -2,6 +2,7 @@
 //! hostile-input corpus, imported meshes and scene graphs (one test binary, as ripgrep has).
 
 mod analytic;
+mod glass;
 mod hostile;
 mod imported;
 mod instancing;

@@ -18,6 +18,10 @@ Every quadray feature the bundled scenes use has an exact POV-Ray counterpart:
   pigment given before the transform so it stays in the object frame, like quadray's textures.
   Every quadric is bounded by its clip box (`clipped_by { bounded_by }`), which sidesteps POV-Ray
   3.7.0's FS#331 bounding bug for paraboloids.
+- Glass (`transmission` t) is a filtering pigment `rgbf <colour, t>` with `interior { ior }`, and
+  its mirror a Fresnel `reflection { (1 - t) r, (1 - t) r + t fresnel on } conserve_energy`; an
+  attenuation is POV-Ray's exponential fade (`fade_power 1001`) matched to quadray's law.
+  Thin-walled glass has no POV-Ray counterpart (rendered as a solid, with a warning).
 - The height ramp and bands are `gradient` colour maps over the z range of the surface inside its
   clip box, which this script finds on its own (roots along a grid of vertical lines).
 """
@@ -139,6 +143,11 @@ def transform_pov(t):
 
 def pigment(m, height_range=None, origin=None, plane=False):
     tex = m.get("texture", "constant")
+    t = m.get("transmission", 0.0)
+    if tex == "constant" and t > 0:
+        # Glass: the filter share passes, tinted by the colour.
+        r, g, b = m.get("color", [0.8] * 3)
+        return f"pigment {{ color rgbf <{r:.9g}, {g:.9g}, {b:.9g}, {t:.9g}> }}"
     if tex == "constant":
         return f"pigment {{ color {rgb(m.get('color', [0.8] * 3))} }}"
     if tex == "checker":
@@ -180,11 +189,38 @@ def finish(m):
         hl = f"phong 0 specular {ks:.9g} roughness {1 / n:.9g}"
     else:
         hl = f"phong {ks:.9g} phong_size {n:.9g} specular 0"
-    return f"finish {{ ambient {ka:.9g} diffuse {kd:.9g} {hl} reflection {{ {r:.9g} }} }}"
+    t = m.get("transmission", 0.0)
+    if t > 0:
+        # quadray's mirror (1 - t) r + t F: POV-Ray's Fresnel reflection from its min to its max,
+        # with the transmitted light reduced by what is reflected (conserve_energy).
+        lo = (1 - t) * r
+        refl = f"reflection {{ {lo:.9g}, {lo + t:.9g} fresnel on }} conserve_energy"
+    else:
+        refl = f"reflection {{ {r:.9g} }}"
+    return f"finish {{ ambient {ka:.9g} diffuse {kd:.9g} {hl} {refl} }}"
+
+
+def interior(m):
+    """Glass's interior: its ior and, for an attenuation, POV-Ray 3.7's exponential fade
+    (fade_power 1001 multiplies by exp(-(1 - fade_color) d / fade_distance), measured), matched
+    to quadray's color^(d / distance) channel by channel."""
+    if m.get("transmission", 0.0) <= 0:
+        return ""
+    if m.get("thin_walled", False):
+        print("warning: POV-Ray has no thin-walled glass: rendered as a solid", file=sys.stderr)
+    out = f"  interior {{ ior {m.get('ior', 1.5):.9g}"
+    if "attenuation_color" in m:
+        d = m["attenuation_distance"]
+        sigma = [-math.log(c) for c in m["attenuation_color"]]
+        scale = max(1.0, max(sigma))
+        fade = d / scale
+        colour = [1 - s * fade / d for s in sigma]
+        out += f" fade_distance {fade:.9g} fade_power 1001 fade_color {rgb(colour)}"
+    return out + " }\n"
 
 
 def texture(m, **kw):
-    return f"  texture {{\n    {pigment(m, **kw)}\n    {finish(m)}\n  }}\n"
+    return f"  texture {{\n    {pigment(m, **kw)}\n    {finish(m)}\n  }}\n{interior(m)}"
 
 
 def camera(c, w, h):

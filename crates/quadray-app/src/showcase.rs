@@ -206,6 +206,7 @@ impl Showcase {
                 reflection_tint: 0.0,
                 specular_tint: 0.0,
                 emission: None,
+                transmission: None,
             }
         } else {
             Material {

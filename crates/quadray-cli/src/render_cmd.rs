@@ -366,8 +366,13 @@ fn stats_line(
         (None, None) => format!("{}x{}", settings.width, settings.height),
     };
     let secs = time.as_secs_f64();
+    let refraction = if c.refraction > 0 {
+        format!(" + {} refraction", c.refraction)
+    } else {
+        String::new()
+    };
     format!(
-        "{size}, {}: {} camera + {} shadow + {} reflection rays in {secs:.3} s ({:.2} Mrays/s) -> {}",
+        "{size}, {}: {} camera + {} shadow + {} reflection{refraction} rays in {secs:.3} s ({:.2} Mrays/s) -> {}",
         sampling.summary(),
         c.camera,
         c.shadow,

@@ -1,5 +1,4 @@
-//! glTF material features on a one-triangle file: emission, sides, metals, and the extensions
-//! quadray warns about.
+//! glTF material features on a one-triangle file: emission, sides, metals, glass.
 
 use crate::common;
 
@@ -44,22 +43,45 @@ fn emission_is_factor_times_strength() {
     assert!(e.contains("emissiveStrength"), "{e}");
 }
 
+/// KHR_materials_transmission, _ior and _volume become quadray's glass: thin-walled without a
+/// volume (as glTF defines), a solid with Beer–Lambert absorption with one; out-of-range values
+/// are errors naming the material.
 #[test]
-fn refraction_extensions_are_named_in_a_warning() {
-    let s = with_material(
-        "glass",
-        json!({"extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
-                              "KHR_materials_ior": {"ior": 1.5}}}),
+fn transmission_ior_and_volume_make_glass() {
+    let thin = with_material(
+        "thin",
+        json!({"extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.9},
+                              "KHR_materials_ior": {"ior": 1.33}}}),
     );
-    for extension in ["KHR_materials_transmission", "KHR_materials_ior"] {
-        assert!(
-            s.notes
-                .iter()
-                .any(|n| n.starts_with("warning:") && n.contains(extension)),
-            "{extension}: {:?}",
-            s.notes
-        );
-    }
+    let t = thin.description.materials[0].transmission.unwrap();
+    assert_eq!(
+        (t.factor, t.ior, t.thin_walled, t.attenuation),
+        (0.9, 1.33, true, None)
+    );
+    let solid = with_material(
+        "solid",
+        json!({"extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                              "KHR_materials_volume": {"thicknessFactor": 0.5,
+                                  "attenuationDistance": 2.0,
+                                  "attenuationColor": [0.5, 0.8, 1.0]}}}),
+    );
+    let t = solid.description.materials[0].transmission.unwrap();
+    assert!(!t.thin_walled);
+    assert_eq!(t.ior, 1.5, "KHR_materials_ior's default");
+    let a = t.attenuation.unwrap();
+    assert_eq!((a.color, a.distance), (Vec3::new(0.5, 0.8, 1.0), 2.0));
+    let opaque = with_material(
+        "opaque",
+        json!({"extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.0}}}),
+    );
+    assert_eq!(opaque.description.materials[0].transmission, None);
+    let (mut gltf, bin) = triangle();
+    gltf["materials"] = json!([{"name": "diamond-ish",
+        "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                       "KHR_materials_ior": {"ior": 0.5}}}]);
+    gltf["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let e = load("bad-ior", &gltf, Some(&bin)).unwrap_err();
+    assert!(e.contains("diamond-ish") && e.contains("ior"), "{e}");
 }
 
 #[test]

@@ -1,5 +1,7 @@
-//! Whitted-style recursive ray tracing: local Phong/Blinn shading with hard shadows, plus mirror reflection.
+//! Whitted-style recursive ray tracing: local Phong/Blinn shading with hard shadows, plus mirror
+//! reflection and refraction through glass ([`crate::dielectric`]).
 
+use crate::dielectric::{Attenuation, Transmission, fresnel, refract};
 use crate::footprint::{HitFootprint, RayCone};
 use crate::material::SpecularModel;
 use crate::math::{Ray, offset_origin};
@@ -17,12 +19,14 @@ pub struct RayCounts {
     pub shadow: u64,
     /// Mirror reflection rays.
     pub reflection: u64,
+    /// Rays refracted through glass.
+    pub refraction: u64,
 }
 
 impl RayCounts {
     /// All rays together.
     pub fn total(&self) -> u64 {
-        self.camera + self.shadow + self.reflection
+        self.camera + self.shadow + self.reflection + self.refraction
     }
 }
 
@@ -31,6 +35,7 @@ impl AddAssign for RayCounts {
         self.camera += o.camera;
         self.shadow += o.shadow;
         self.reflection += o.reflection;
+        self.refraction += o.refraction;
     }
 }
 
@@ -39,7 +44,8 @@ impl AddAssign for RayCounts {
 pub struct Whitted {
     /// Most rays in one chain, the camera ray included (POV-Ray's max_trace_level); the next would be black.
     pub max_depth: u32,
-    /// A reflection whose contribution to the pixel would fall below this weight is not traced.
+    /// A reflected or refracted ray whose contribution to the pixel would fall below this weight
+    /// is not traced.
     pub min_throughput: f32,
 }
 
@@ -63,10 +69,21 @@ impl Whitted {
         counts: &mut RayCounts,
     ) -> Vec3 {
         counts.camera += 1;
-        if cone.is_point() {
-            self.radiance::<false>(scene, ray, cone, None, 1, 1.0, counts)
-        } else {
-            self.radiance::<true>(scene, ray, cone, None, 1, 1.0, counts)
+        // Each combination compiles its own path: a scene without filtered textures or glass
+        // pays nothing for them.
+        match (cone.is_point(), scene.transmits()) {
+            (true, false) => {
+                self.radiance::<false, false>(scene, ray, cone, None, 1, 1.0, None, counts)
+            }
+            (false, false) => {
+                self.radiance::<true, false>(scene, ray, cone, None, 1, 1.0, None, counts)
+            }
+            (true, true) => {
+                self.radiance::<false, true>(scene, ray, cone, None, 1, 1.0, None, counts)
+            }
+            (false, true) => {
+                self.radiance::<true, true>(scene, ray, cone, None, 1, 1.0, None, counts)
+            }
         }
     }
 
@@ -82,8 +99,12 @@ impl Whitted {
         counts.camera += 1;
         let hit = self.intersect(scene, ray, None);
         let radiance = match &hit {
-            Some(h) if cone.is_point() => self.shade::<false>(scene, ray, cone, h, 1, 1.0, counts),
-            Some(h) => self.shade::<true>(scene, ray, cone, h, 1, 1.0, counts),
+            Some(h) => match (cone.is_point(), scene.transmits()) {
+                (true, false) => self.shade::<false, false>(scene, ray, cone, h, 1, 1.0, counts),
+                (false, false) => self.shade::<true, false>(scene, ray, cone, h, 1, 1.0, counts),
+                (true, true) => self.shade::<false, true>(scene, ray, cone, h, 1, 1.0, counts),
+                (false, true) => self.shade::<true, true>(scene, ray, cone, h, 1, 1.0, counts),
+            },
             None => scene.background(),
         };
         (radiance, hit)
@@ -95,9 +116,10 @@ impl Whitted {
     }
 
     /// Radiance along `ray` (with its `cone` when `CONES`), the `depth`-th ray of its chain,
-    /// whose contribution is weighted by `throughput`.
+    /// whose contribution is weighted by `throughput`, travelling inside a solid that absorbs as
+    /// `medium` (Beer–Lambert over the distance to the hit) or outside when `None`.
     #[allow(clippy::too_many_arguments)]
-    fn radiance<const CONES: bool>(
+    fn radiance<const CONES: bool, const GLASS: bool>(
         &self,
         scene: &Scene,
         ray: &Ray,
@@ -105,20 +127,29 @@ impl Whitted {
         from: Option<PrimRef>,
         depth: u32,
         throughput: f32,
+        medium: Option<Attenuation>,
         counts: &mut RayCounts,
     ) -> Vec3 {
         match self.intersect(scene, ray, from) {
-            Some(hit) => self.shade::<CONES>(scene, ray, cone, &hit, depth, throughput, counts),
+            Some(hit) => {
+                let leaving =
+                    self.shade::<CONES, GLASS>(scene, ray, cone, &hit, depth, throughput, counts);
+                match medium {
+                    Some(a) if GLASS => leaving * a.after(hit.t * ray.dir.length()),
+                    _ => leaving,
+                }
+            }
             None if depth > 1 => scene.environment(),
             None => scene.background(),
         }
     }
 
-    /// Radiance leaving `hit` back along `ray` (with its `cone` when `CONES`): local shading plus
-    /// the mirror reflection. Without cones (scenes with no filtered texture) `cone` is ignored,
-    /// and the shading compiles as if cones did not exist.
+    /// Radiance leaving `hit` back along `ray` (with its `cone` when `CONES`; through glass when
+    /// `GLASS`, in scenes with any): local shading plus the mirror reflection and refraction.
+    /// Without cones (scenes with no filtered texture) `cone` is ignored, and the shading
+    /// compiles as if cones did not exist; without `GLASS`, as if glass did not.
     #[allow(clippy::too_many_arguments)]
-    fn shade<const CONES: bool>(
+    fn shade<const CONES: bool, const GLASS: bool>(
         &self,
         scene: &Scene,
         ray: &Ray,
@@ -148,12 +179,82 @@ impl Whitted {
         };
         let ng = g.geometric_normal * facing;
         let ns = g.shading_normal * facing;
-        let matte = 1.0 - m.reflectivity;
+        // Glass splits what it does not reflect by Fresnel into light through it; the rest of
+        // the surface is the opaque material.
+        let glass = m
+            .transmission
+            .as_ref()
+            .filter(|_| GLASS)
+            .map(|t| Glass::at(t, incoming, ns, facing > 0.0, base));
+        let opaque = glass.as_ref().map_or(1.0, |g| 1.0 - g.transmission.factor);
+        let matte = (1.0 - m.reflectivity) * opaque;
         let mut color = base * (m.ambient * matte);
         if m.emission.is_some() {
             color += scene.emitted(hit, &footprint);
         }
 
+        color = self.direct_light::<GLASS>(scene, hit, base, (ns, ng, view), matte, color, counts);
+
+        // The mirror: the opaque share's reflectivity, plus the Fresnel share of glass.
+        let (mirror, mirror_share) = match &glass {
+            None => (m.reflection_color(base), m.reflectivity),
+            Some(g) => {
+                let mirror = m.reflection_color(base) * opaque + Vec3::splat(g.reflected);
+                (mirror, mirror.max_element())
+            }
+        };
+        let weight = throughput * mirror_share;
+        if mirror_share > 0.0 && depth < self.max_depth && weight >= self.min_throughput {
+            let mut dir = reflect(incoming, ns);
+            // An interpolated normal can mirror the ray into the surface; fall back to the true normal.
+            if dir.dot(ng) <= 0.0 {
+                dir = reflect(incoming, ng);
+            }
+            counts.reflection += 1;
+            let reflected = Ray::new(offset_origin(g.point, ng, g.error, dir), dir);
+            let reflected_cone = if CONES {
+                cone.reflected(distance, scene.curvature(hit))
+            } else {
+                RayCone::POINT
+            };
+            // Reflected inside a solid, the ray stays in it.
+            let medium = glass.as_ref().and_then(|g| g.inside_after_reflection());
+            color += self.radiance::<CONES, GLASS>(
+                scene,
+                &reflected,
+                reflected_cone,
+                Some(hit.prim),
+                depth + 1,
+                weight,
+                medium,
+                counts,
+            ) * mirror;
+        }
+        if let Some(glass) = &glass {
+            color +=
+                self.refracted::<CONES>(scene, ray, cone, hit, depth, throughput, glass, counts);
+        }
+        color
+    }
+
+    /// `color` plus the light reaching `hit` straight from the scene's lights (diffuse, weighted
+    /// by `matte`, and highlights), each behind its shadow ray; through glass a share of it when
+    /// `GLASS`. The normals are the shading and geometric ones facing the viewer, then the
+    /// direction towards it. Added to `color` light by light, in the order shading always added.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn direct_light<const GLASS: bool>(
+        &self,
+        scene: &Scene,
+        hit: &SurfaceHit,
+        base: Vec3,
+        (ns, ng, view): (DVec3, DVec3, DVec3),
+        matte: f32,
+        mut color: Vec3,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
+        let m = &scene.materials()[hit.material as usize];
+        let g = &hit.geometry;
         let highlight = m.highlight_color(base);
         for light in scene.lights() {
             let Some(inc) = light.incident(g.point) else {
@@ -169,9 +270,18 @@ impl Whitted {
                 offset_origin(g.point, ng, g.error, inc.to_light),
                 inc.to_light,
             );
-            if scene.occluded_from(&shadow, inc.distance, Some(hit.prim)) {
+            // Through glass, a share of the light arrives; otherwise all or nothing.
+            let through = if GLASS {
+                let through = scene.transmittance(&shadow, inc.distance, Some(hit.prim));
+                if through == Vec3::ZERO {
+                    continue;
+                }
+                through
+            } else if scene.occluded_from(&shadow, inc.distance, Some(hit.prim)) {
                 continue;
-            }
+            } else {
+                Vec3::ONE
+            };
             let mut response = base * (m.diffuse * matte * cos as f32);
             if m.specular > 0.0 {
                 let alignment = match m.specular_model {
@@ -182,34 +292,116 @@ impl Whitted {
                     response += highlight * m.specular_lobe(alignment as f32);
                 }
             }
-            color += inc.irradiance * response;
+            color += inc.irradiance * response * through;
         }
 
-        let weight = throughput * m.reflectivity;
-        if m.reflectivity > 0.0 && depth < self.max_depth && weight >= self.min_throughput {
-            let mut dir = reflect(incoming, ns);
-            // An interpolated normal can mirror the ray into the surface; fall back to the true normal.
-            if dir.dot(ng) <= 0.0 {
-                dir = reflect(incoming, ng);
-            }
-            counts.reflection += 1;
-            let reflected = Ray::new(offset_origin(g.point, ng, g.error, dir), dir);
-            let reflected_cone = if CONES {
-                cone.reflected(distance, scene.curvature(hit))
-            } else {
-                RayCone::POINT
-            };
-            color += self.radiance::<CONES>(
-                scene,
-                &reflected,
-                reflected_cone,
-                Some(hit.prim),
-                depth + 1,
-                weight,
-                counts,
-            ) * m.reflection_color(base);
-        }
         color
+    }
+
+    /// The light `glass` lets through at `hit` from beyond it, along the refracted ray (straight
+    /// on through a thin sheet); nothing past the critical angle, or when the ray would weigh
+    /// too little.
+    #[allow(clippy::too_many_arguments)]
+    fn refracted<const CONES: bool>(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        cone: RayCone,
+        hit: &SurfaceHit,
+        depth: u32,
+        throughput: f32,
+        glass: &Glass,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
+        let Some(dir) = glass.direction else {
+            return Vec3::ZERO;
+        };
+        let weight = throughput * glass.through.max_element();
+        if depth >= self.max_depth || weight < self.min_throughput {
+            return Vec3::ZERO;
+        }
+        counts.refraction += 1;
+        let g = &hit.geometry;
+        let refracted = Ray::new(
+            offset_origin(g.point, g.geometric_normal, g.error, dir),
+            dir,
+        );
+        // The footprint carries on as if the surface were flat (refraction's own spread of a
+        // cone is not modelled).
+        let refracted_cone = if CONES {
+            cone.reflected(hit.t * ray.dir.length(), 0.0)
+        } else {
+            RayCone::POINT
+        };
+        self.radiance::<CONES, true>(
+            scene,
+            &refracted,
+            refracted_cone,
+            Some(hit.prim),
+            depth + 1,
+            weight,
+            glass.inside_after_refraction(),
+            counts,
+        ) * glass.through
+    }
+}
+
+/// What a transmissive surface does with one incoming ray: the shares reflected and let
+/// through, and where the light through it goes.
+struct Glass {
+    /// The material's transmission.
+    transmission: Transmission,
+    /// Whether the ray arrives from outside the solid (the front of the surface).
+    entering: bool,
+    /// Share of the light reflected by the Fresnel equations (of the transmitted share).
+    reflected: f32,
+    /// Colour multiplying the light through: factor · (1 − F) · base colour.
+    through: Vec3,
+    /// The refracted direction, or `None` past the critical angle.
+    direction: Option<DVec3>,
+}
+
+impl Glass {
+    /// The split at a hit seen along unit `incoming`, with unit shading normal `n` facing the
+    /// viewer; `entering` when the viewer is on the front (outward) side; `base` the base colour.
+    fn at(t: &Transmission, incoming: DVec3, n: DVec3, entering: bool, base: Vec3) -> Glass {
+        // n_t / n_i: into the glass from outside, out of it from inside; a thin sheet is entered
+        // and left at once, so its reflection is the entering one's.
+        let eta = if t.thin_walled || entering {
+            t.ior
+        } else {
+            1.0 / t.ior
+        };
+        let cos_i = (-incoming.dot(n)).clamp(0.0, 1.0);
+        let f = fresnel(cos_i, eta);
+        let direction = if t.thin_walled {
+            Some(incoming)
+        } else {
+            refract(incoming, n, eta)
+        };
+        Glass {
+            transmission: *t,
+            entering,
+            reflected: t.factor * f as f32,
+            through: base * (t.factor * (1.0 - f) as f32),
+            direction: direction.filter(|_| f < 1.0),
+        }
+    }
+
+    /// The solid the refracted ray travels in: this one when it enters a solid.
+    fn inside_after_refraction(&self) -> Option<Attenuation> {
+        let t = &self.transmission;
+        (self.entering && !t.thin_walled)
+            .then_some(t.attenuation)
+            .flatten()
+    }
+
+    /// The solid the reflected ray travels in: this one when the ray was inside it.
+    fn inside_after_reflection(&self) -> Option<Attenuation> {
+        let t = &self.transmission;
+        (!self.entering && !t.thin_walled)
+            .then_some(t.attenuation)
+            .flatten()
     }
 }
 

@@ -49,6 +49,10 @@ pub struct Material {
     /// It is seen directly and in mirrors, but lights no other surface: Whitted tracing follows
     /// light only from the scene's lights.
     pub emission: Option<Texture>,
+    /// Glass: light through the surface ([`crate::dielectric`]), or `None` for an opaque one.
+    /// With it, the mirror reflection of the transmitted share follows the Fresnel equations
+    /// instead of `reflectivity`.
+    pub transmission: Option<crate::dielectric::Transmission>,
 }
 
 impl Material {
@@ -103,6 +107,7 @@ impl Default for Material {
             reflection_tint: 0.0,
             specular_tint: 0.0,
             emission: None,
+            transmission: None,
         }
     }
 }

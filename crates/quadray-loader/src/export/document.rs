@@ -46,6 +46,10 @@ pub(crate) struct Document {
     pub(crate) masked: HashMap<MaterialVariant, usize>,
     /// Whether a material uses KHR_materials_emissive_strength (then listed as used).
     pub(crate) emissive_strength: bool,
+    /// Whether a material is glass (KHR_materials_transmission and _ior then listed as used).
+    pub(crate) transmission: bool,
+    /// Whether a glass material is a solid (KHR_materials_volume then listed as used).
+    pub(crate) volume: bool,
 }
 
 /// One mesh's vertex data, borrowed.
@@ -240,7 +244,29 @@ impl Document {
         if let Some(emission) = &m.emission {
             self.write_emission(&mut material, emission)?;
         }
+        if let Some(glass) = &m.transmission {
+            self.write_transmission(&mut material, glass);
+        }
         Ok(material)
+    }
+
+    /// Glass as KHR_materials_transmission, KHR_materials_ior and, for a solid,
+    /// KHR_materials_volume (its thickness factor 1 only says "a volume": a ray tracer measures
+    /// the path inside the mesh itself).
+    fn write_transmission(&mut self, material: &mut Value, glass: &quadray::Transmission) {
+        use crate::gltf::transmission::{IOR, TRANSMISSION, VOLUME};
+        material["extensions"][TRANSMISSION] = json!({"transmissionFactor": glass.factor});
+        material["extensions"][IOR] = json!({"ior": glass.ior});
+        self.transmission = true;
+        if !glass.thin_walled {
+            let mut volume = json!({"thicknessFactor": 1.0});
+            if let Some(a) = &glass.attenuation {
+                volume["attenuationColor"] = json!(a.color.to_array());
+                volume["attenuationDistance"] = json!(a.distance);
+            }
+            material["extensions"][VOLUME] = volume;
+            self.volume = true;
+        }
     }
 
     /// glTF's emissive fields for `emission`: a factor in [0, 1] scaled by

@@ -206,6 +206,15 @@ fn document_json(
     if doc.emissive_strength {
         used.push(crate::gltf::material::EMISSIVE_STRENGTH);
     }
+    if doc.transmission {
+        used.extend([
+            crate::gltf::transmission::TRANSMISSION,
+            crate::gltf::transmission::IOR,
+        ]);
+    }
+    if doc.volume {
+        used.push(crate::gltf::transmission::VOLUME);
+    }
     let root_ext = RootExtension {
         shapes: std::mem::take(&mut doc.shapes),
         extensions: None,
@@ -446,6 +455,43 @@ intensity = 0.8
             .filter_map(|(_, m)| m.emission.clone())
             .collect();
         assert_eq!(emissions, [glow]);
+    }
+
+    /// Glass goes out as KHR_materials_transmission, _ior and (for a solid) _volume, and comes
+    /// back the same: a thin sheet and an absorbing solid.
+    #[test]
+    fn glass_round_trips() {
+        let mut scene = crate::native::parse_scene(SCENE, Path::new("s.toml")).unwrap();
+        let solid = quadray::Transmission {
+            factor: 0.9,
+            ior: 1.7,
+            thin_walled: false,
+            attenuation: Some(quadray::Attenuation {
+                color: Vec3::new(0.5, 0.75, 1.0),
+                distance: 2.0,
+            }),
+        };
+        let sheet = quadray::Transmission {
+            thin_walled: true,
+            attenuation: None,
+            ..solid
+        };
+        scene.description.materials[0].transmission = Some(solid);
+        if let Some(m) = scene.description.materials.get_mut(1) {
+            m.transmission = Some(sheet);
+        }
+        let out = temp("glass.gltf");
+        export_gltf(&scene, &out).unwrap();
+        let back = crate::gltf::import_gltf(&out, &ImportOptions::default()).unwrap();
+        let glass: Vec<_> = back
+            .materials
+            .iter()
+            .filter_map(|(_, m)| m.transmission)
+            .collect();
+        assert!(glass.contains(&solid), "{glass:?}");
+        if scene.description.materials.len() > 1 {
+            assert!(glass.contains(&sheet), "{glass:?}");
+        }
     }
 
     #[test]

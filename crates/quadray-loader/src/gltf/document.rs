@@ -18,7 +18,10 @@ use std::path::{Path, PathBuf};
 pub const SUPPORTED_REQUIRED: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_transmission",
     "KHR_materials_unlit",
+    "KHR_materials_volume",
     "KHR_texture_transform",
     crate::gltf::quadrics_ext::EXTENSION,
 ];

@@ -18,7 +18,7 @@
 //! | KHR_materials_unlit | `ambient` 1, everything else 0: the base colour as is |
 //! | `extensions.QUADRAY_quadrics.whitted` | quadray's parameters exactly, overriding all of the above |
 //! | `emissiveFactor`, `emissiveTexture` (sRGB), KHR_materials_emissive_strength | `emission`: their product, the surface's own light, seen directly and in mirrors (it lights nothing else) |
-//! | KHR_materials_transmission, KHR_materials_ior, KHR_materials_volume | opaque, with a warning naming the extension: no refraction yet |
+//! | KHR_materials_transmission, KHR_materials_ior, KHR_materials_volume | glass: [`crate::gltf::transmission`] |
 //! | `normalTexture` (its `scale` and coordinate set) | a tangent-space [`NormalMap`] on the meshes drawn with it, with the file's TANGENTs or MikkTSpace's |
 //! | metallicRoughnessTexture | its mean metalness and roughness, with a note |
 //! | occlusionTexture | ignored, with a note |
@@ -181,13 +181,7 @@ impl<'a> Materials<'a> {
         if m.occlusion_texture().is_some() {
             self.ignored.insert("occlusionTexture");
         }
-        for (extension, what) in REFRACTION {
-            if m.extension_value(extension).is_some() {
-                notes.push(format!(
-                    "warning: {label}: {extension} ({what}) is not supported: quadray has no refraction yet, so the surface renders opaque"
-                ));
-            }
-        }
+        let transmission = crate::gltf::transmission::transmission_of(m, &label, notes)?;
         let emission = self.emission(m, &label, uv_transform.as_ref(), notes)?;
         let texture = match &map {
             Some(map) => Texture::Image(ImageTexture {
@@ -218,6 +212,7 @@ impl<'a> Materials<'a> {
         };
         let material = Material {
             emission,
+            transmission,
             ..material
         };
         let id = self.list.len() as u32;
@@ -463,17 +458,6 @@ fn coverage(m: &gltf::Material<'_>, alpha: f32, map: &Option<ImageMap>) -> Optio
 
 /// The glTF extension that scales emission beyond 1.
 pub const EMISSIVE_STRENGTH: &str = "KHR_materials_emissive_strength";
-
-/// Material extensions that need refraction, which quadray does not trace: each is named in a
-/// warning.
-const REFRACTION: [(&str, &str); 3] = [
-    (
-        "KHR_materials_transmission",
-        "light passing through the surface",
-    ),
-    ("KHR_materials_ior", "the index of refraction"),
-    ("KHR_materials_volume", "absorption inside the volume"),
-];
 
 /// The Whitted material for PBR parameters (see the module's table). Every term stays at or
 /// below 1: the diffuse albedo, the mirror's weight and the highlight's peak.

@@ -431,6 +431,7 @@ pub fn whitted_material(def: &WhittedDef, base_texture: Texture) -> Result<Mater
         specular_tint: def.specular_tint,
         // glTF's own emissive fields carry emission, for every viewer.
         emission: None,
+        transmission: None,
     })
 }
 
@@ -518,6 +519,7 @@ mod tests {
             reflection_tint: 0.5,
             specular_tint: 0.25,
             emission: None,
+            transmission: None,
         };
         let def = whitted_def(&m);
         let json = serde_json::to_string(&def).unwrap();

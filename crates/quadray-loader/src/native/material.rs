@@ -1,6 +1,7 @@
 //! `[[material]]`: colours, textures and the lighting model.
 
 use super::*;
+use quadray::{Attenuation, Transmission};
 
 impl Builder<'_> {
     pub(super) fn material(&self, m: &MaterialSpec, key: &str) -> Result<Material, LoadError> {
@@ -59,7 +60,90 @@ impl Builder<'_> {
                 .filter(|t| t != &Texture::Constant(Vec3::ZERO)),
                 None => None,
             },
+            transmission: self.transmission(m, key)?,
         })
+    }
+
+    /// Glass: `transmission` with `ior`, `thin_walled` and the attenuation pair, which mean
+    /// nothing without it; `transmission = 0` is an opaque material.
+    fn transmission(&self, m: &MaterialSpec, key: &str) -> Result<Option<Transmission>, LoadError> {
+        let factor = self.non_negative(&m.transmission, &format!("{key}.transmission"), 0.0)?;
+        if factor == 0.0 {
+            let glass_keys = [
+                m.ior.as_ref().map(|v| (v.span(), "ior")),
+                m.thin_walled.as_ref().map(|v| (v.span(), "thin_walled")),
+                m.attenuation_color
+                    .as_ref()
+                    .map(|v| (v.span(), "attenuation_color")),
+                m.attenuation_distance
+                    .as_ref()
+                    .map(|v| (v.span(), "attenuation_distance")),
+            ];
+            if let Some((span, name)) = glass_keys.into_iter().flatten().next() {
+                return Err(self.err(
+                    span,
+                    format!("{key}.{name}"),
+                    "only applies to a material with transmission > 0".to_string(),
+                ));
+            }
+            return Ok(None);
+        }
+        let defaults = Transmission::default();
+        let attenuation = match (&m.attenuation_color, &m.attenuation_distance) {
+            (None, None) => None,
+            (Some(c), Some(d)) => Some(Attenuation {
+                color: self.colour(c, &format!("{key}.attenuation_color"))?,
+                distance: self.positive(d, &format!("{key}.attenuation_distance"))?,
+            }),
+            (Some(v), None) => {
+                return Err(self.err(
+                    v.span(),
+                    format!("{key}.attenuation_color"),
+                    "needs attenuation_distance: the distance at which white light takes this colour"
+                        .to_string(),
+                ));
+            }
+            (None, Some(v)) => {
+                return Err(self.err(
+                    v.span(),
+                    format!("{key}.attenuation_distance"),
+                    "needs attenuation_color: the colour white light takes at this distance"
+                        .to_string(),
+                ));
+            }
+        };
+        // Each range checked where the file states it.
+        let span_of = |v: &Option<Spanned<f64>>| v.as_ref().map(|v| v.span()).unwrap_or_default();
+        if factor > 1.0 {
+            return Err(self.err(
+                span_of(&m.transmission),
+                format!("{key}.transmission"),
+                format!("must be in [0, 1], got {factor}"),
+            ));
+        }
+        let ior = m.ior.as_ref().map_or(defaults.ior, |v| *v.get_ref());
+        if !(1.0..=quadray::dielectric::MAX_IOR).contains(&ior) {
+            return Err(self.err(
+                span_of(&m.ior),
+                format!("{key}.ior"),
+                format!(
+                    "must be in [1, {}] (glass is about 1.5), got {ior}",
+                    quadray::dielectric::MAX_IOR
+                ),
+            ));
+        }
+        if let (Some(a), Some(c)) = (&attenuation, &m.attenuation_color)
+            && let Err(problem) = a.validate()
+        {
+            return Err(self.err(c.span(), format!("{key}.attenuation_color"), problem));
+        }
+        let t = Transmission {
+            factor: factor as f32,
+            ior,
+            thin_walled: m.thin_walled.as_ref().is_some_and(|v| *v.get_ref()),
+            attenuation,
+        };
+        Ok(Some(t))
     }
 
     /// The material's texture (`texture`, with `color`, `bands`, `checker_size`, `color2`),

@@ -149,6 +149,11 @@ pub(super) struct MaterialSpec {
     pub(super) reflection_tint: Option<Spanned<f64>>,
     pub(super) specular_tint: Option<Spanned<f64>>,
     pub(super) emission: Option<Spanned<V3>>,
+    pub(super) transmission: Option<Spanned<f64>>,
+    pub(super) ior: Option<Spanned<f64>>,
+    pub(super) thin_walled: Option<Spanned<bool>>,
+    pub(super) attenuation_color: Option<Spanned<V3>>,
+    pub(super) attenuation_distance: Option<Spanned<f64>>,
 }
 
 #[derive(Clone, Deserialize)]

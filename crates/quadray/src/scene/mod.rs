@@ -16,6 +16,7 @@ use validate::{validate_levels, validate_material};
 
 pub use crate::math::MAX_COORDINATE;
 
+mod transmittance;
 mod validate;
 
 /// Everything a scene holds, before validation.
@@ -90,6 +91,8 @@ pub struct Scene {
     /// Whether any material has a texture that is filtered over ray cones: only then do rays
     /// carry cones.
     filters_textures: bool,
+    /// Whether any material lets light through ([`Scene::transmittance`]).
+    transmits: bool,
 }
 
 /// Which colour [`Scene::colour_at`] looks up.
@@ -191,6 +194,7 @@ impl Scene {
         let filters_textures = d.materials.iter().any(|m| {
             m.texture.is_filtered() || m.emission.as_ref().is_some_and(Texture::is_filtered)
         });
+        let transmits = d.materials.iter().any(|m| m.transmission.is_some());
         Ok(Scene {
             camera: d.camera,
             background: d.background,
@@ -201,6 +205,7 @@ impl Scene {
             accel,
             single_sided,
             filters_textures,
+            transmits,
         })
     }
 

@@ -104,3 +104,69 @@ fn single_sided_meshes_are_seen_from_the_front_only() {
         "an instance's back face casts no shadow"
     );
 }
+
+/// A shadow ray through the centre of a glass ball of index 1.5 keeps (1 − 0.04)² of the light
+/// (two crossings at normal incidence), times the attenuation colour to the power of the path
+/// length over the attenuation distance; an opaque ball keeps nothing; beside the ball, all.
+#[test]
+fn shadow_rays_pass_glass_attenuated_and_stop_at_opaque_surfaces() {
+    use crate::dielectric::{Attenuation, Transmission};
+    let ball = |transmission: Option<Transmission>| {
+        Scene::new(SceneDescription {
+            camera: Camera {
+                from: DVec3::new(0.0, 0.0, 10.0),
+                to: DVec3::ZERO,
+                up: DVec3::Y,
+                projection: Projection::Perspective { vfov_deg: 40.0 },
+            },
+            background: Vec3::ZERO,
+            environment: None,
+            materials: vec![Material {
+                texture: crate::Texture::Constant(Vec3::ONE),
+                transmission,
+                ..Material::default()
+            }],
+            lights: vec![],
+            geometry: Geometry {
+                spheres: vec![Sphere {
+                    center: DVec3::ZERO,
+                    radius: 1.0,
+                    material: 0,
+                }],
+                ..Geometry::default()
+            },
+        })
+        .unwrap()
+    };
+    let through_centre = Ray::new(DVec3::new(0.0, 0.0, -5.0), DVec3::Z);
+    let beside = Ray::new(DVec3::new(0.0, 1.5, -5.0), DVec3::Z);
+    let clear = ball(Some(Transmission::default()));
+    assert!(clear.transmits());
+    let t = clear.transmittance(&through_centre, 10.0, None);
+    assert!(
+        (t - Vec3::splat(0.96 * 0.96)).abs().max_element() < 1e-6,
+        "{t}"
+    );
+    assert_eq!(clear.transmittance(&beside, 10.0, None), Vec3::ONE);
+    let tinted = ball(Some(Transmission {
+        attenuation: Some(Attenuation {
+            color: Vec3::new(0.5, 0.8, 1.0),
+            distance: 1.0,
+        }),
+        ..Transmission::default()
+    }));
+    // Two units inside: the colour squared.
+    let t = tinted.transmittance(&through_centre, 10.0, None);
+    let want = Vec3::new(0.25, 0.64, 1.0) * (0.96 * 0.96);
+    assert!((t - want).abs().max_element() < 1e-5, "{t}");
+    // A light inside the ball: one crossing, one unit of glass.
+    let t = tinted.transmittance(&through_centre, 5.0, None);
+    let want = Vec3::new(0.5, 0.8, 1.0) * 0.96;
+    assert!((t - want).abs().max_element() < 1e-5, "{t}");
+    let opaque = ball(None);
+    assert!(!opaque.transmits());
+    assert_eq!(
+        opaque.transmittance(&through_centre, 10.0, None),
+        Vec3::ZERO
+    );
+}

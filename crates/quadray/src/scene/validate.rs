@@ -83,6 +83,9 @@ pub(super) fn validate_material(m: &Material) -> Result<(), String> {
         ));
     }
     check_texture(&m.texture)?;
+    if let Some(t) = &m.transmission {
+        t.validate()?;
+    }
     match &m.emission {
         Some(emission) => check_texture(emission).map_err(|e| format!("emission: {e}")),
         None => Ok(()),
