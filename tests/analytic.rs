@@ -321,17 +321,35 @@ fn emission_is_seen_directly_and_in_mirrors_and_lights_nothing() {
     let mut counts = RayCounts::default();
     let down = |x: f64, z: f64| Ray::new(DVec3::new(x, 0.0, z), -DVec3::Z);
     assert_eq!(
-        whitted.camera_ray(&scene, &down(0.0, 10.0), RayCone::POINT, &mut counts),
+        whitted.camera_ray(
+            &scene,
+            &down(0.0, 10.0),
+            RayCone::POINT,
+            quadray::sampler::SampleKey::LONE,
+            &mut counts
+        ),
         glow
     );
     // Down to the mirror at z = 0, back up to the emitter's underside.
     assert_eq!(
-        whitted.camera_ray(&scene, &down(0.0, 3.0), RayCone::POINT, &mut counts),
+        whitted.camera_ray(
+            &scene,
+            &down(0.0, 3.0),
+            RayCone::POINT,
+            quadray::sampler::SampleKey::LONE,
+            &mut counts
+        ),
         glow
     );
     assert_eq!(counts.reflection, 1);
     assert_eq!(
-        whitted.camera_ray(&scene, &down(5.0, 10.0), RayCone::POINT, &mut counts),
+        whitted.camera_ray(
+            &scene,
+            &down(5.0, 10.0),
+            RayCone::POINT,
+            quadray::sampler::SampleKey::LONE,
+            &mut counts
+        ),
         Vec3::ZERO
     );
 }
@@ -371,17 +389,35 @@ fn reflections_that_miss_see_the_environment() {
     );
     let studio = scene(Some(Vec3::splat(0.5)));
     assert_eq!(
-        whitted.camera_ray(&studio, &up, RayCone::POINT, &mut counts),
+        whitted.camera_ray(
+            &studio,
+            &up,
+            RayCone::POINT,
+            quadray::sampler::SampleKey::LONE,
+            &mut counts
+        ),
         Vec3::splat(0.1)
     );
     assert_eq!(
-        whitted.camera_ray(&studio, &down, RayCone::POINT, &mut counts),
+        whitted.camera_ray(
+            &studio,
+            &down,
+            RayCone::POINT,
+            quadray::sampler::SampleKey::LONE,
+            &mut counts
+        ),
         Vec3::splat(0.5)
     );
     let plain = scene(None);
     assert_eq!(plain.environment(), Vec3::splat(0.1));
     assert_eq!(
-        whitted.camera_ray(&plain, &down, RayCone::POINT, &mut counts),
+        whitted.camera_ray(
+            &plain,
+            &down,
+            RayCone::POINT,
+            quadray::sampler::SampleKey::LONE,
+            &mut counts
+        ),
         Vec3::splat(0.1)
     );
     assert!(

@@ -1,5 +1,5 @@
 //! The twenty Khronos glTF sample models of `../shared/assets/gltf/khronos`, each rendered on its
-//! own at 160x120 with one sample per pixel (as `quadray render FILE --res 160x120 --spp 1` does: the
+//! own at 160x120 with 4 samples per pixel (as `quadray render FILE --res 160x120` does: the
 //! file's camera, or one framing it, and the default lighting when it brings none), compared with
 //! `tests/khronos/<name>.png` under the rule of `quadray compare`, plus the analytic facts that
 //! single out what each feature must do: a rough red metal reflects no green or blue, a culled
@@ -79,11 +79,22 @@ fn load(root: &std::path::Path, name: &str) -> LoadedScene {
         .unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
+/// Renders at the file's settings (4 samples per pixel, as `quadray render` does).
 fn render(loaded: LoadedScene) -> Film {
-    // One sample at each pixel centre: the facts below are about surfaces, not edges.
+    render_with_spp(loaded, None)
+}
+
+/// Renders with one sample at each pixel centre: for the facts about surfaces, whose edges would
+/// blend with the backdrop at more samples.
+fn render_at_centres(loaded: LoadedScene) -> Film {
+    render_with_spp(loaded, Some(1))
+}
+
+fn render_with_spp(loaded: LoadedScene, spp: Option<u32>) -> Film {
+    let defaults = loaded.settings.render_settings();
     let settings = quadray::RenderSettings {
-        spp: 1,
-        ..loaded.settings.render_settings()
+        spp: spp.unwrap_or(defaults.spp),
+        ..defaults
     };
     let scene = Scene::new(loaded.description).unwrap();
     quadray::render(&scene, &settings, &quadray::NoProgress)
@@ -140,18 +151,26 @@ fn every_khronos_sample_matches_its_reference() {
 }
 
 /// BoxInterleaved's only material is red (0.8, 0, 0) with glTF's default metallic 1 and
-/// roughness 1: a rough red metal, whose diffuse term is gone and whose highlight and
+/// roughness 1: a rough red metal, whose diffuse term is gone and whose highlight and glossy
 /// reflections are tinted by its red. Every pixel of the box has green and blue exactly 0 (the
-/// backdrop is grey); a white highlight or a diffuse term on the grey environment would not.
+/// backdrop is grey); a white highlight or a diffuse term on the grey environment would not. At
+/// one sample a pixel whose glossy ray is lost to masking is black, so the red is asked of the
+/// box as a whole.
 #[cfg_attr(not(quadray_shared), ignore = "needs ../shared/assets, absent here")]
 #[test]
 fn box_interleaved_is_red_in_every_pixel() {
     let root = khronos();
-    let pixels = srgb8(&render(load(&root, "BoxInterleaved")));
+    let pixels = srgb8(&render_at_centres(load(&root, "BoxInterleaved")));
     let backdrop = pixels[0];
     let boxed: Vec<_> = pixels.iter().filter(|&&p| p != backdrop).collect();
     assert!(boxed.len() > 5000, "{} box pixels", boxed.len());
-    assert!(boxed.iter().all(|p| p[1] == 0 && p[2] == 0 && p[0] > 0));
+    assert!(boxed.iter().all(|p| p[1] == 0 && p[2] == 0));
+    let lit = boxed.iter().filter(|p| p[0] > 0).count();
+    assert!(
+        lit > boxed.len() / 2,
+        "{lit} of {} box pixels red",
+        boxed.len()
+    );
 }
 
 /// NegativeScaleTest and TextureSettingsTest draw a red ✗ on faces that glTF culls (the backs of
@@ -182,7 +201,10 @@ fn culled_faces_hide_their_red_marks() {
         ) {
             *mesh = mesh.clone().with_single_sided(false);
         }
-        let (culled, drawn) = (red(&render(loaded)), red(&render(two_sided)));
+        let (culled, drawn) = (
+            red(&render_at_centres(loaded)),
+            red(&render_at_centres(two_sided)),
+        );
         assert_eq!(culled, 0, "{name}");
         assert!(drawn > 10, "{name}: the marks show two-sided ({drawn})");
     }
@@ -201,7 +223,7 @@ fn multi_uv_test_emission_adds_the_logo() {
         assert!(m.emission.is_some(), "the sample's material emits");
         m.emission = None;
     }
-    let (lit, dark) = (render(loaded), render(dark));
+    let (lit, dark) = (render_at_centres(loaded), render_at_centres(dark));
     let mut brighter = 0;
     for (a, b) in lit.pixels().iter().zip(dark.pixels()) {
         let added = *a - *b;

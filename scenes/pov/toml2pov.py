@@ -185,7 +185,8 @@ def finish(m):
     r = m.get("reflectivity", 0.0)
     ka, kd = m.get("ambient", 0.1) * (1 - r), m.get("diffuse", 0.9) * (1 - r)
     ks, n = m.get("specular", 0.0), m.get("shininess", 32.0)
-    if m.get("specular_model", "phong") == "blinn":
+    # GGX (glTF's highlight) has no POV-Ray counterpart: Blinn-Phong of the same lobe width.
+    if m.get("specular_model", "phong") in ("blinn", "ggx"):
         hl = f"phong 0 specular {ks:.9g} roughness {1 / n:.9g}"
     else:
         hl = f"phong {ks:.9g} phong_size {n:.9g} specular 0"

@@ -206,6 +206,7 @@ impl Showcase {
                 reflection_tint: 0.0,
                 specular_tint: 0.0,
                 emission: None,
+                roughness: 0.0,
                 transmission: None,
             }
         } else {

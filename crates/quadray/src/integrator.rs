@@ -5,6 +5,8 @@ use crate::dielectric::{Attenuation, Transmission, fresnel, refract};
 use crate::footprint::{HitFootprint, RayCone};
 use crate::material::SpecularModel;
 use crate::math::{Ray, offset_origin};
+use crate::microfacet::{MIRROR_ROUGHNESS, reflect_glossy};
+use crate::sampler::SampleKey;
 use crate::scene::Scene;
 use crate::shape::{PrimRef, SurfaceHit};
 use glam::{DVec3, Vec3};
@@ -66,6 +68,7 @@ impl Whitted {
         scene: &Scene,
         ray: &Ray,
         cone: RayCone,
+        key: SampleKey,
         counts: &mut RayCounts,
     ) -> Vec3 {
         counts.camera += 1;
@@ -73,16 +76,16 @@ impl Whitted {
         // pays nothing for them.
         match (cone.is_point(), scene.transmits()) {
             (true, false) => {
-                self.radiance::<false, false>(scene, ray, cone, None, 1, 1.0, None, counts)
+                self.radiance::<false, false>(scene, ray, cone, None, 1, 1.0, None, key, counts)
             }
             (false, false) => {
-                self.radiance::<true, false>(scene, ray, cone, None, 1, 1.0, None, counts)
+                self.radiance::<true, false>(scene, ray, cone, None, 1, 1.0, None, key, counts)
             }
             (true, true) => {
-                self.radiance::<false, true>(scene, ray, cone, None, 1, 1.0, None, counts)
+                self.radiance::<false, true>(scene, ray, cone, None, 1, 1.0, None, key, counts)
             }
             (false, true) => {
-                self.radiance::<true, true>(scene, ray, cone, None, 1, 1.0, None, counts)
+                self.radiance::<true, true>(scene, ray, cone, None, 1, 1.0, None, key, counts)
             }
         }
     }
@@ -94,16 +97,21 @@ impl Whitted {
         scene: &Scene,
         ray: &Ray,
         cone: RayCone,
+        key: SampleKey,
         counts: &mut RayCounts,
     ) -> (Vec3, Option<SurfaceHit>) {
         counts.camera += 1;
         let hit = self.intersect(scene, ray, None);
         let radiance = match &hit {
             Some(h) => match (cone.is_point(), scene.transmits()) {
-                (true, false) => self.shade::<false, false>(scene, ray, cone, h, 1, 1.0, counts),
-                (false, false) => self.shade::<true, false>(scene, ray, cone, h, 1, 1.0, counts),
-                (true, true) => self.shade::<false, true>(scene, ray, cone, h, 1, 1.0, counts),
-                (false, true) => self.shade::<true, true>(scene, ray, cone, h, 1, 1.0, counts),
+                (true, false) => {
+                    self.shade::<false, false>(scene, ray, cone, h, 1, 1.0, key, counts)
+                }
+                (false, false) => {
+                    self.shade::<true, false>(scene, ray, cone, h, 1, 1.0, key, counts)
+                }
+                (true, true) => self.shade::<false, true>(scene, ray, cone, h, 1, 1.0, key, counts),
+                (false, true) => self.shade::<true, true>(scene, ray, cone, h, 1, 1.0, key, counts),
             },
             None => scene.background(),
         };
@@ -128,12 +136,13 @@ impl Whitted {
         depth: u32,
         throughput: f32,
         medium: Option<Attenuation>,
+        key: SampleKey,
         counts: &mut RayCounts,
     ) -> Vec3 {
         match self.intersect(scene, ray, from) {
             Some(hit) => {
-                let leaving =
-                    self.shade::<CONES, GLASS>(scene, ray, cone, &hit, depth, throughput, counts);
+                let leaving = self
+                    .shade::<CONES, GLASS>(scene, ray, cone, &hit, depth, throughput, key, counts);
                 match medium {
                     Some(a) if GLASS => leaving * a.after(hit.t * ray.dir.length()),
                     _ => leaving,
@@ -157,6 +166,7 @@ impl Whitted {
         hit: &SurfaceHit,
         depth: u32,
         throughput: f32,
+        key: SampleKey,
         counts: &mut RayCounts,
     ) -> Vec3 {
         let m = &scene.materials()[hit.material as usize];
@@ -205,34 +215,48 @@ impl Whitted {
         };
         let weight = throughput * mirror_share;
         if mirror_share > 0.0 && depth < self.max_depth && weight >= self.min_throughput {
-            let mut dir = reflect(incoming, ns);
-            // An interpolated normal can mirror the ray into the surface; fall back to the true normal.
-            if dir.dot(ng) <= 0.0 {
-                dir = reflect(incoming, ng);
-            }
-            counts.reflection += 1;
-            let reflected = Ray::new(offset_origin(g.point, ng, g.error, dir), dir);
-            let reflected_cone = if CONES {
-                cone.reflected(distance, scene.curvature(hit))
+            let reflection = if m.roughness < MIRROR_ROUGHNESS {
+                let mut dir = reflect(incoming, ns);
+                // An interpolated normal can mirror the ray into the surface; fall back to the
+                // true normal.
+                if dir.dot(ng) <= 0.0 {
+                    dir = reflect(incoming, ng);
+                }
+                Some((dir, mirror))
             } else {
-                RayCone::POINT
+                // One ray from the GGX lobe, drawn with this sample's point for this bounce; a
+                // microfacet that sends it below the surface reflects nothing for this sample.
+                let alpha = (m.roughness * m.roughness) as f64;
+                reflect_glossy(incoming, ns, alpha, key.bounce(depth))
+                    .filter(|(dir, _)| dir.dot(ng) > 0.0)
+                    .map(|(dir, masking)| (dir, mirror * masking))
             };
-            // Reflected inside a solid, the ray stays in it.
-            let medium = glass.as_ref().and_then(|g| g.inside_after_reflection());
-            color += self.radiance::<CONES, GLASS>(
-                scene,
-                &reflected,
-                reflected_cone,
-                Some(hit.prim),
-                depth + 1,
-                weight,
-                medium,
-                counts,
-            ) * mirror;
+            if let Some((dir, mirror)) = reflection {
+                counts.reflection += 1;
+                let reflected = Ray::new(offset_origin(g.point, ng, g.error, dir), dir);
+                let reflected_cone = if CONES {
+                    cone.reflected(distance, scene.curvature(hit))
+                } else {
+                    RayCone::POINT
+                };
+                // Reflected inside a solid, the ray stays in it.
+                let medium = glass.as_ref().and_then(|g| g.inside_after_reflection());
+                color += self.radiance::<CONES, GLASS>(
+                    scene,
+                    &reflected,
+                    reflected_cone,
+                    Some(hit.prim),
+                    depth + 1,
+                    weight,
+                    medium,
+                    key,
+                    counts,
+                ) * mirror;
+            }
         }
         if let Some(glass) = &glass {
-            color +=
-                self.refracted::<CONES>(scene, ray, cone, hit, depth, throughput, glass, counts);
+            color += self
+                .refracted::<CONES>(scene, ray, cone, hit, depth, throughput, glass, key, counts);
         }
         color
     }
@@ -287,6 +311,12 @@ impl Whitted {
                 let alignment = match m.specular_model {
                     SpecularModel::Phong => reflect(-inc.to_light, ns).dot(view),
                     SpecularModel::Blinn => (inc.to_light + view).normalize().dot(ns),
+                    SpecularModel::Ggx => {
+                        let alpha = (m.roughness * m.roughness) as f64;
+                        response +=
+                            crate::microfacet::highlight(ns, view, inc.to_light, alpha, highlight);
+                        0.0
+                    }
                 };
                 if alignment > 0.0 {
                     response += highlight * m.specular_lobe(alignment as f32);
@@ -311,6 +341,7 @@ impl Whitted {
         depth: u32,
         throughput: f32,
         glass: &Glass,
+        key: SampleKey,
         counts: &mut RayCounts,
     ) -> Vec3 {
         let Some(dir) = glass.direction else {
@@ -341,6 +372,7 @@ impl Whitted {
             depth + 1,
             weight,
             glass.inside_after_refraction(),
+            key,
             counts,
         ) * glass.through
     }

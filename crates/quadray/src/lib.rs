@@ -64,6 +64,7 @@ pub mod limits;
 pub mod material;
 pub mod math;
 pub mod mesh;
+pub mod microfacet;
 pub mod plane;
 pub mod quadric;
 pub mod render;

@@ -14,6 +14,10 @@ pub enum SpecularModel {
     Phong,
     /// Blinn–Phong: (n·h)^n with h the half vector of light and view directions.
     Blinn,
+    /// glTF's metallic-roughness specular BRDF (the Khronos glTF-Sample-Viewer's): GGX
+    /// distribution of [`Material::roughness`], Smith's height-correlated masking, and Schlick's
+    /// Fresnel from the highlight colour at normal incidence; `shininess` is not used.
+    Ggx,
 }
 
 /// A surface's response to light, Whitted style.
@@ -49,6 +53,10 @@ pub struct Material {
     /// It is seen directly and in mirrors, but lights no other surface: Whitted tracing follows
     /// light only from the scene's lights.
     pub emission: Option<Texture>,
+    /// Microfacet roughness of the mirror reflection, in [0, 1] (glTF's; GGX α = roughness²):
+    /// below [`crate::microfacet::MIRROR_ROUGHNESS`] a perfect mirror, one ray; above, one
+    /// glossy ray per sample drawn from the GGX lobe, so the blur converges with the samples.
+    pub roughness: f32,
     /// Glass: light through the surface ([`crate::dielectric`]), or `None` for an opaque one.
     /// With it, the mirror reflection of the transmitted share follows the Fresnel equations
     /// instead of `reflectivity`.
@@ -107,6 +115,7 @@ impl Default for Material {
             reflection_tint: 0.0,
             specular_tint: 0.0,
             emission: None,
+            roughness: 0.0,
             transmission: None,
         }
     }

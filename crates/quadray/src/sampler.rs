@@ -74,6 +74,45 @@ fn rand_float(mut i: u32, pattern: u32) -> f64 {
     i as f64 / 4294967808.0
 }
 
+/// Which sample of which pixel a camera ray stands for, so the integrator can draw its own 2-D
+/// samples (glossy reflection directions) stratified over the pixel's samples as anti-aliasing
+/// is: one independent set per bounce, deterministic for a given sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SampleKey {
+    /// The pixel's pattern key ([`pixel_pattern`]).
+    pub pattern: u32,
+    /// The sample's index within its pixel.
+    pub index: u32,
+    /// The pixel's sample count when its samples are one stratified set ([`sample_2d`]), or
+    /// `None` for the open-ended progressive sequence ([`progressive_2d`]).
+    pub count: Option<u32>,
+}
+
+impl SampleKey {
+    /// The key of a lone ray outside any render (tests, picking): sample 0 of 1 of pattern 0.
+    pub const LONE: SampleKey = SampleKey {
+        pattern: 0,
+        index: 0,
+        count: Some(1),
+    };
+
+    /// The sample's 2-D point in [0, 1)² for bounce `depth`: the same kind of set as the pixel's
+    /// own samples (stratified over the pixel's `count`, or its progressive sequence), keyed
+    /// apart from them and from other bounces. A lone sample gets a hashed point rather than the
+    /// centre, which would pick one fixed direction for every pixel.
+    pub fn bounce(&self, depth: u32) -> (f64, f64) {
+        let pattern = pixel_pattern(self.pattern, depth, 0x6b43_a9b5);
+        match self.count {
+            Some(count) if count > 1 => sample_2d(self.index, count, pattern),
+            Some(_) => (
+                rand_float(self.index, pattern),
+                rand_float(self.index, pattern.wrapping_mul(JITTER_Y_KEY)),
+            ),
+            None => progressive_2d(self.index, pattern),
+        }
+    }
+}
+
 /// The pattern key of pixel (x, y) in the sample set `seed`: a 32-bit hash, distinct per pixel.
 ///
 /// Seed 0 is the renderer's default; another seed gives every pixel an unrelated pattern (a

@@ -8,9 +8,9 @@
 //! |---|---|
 //! | `baseColorFactor` (linear RGB), `baseColorTexture` (sRGB) | base colour: `Texture::Image` scaled by the factor, or `Texture::Constant`; `COLOR_0` multiplies it |
 //! | sampler `wrapS`/`wrapT`, `magFilter`; `texCoord`; KHR_texture_transform | the image's wrap modes, nearest or bilinear filtering, the coordinate set; the transform is applied to the mesh's coordinates at load |
-//! | roughness r | Blinn–Phong exponent n = 2/α² − 2 with α = r² (the exponent whose lobe matches a Beckmann/GGX lobe of that width), clamped to [1, 10⁴] |
-//! | metallic m, roughness r | `reflectivity` = m·(1 − r)²: polished metal is a mirror; `reflection_tint` = m: metals reflect in their base colour |
-//! | metallic m | highlight strength `specular` = min(1, F₀·(n + 8)/8), the normalised Blinn–Phong peak, with F₀ = 0.04·(1 − m) + m; `specular_tint` = m: a metal's highlight is its base colour (F₀ of a metal is its base colour) |
+//! | roughness r | `roughness` r: the GGX lobe (α = r²) of the highlights (`specular_model` GGX: glTF's specular BRDF, the glTF-Sample-Viewer's) and of metals' reflections; `shininess` n = 2/α² − 2 only tells other renderers the lobe's width |
+//! | metallic m, roughness r | `reflectivity` = m, `roughness` = r: a metal reflects its surroundings, sharply when polished and blurred by the GGX lobe of its roughness when rough ([`quadray::microfacet`]); `reflection_tint` = m: metals reflect in their base colour |
+//! | metallic m | `specular` = F₀ = 0.04·(1 − m) + m, the highlight's Fresnel at normal incidence (Schlick's towards grazing); `specular_tint` = m: a metal's F₀ is its base colour |
 //! | metallic m | `diffuse` = 0.9·(1 − m): a metal has no diffuse term; a rough metal is its broad, tinted highlight |
 //! | — | `ambient` 0.1, quadray's default |
 //! | `alphaMode` MASK, `alphaCutoff`, base colour alpha | an [`AlphaMask`] cut-out on the mesh (tested inside intersection) |
@@ -459,10 +459,13 @@ fn coverage(m: &gltf::Material<'_>, alpha: f32, map: &Option<ImageMap>) -> Optio
 /// The glTF extension that scales emission beyond 1.
 pub const EMISSIVE_STRENGTH: &str = "KHR_materials_emissive_strength";
 
-/// The Whitted material for PBR parameters (see the module's table). Every term stays at or
-/// below 1: the diffuse albedo, the mirror's weight and the highlight's peak.
+/// The Whitted material for PBR parameters (see the module's table): glTF's specular BRDF for
+/// the lights' highlights ([`SpecularModel::Ggx`]), a mirror or glossy reflection for metals.
+/// The diffuse albedo and the mirror's weight stay at or below 1.
 pub fn pbr_to_whitted(texture: Texture, metallic: f32, roughness: f32) -> Material {
     let alpha = roughness * roughness;
+    // The Blinn–Phong exponent of the same lobe width: not used by the GGX highlight, but what
+    // `quadray convert` tells other renderers (and POV-Ray's translation) about the highlight.
     let shininess = if alpha > 0.0 {
         (2.0 / (alpha * alpha) - 2.0).clamp(1.0, 1e4)
     } else {
@@ -474,12 +477,13 @@ pub fn pbr_to_whitted(texture: Texture, metallic: f32, roughness: f32) -> Materi
     Material {
         texture,
         diffuse: Material::default().diffuse * (1.0 - metallic),
-        specular: (f0 * (shininess + 8.0) / 8.0).min(1.0),
+        specular: f0,
         shininess,
-        specular_model: SpecularModel::Blinn,
+        specular_model: SpecularModel::Ggx,
         specular_tint: metallic,
-        reflectivity: metallic * (1.0 - roughness) * (1.0 - roughness),
+        reflectivity: metallic,
         reflection_tint: metallic,
+        roughness,
         ..Material::default()
     }
 }
@@ -493,10 +497,16 @@ mod tests {
         let gold = Texture::Constant(Vec3::new(1.0, 0.8, 0.3));
         let mirror = pbr_to_whitted(gold.clone(), 1.0, 0.0);
         assert_eq!((mirror.reflectivity, mirror.reflection_tint), (1.0, 1.0));
+        assert_eq!(mirror.roughness, 0.0);
         assert_eq!((mirror.shininess, mirror.specular), (1e4, 1.0));
-        // A rough metal: no mirror, no diffuse, a broad highlight in its own colour.
+        assert_eq!(mirror.specular_model, SpecularModel::Ggx);
+        // A rough metal: a fully blurred reflection, no diffuse, a broad highlight in its own
+        // colour.
         let rough_metal = pbr_to_whitted(gold.clone(), 1.0, 1.0);
-        assert_eq!(rough_metal.reflectivity, 0.0);
+        assert_eq!(
+            (rough_metal.reflectivity, rough_metal.roughness),
+            (1.0, 1.0)
+        );
         assert_eq!(rough_metal.shininess, 1.0);
         assert_eq!(rough_metal.diffuse, 0.0);
         assert_eq!(
@@ -506,14 +516,14 @@ mod tests {
         let plastic = pbr_to_whitted(gold, 0.0, 0.5);
         assert_eq!(plastic.reflectivity, 0.0);
         assert_eq!((plastic.diffuse, plastic.specular_tint), (0.9, 0.0));
-        // r = 0.5: α = 0.25, n = 2/0.0625 − 2 = 30, specular = 0.04·38/8.
+        // r = 0.5: α = 0.25, the lobe of Blinn–Phong's n = 2/0.0625 − 2 = 30; F₀ = 0.04.
         assert!((plastic.shininess - 30.0).abs() < 1e-4);
-        assert!((plastic.specular - 0.19).abs() < 1e-6);
-        assert_eq!(plastic.specular_model, SpecularModel::Blinn);
+        assert!((plastic.specular - 0.04).abs() < 1e-6);
+        assert_eq!(plastic.specular_model, SpecularModel::Ggx);
     }
 
-    /// Along the MetalRoughSpheres grid's axes the mapping moves one way: more roughness fades
-    /// the mirror and widens the highlight; more metalness strengthens the mirror, tints
+    /// Along the MetalRoughSpheres grid's axes the mapping moves one way: more roughness blurs
+    /// the reflection and widens the highlight; more metalness strengthens the mirror, tints
     /// highlights and reflections and takes the diffuse term away; no term exceeds 1.
     #[test]
     fn pbr_mapping_is_monotone_and_bounded() {
@@ -523,8 +533,12 @@ mod tests {
             for pair in steps.windows(2) {
                 let (smooth, rough) = (material(m, pair[0]), material(m, pair[1]));
                 assert!(rough.reflectivity <= smooth.reflectivity);
+                assert!(rough.roughness > smooth.roughness);
                 assert!(rough.shininess < smooth.shininess || rough.shininess == 1.0);
-                assert!(rough.specular <= smooth.specular);
+                assert!(
+                    rough.specular == smooth.specular,
+                    "F₀ does not depend on roughness"
+                );
             }
         }
         for &r in &steps {

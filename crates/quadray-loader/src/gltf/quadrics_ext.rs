@@ -134,7 +134,7 @@ pub struct WhittedDef {
     pub specular: f32,
     /// Highlight exponent.
     pub shininess: f32,
-    /// `"phong"` or `"blinn"`.
+    /// `"phong"`, `"blinn"` or `"ggx"`.
     pub specular_model: String,
     /// Mirror reflectivity in [0, 1].
     pub reflectivity: f32,
@@ -144,6 +144,9 @@ pub struct WhittedDef {
     /// How far highlights take the base colour, in [0, 1] (0 when absent: files from before it).
     #[serde(default)]
     pub specular_tint: f32,
+    /// Microfacet roughness of reflections and GGX highlights, in [0, 1] (0 when absent).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub roughness: f32,
     /// A procedural texture; the glTF base colour (and its texture) when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<TextureDef>,
@@ -357,10 +360,12 @@ pub fn whitted_def(m: &Material) -> WhittedDef {
         specular_model: match m.specular_model {
             SpecularModel::Phong => "phong".into(),
             SpecularModel::Blinn => "blinn".into(),
+            SpecularModel::Ggx => "ggx".into(),
         },
         reflectivity: m.reflectivity,
         reflection_tint: m.reflection_tint,
         specular_tint: m.specular_tint,
+        roughness: m.roughness,
         texture,
     }
 }
@@ -384,6 +389,7 @@ pub fn whitted_material(def: &WhittedDef, base_texture: Texture) -> Result<Mater
         ("reflectivity", def.reflectivity),
         ("reflectionTint", def.reflection_tint),
         ("specularTint", def.specular_tint),
+        ("roughness", def.roughness),
     ] {
         if !(0.0..=1.0).contains(&v) {
             return Err(format!("`{name}` must be in [0, 1], got {v}"));
@@ -392,7 +398,12 @@ pub fn whitted_material(def: &WhittedDef, base_texture: Texture) -> Result<Mater
     let specular_model = match def.specular_model.as_str() {
         "phong" => SpecularModel::Phong,
         "blinn" => SpecularModel::Blinn,
-        other => return Err(format!("unknown specularModel \"{other}\" (phong, blinn)")),
+        "ggx" => SpecularModel::Ggx,
+        other => {
+            return Err(format!(
+                "unknown specularModel \"{other}\" (phong, blinn, ggx)"
+            ));
+        }
     };
     let colour = |c: [f32; 3]| -> Result<Vec3, String> {
         let v = Vec3::from_array(c);
@@ -431,8 +442,14 @@ pub fn whitted_material(def: &WhittedDef, base_texture: Texture) -> Result<Mater
         specular_tint: def.specular_tint,
         // glTF's own emissive fields carry emission, for every viewer.
         emission: None,
+        roughness: def.roughness,
         transmission: None,
     })
+}
+
+/// Whether a serialised number is its default, 0 (left out of the file).
+fn is_zero(x: &f32) -> bool {
+    *x == 0.0
 }
 
 #[cfg(test)]
@@ -519,6 +536,7 @@ mod tests {
             reflection_tint: 0.5,
             specular_tint: 0.25,
             emission: None,
+            roughness: 0.0,
             transmission: None,
         };
         let def = whitted_def(&m);

@@ -60,8 +60,23 @@ impl Builder<'_> {
                 .filter(|t| t != &Texture::Constant(Vec3::ZERO)),
                 None => None,
             },
+            roughness: self.roughness(m, key)?,
             transmission: self.transmission(m, key)?,
         })
+    }
+
+    /// `roughness` in [0, 1]: the glossiness of the mirror reflection.
+    fn roughness(&self, m: &MaterialSpec, key: &str) -> Result<f32, LoadError> {
+        let roughness = self.non_negative(&m.roughness, &format!("{key}.roughness"), 0.0)?;
+        if roughness > 1.0 {
+            let span = m.roughness.as_ref().map(|r| r.span()).unwrap_or_default();
+            return Err(self.err(
+                span,
+                format!("{key}.roughness"),
+                format!("must be in [0, 1], got {roughness}"),
+            ));
+        }
+        Ok(roughness)
     }
 
     /// Glass: `transmission` with `ior`, `thin_walled` and the attenuation pair, which mean
@@ -231,13 +246,14 @@ impl Builder<'_> {
             {
                 None | Some(("phong", _)) => SpecularModel::Phong,
                 Some(("blinn", _)) => SpecularModel::Blinn,
+                Some(("ggx", _)) => SpecularModel::Ggx,
                 Some((other, span)) => {
                     return Err(self.err(
                         span,
                         format!("{key}.specular_model"),
                         format!(
-                            "unknown model \"{other}\" (phong, blinn){}",
-                            did_you_mean(other, ["phong", "blinn"])
+                            "unknown model \"{other}\" (phong, blinn, ggx){}",
+                            did_you_mean(other, ["phong", "blinn", "ggx"])
                         ),
                     ));
                 }

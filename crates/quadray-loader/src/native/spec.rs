@@ -149,6 +149,7 @@ pub(super) struct MaterialSpec {
     pub(super) reflection_tint: Option<Spanned<f64>>,
     pub(super) specular_tint: Option<Spanned<f64>>,
     pub(super) emission: Option<Spanned<V3>>,
+    pub(super) roughness: Option<Spanned<f64>>,
     pub(super) transmission: Option<Spanned<f64>>,
     pub(super) ior: Option<Spanned<f64>>,
     pub(super) thin_walled: Option<Spanned<bool>>,

@@ -107,6 +107,7 @@ pub fn whitted_material(
         reflection_tint: 0.0,
         specular_tint: 0.0,
         emission,
+        roughness: 0.0,
         transmission: None,
     })
 }

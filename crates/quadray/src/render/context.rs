@@ -7,6 +7,7 @@ use crate::camera::CameraFrame;
 use crate::footprint::{HitFootprint, RayCone, footprint_scale};
 use crate::integrator::RayCounts;
 use crate::render::{PixelWindow, RenderError, RenderSettings};
+use crate::sampler::SampleKey;
 use crate::scene::Scene;
 use glam::{DVec3, Vec3};
 
@@ -60,13 +61,15 @@ impl<'a> SampleContext<'a> {
     }
 
     /// The radiance of the camera ray through `(dx, dy)` inside pixel `(x, y)` of the full image,
-    /// for a sample standing for `cone`; with `aov`, also the pixel's surface passes from the
+    /// for a sample standing for `cone`, which is sample `key` (for the integrator's own samples,
+    /// glossy directions); with `aov`, also the pixel's surface passes from the
     /// ray's first hit (its albedo averaged over the whole pixel, as one sample gives the pass).
     pub fn trace(
         &self,
         (x, y): (u32, u32),
         (dx, dy): (f64, f64),
         cone: RayCone,
+        key: SampleKey,
         aov: Option<&mut AovSample>,
         counts: &mut RayCounts,
     ) -> Vec3 {
@@ -75,7 +78,7 @@ impl<'a> SampleContext<'a> {
         let whitted = &self.settings.whitted;
         match aov {
             Some(aov) => {
-                let (radiance, hit) = whitted.camera_ray_hit(self.scene, &ray, cone, counts);
+                let (radiance, hit) = whitted.camera_ray_hit(self.scene, &ray, cone, key, counts);
                 let footprint = match &hit {
                     Some(hit) if !cone.is_point() => HitFootprint::new(
                         &self.sample_cone(1),
@@ -94,7 +97,7 @@ impl<'a> SampleContext<'a> {
                 );
                 radiance
             }
-            None => whitted.camera_ray(self.scene, &ray, cone, counts),
+            None => whitted.camera_ray(self.scene, &ray, cone, key, counts),
         }
     }
 

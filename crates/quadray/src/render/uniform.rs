@@ -7,7 +7,7 @@ use crate::render::adaptive::SamplingStats;
 use crate::render::context::SampleContext;
 use crate::render::row_order::row_keys;
 use crate::render::{Progress, RenderError, Rendered};
-use crate::sampler::{PixelSampler, pixel_pattern};
+use crate::sampler::{PixelSampler, SampleKey, pixel_pattern};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Mutex;
@@ -48,7 +48,8 @@ pub(super) fn render_uniform(
             let mut sampler = PixelSampler::new(spp);
             for (column, pixel) in row.iter_mut().enumerate() {
                 let x = window.x0 + column as u32;
-                sampler.start_pixel(pixel_pattern(x, y, settings.seed));
+                let pattern = pixel_pattern(x, y, settings.seed);
+                sampler.start_pixel(pattern);
                 let mut aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
                 // The variance pass needs the running estimate; the image keeps its f32 sum.
                 let mut estimate = selection.variance.then(PixelEstimate::default);
@@ -56,7 +57,12 @@ pub(super) fn render_uniform(
                 for s in 0..spp {
                     let offset = sampler.sample(s);
                     let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
-                    let radiance = context.trace((x, y), offset, cone, first_hit, &mut counts);
+                    let key = SampleKey {
+                        pattern,
+                        index: s,
+                        count: Some(spp),
+                    };
+                    let radiance = context.trace((x, y), offset, cone, key, first_hit, &mut counts);
                     if let Some(e) = &mut estimate {
                         e.add(radiance);
                     }

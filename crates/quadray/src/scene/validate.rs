@@ -83,6 +83,9 @@ pub(super) fn validate_material(m: &Material) -> Result<(), String> {
         ));
     }
     check_texture(&m.texture)?;
+    if !(0.0..=1.0).contains(&m.roughness) {
+        return Err(format!("roughness must be in [0, 1], got {}", m.roughness));
+    }
     if let Some(t) = &m.transmission {
         t.validate()?;
     }

@@ -21,7 +21,7 @@ use crate::aov::{AovSample, Aovs};
 use crate::film::{Film, MIN_ERROR_SAMPLES, PixelEstimate};
 use crate::integrator::RayCounts;
 use crate::render::{MAX_SPP, PixelWindow, Progress, RenderError, Rendered, SampleContext};
-use crate::sampler::{pixel_pattern, progressive_2d};
+use crate::sampler::{SampleKey, pixel_pattern, progressive_2d};
 use rayon::prelude::*;
 pub use stats::{ErrorStats, RoundSummary, SamplingStats, Stop};
 use std::borrow::Cow;
@@ -423,7 +423,12 @@ pub(crate) fn sample_row(
                 _ => None,
             };
             let offset = progressive_2d(index, pattern);
-            estimate.add(context.trace((x, y), offset, cone, first_hit, &mut counts));
+            let key = SampleKey {
+                pattern,
+                index,
+                count: None,
+            };
+            estimate.add(context.trace((x, y), offset, cone, key, first_hit, &mut counts));
         }
     }
     counts
