@@ -5,7 +5,7 @@ use crate::dielectric::{Attenuation, Transmission, fresnel, refract};
 use crate::footprint::{HitFootprint, RayCone};
 use crate::material::SpecularModel;
 use crate::math::{Ray, offset_origin};
-use crate::microfacet::{MIRROR_ROUGHNESS, reflect_glossy};
+use crate::microfacet::{MIRROR_ROUGHNESS, reflect_glossy, schlick};
 use crate::sampler::SampleKey;
 use crate::scene::Scene;
 use crate::shape::{PrimRef, SurfaceHit};
@@ -197,7 +197,14 @@ impl Whitted {
             .filter(|_| GLASS)
             .map(|t| Glass::at(t, incoming, ns, facing > 0.0, base));
         let opaque = glass.as_ref().map_or(1.0, |g| 1.0 - g.transmission.factor);
-        let matte = (1.0 - m.reflectivity) * opaque;
+        // glTF's model weighs the mirror by Fresnel, not by `reflectivity` (the diffuse term
+        // already carries the metalness).
+        let ggx = m.specular_model == SpecularModel::Ggx;
+        let matte = if ggx {
+            opaque
+        } else {
+            (1.0 - m.reflectivity) * opaque
+        };
         let mut color = base * (m.ambient * matte);
         if m.emission.is_some() {
             color += scene.emitted(hit, &footprint);
@@ -207,6 +214,10 @@ impl Whitted {
 
         // The mirror: the opaque share's reflectivity, plus the Fresnel share of glass.
         let (mirror, mirror_share) = match &glass {
+            None if ggx => {
+                let f = schlick(m.fresnel_f0(base), view.dot(ns));
+                (f, f.max_element())
+            }
             None => (m.reflection_color(base), m.reflectivity),
             Some(g) => {
                 let mirror = m.reflection_color(base) * opaque + Vec3::splat(g.reflected);
@@ -229,7 +240,16 @@ impl Whitted {
                 let alpha = (m.roughness * m.roughness) as f64;
                 reflect_glossy(incoming, ns, alpha, key.bounce(depth))
                     .filter(|(dir, _)| dir.dot(ng) > 0.0)
-                    .map(|(dir, masking)| (dir, mirror * masking))
+                    .map(|(dir, masking)| {
+                        // glTF's Fresnel is the microfacet's: at the half vector of view and ray.
+                        let fresnel = match glass {
+                            None if ggx => {
+                                schlick(m.fresnel_f0(base), view.dot((view + dir).normalize()))
+                            }
+                            _ => mirror,
+                        };
+                        (dir, fresnel * masking)
+                    })
             };
             if let Some((dir, mirror)) = reflection {
                 counts.reflection += 1;
@@ -313,8 +333,8 @@ impl Whitted {
                     SpecularModel::Blinn => (inc.to_light + view).normalize().dot(ns),
                     SpecularModel::Ggx => {
                         let alpha = (m.roughness * m.roughness) as f64;
-                        response +=
-                            crate::microfacet::highlight(ns, view, inc.to_light, alpha, highlight);
+                        let f0 = m.fresnel_f0(base);
+                        response += crate::microfacet::highlight(ns, view, inc.to_light, alpha, f0);
                         0.0
                     }
                 };

@@ -16,7 +16,8 @@ pub enum SpecularModel {
     Blinn,
     /// glTF's metallic-roughness specular BRDF (the Khronos glTF-Sample-Viewer's): GGX
     /// distribution of [`Material::roughness`], Smith's height-correlated masking, and Schlick's
-    /// Fresnel from the highlight colour at normal incidence; `shininess` is not used.
+    /// Fresnel from [`Material::fresnel_f0`], for the lights' highlights and for the mirror (whose
+    /// weight is then that Fresnel, not `reflectivity`); `shininess` is not used.
     Ggx,
 }
 
@@ -93,6 +94,14 @@ impl Material {
     #[inline]
     pub fn highlight_color(&self, base: Vec3) -> Vec3 {
         Vec3::ONE.lerp(base, self.specular_tint) * self.specular
+    }
+
+    /// The Fresnel reflectance at normal incidence of a [`SpecularModel::Ggx`] material, given the
+    /// base colour: glTF's F₀ = mix(`specular`, base, `specular_tint`), 4% for a dielectric and
+    /// the base colour for a metal when `specular` is 0.04 and the tint the metalness.
+    #[inline]
+    pub fn fresnel_f0(&self, base: Vec3) -> Vec3 {
+        Vec3::splat(self.specular).lerp(base, self.specular_tint)
     }
 
     /// The colour multiplying mirror reflections, given the base colour at the hit.

@@ -96,8 +96,14 @@ pub fn highlight(n: DVec3, view: DVec3, light: DVec3, alpha: f64, f0: glam::Vec3
     let d = a2 / (std::f64::consts::PI * denominator * denominator);
     let g2 = 1.0 / (1.0 + lambda(alpha, cos_v) + lambda(alpha, cos_l));
     let lobe = (std::f64::consts::PI * d * g2 / (4.0 * cos_v)) as f32;
-    let schlick = (1.0 - view.dot(h).clamp(0.0, 1.0) as f32).powi(5);
-    (f0 + (glam::Vec3::ONE - f0) * schlick) * lobe
+    schlick(f0, view.dot(h)) * lobe
+}
+
+/// Schlick's Fresnel, f0 + (1 − f0)(1 − cos)⁵, as glTF's BRDF uses it, for the cosine between
+/// the view and the (micro)facet normal.
+pub fn schlick(f0: glam::Vec3, cos: f64) -> glam::Vec3 {
+    let k = (1.0 - cos.clamp(0.0, 1.0) as f32).powi(5);
+    f0 + (glam::Vec3::ONE - f0) * k
 }
 
 #[cfg(test)]

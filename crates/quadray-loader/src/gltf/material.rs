@@ -10,9 +10,8 @@
 //! | sampler `wrapS`/`wrapT`, `magFilter`; `texCoord`; KHR_texture_transform | the image's wrap modes, nearest or bilinear filtering, the coordinate set; the transform is applied to the mesh's coordinates at load |
 //! | roughness r | `roughness` r: the GGX lobe (α = r²) of the highlights (`specular_model` GGX: glTF's specular BRDF, the glTF-Sample-Viewer's) and of metals' reflections; `shininess` n = 2/α² − 2 only tells other renderers the lobe's width |
 //! | metallic m, roughness r | `reflectivity` = m, `roughness` = r: a metal reflects its surroundings, sharply when polished and blurred by the GGX lobe of its roughness when rough ([`quadray::microfacet`]); `reflection_tint` = m: metals reflect in their base colour |
-//! | metallic m | `specular` = F₀ = 0.04·(1 − m) + m, the highlight's Fresnel at normal incidence (Schlick's towards grazing); `specular_tint` = m: a metal's F₀ is its base colour |
-//! | metallic m | `diffuse` = 0.9·(1 − m): a metal has no diffuse term; a rough metal is its broad, tinted highlight |
-//! | — | `ambient` 0.1, quadray's default |
+//! | metallic m | `specular` 0.04, `specular_tint` m: F₀ = mix(0.04, base colour, m) ([`Material::fresnel_f0`]), Schlick's Fresnel towards grazing, for highlights and reflections |
+//! | metallic m | `ambient` = 0.1·(1 − m), `diffuse` = 0.9·(1 − m): a metal has no diffuse term |
 //! | `alphaMode` MASK, `alphaCutoff`, base colour alpha | an [`AlphaMask`] cut-out on the mesh (tested inside intersection) |
 //! | `alphaMode` BLEND | a stochastic [`AlphaMask`]: alpha is each ray's chance to keep the hit |
 //! | KHR_materials_unlit | `ambient` 1, everything else 0: the base colour as is |
@@ -471,13 +470,13 @@ pub fn pbr_to_whitted(texture: Texture, metallic: f32, roughness: f32) -> Materi
     } else {
         1e4
     };
-    // Fresnel reflectance at normal incidence: 4% for a dielectric, the base colour for a metal
-    // (which `specular_tint` multiplies in, so its scalar part is 1).
-    let f0 = 0.04 * (1.0 - metallic) + metallic;
+    // F₀ = mix(0.04, base colour, metallic) ([`Material::fresnel_f0`]): 4% for a dielectric,
+    // the base colour for a metal.
     Material {
         texture,
+        ambient: Material::default().ambient * (1.0 - metallic),
         diffuse: Material::default().diffuse * (1.0 - metallic),
-        specular: f0,
+        specular: 0.04,
         shininess,
         specular_model: SpecularModel::Ggx,
         specular_tint: metallic,
@@ -498,7 +497,11 @@ mod tests {
         let mirror = pbr_to_whitted(gold.clone(), 1.0, 0.0);
         assert_eq!((mirror.reflectivity, mirror.reflection_tint), (1.0, 1.0));
         assert_eq!(mirror.roughness, 0.0);
-        assert_eq!((mirror.shininess, mirror.specular), (1e4, 1.0));
+        assert_eq!((mirror.shininess, mirror.specular), (1e4, 0.04));
+        assert_eq!(
+            mirror.fresnel_f0(Vec3::new(1.0, 0.8, 0.3)),
+            Vec3::new(1.0, 0.8, 0.3)
+        );
         assert_eq!(mirror.specular_model, SpecularModel::Ggx);
         // A rough metal: a fully blurred reflection, no diffuse, a broad highlight in its own
         // colour.
@@ -511,7 +514,16 @@ mod tests {
         assert_eq!(rough_metal.diffuse, 0.0);
         assert_eq!(
             (rough_metal.specular, rough_metal.specular_tint),
-            (1.0, 1.0)
+            (0.04, 1.0)
+        );
+        // F₀ = mix(0.04, base, metallic): glTF's.
+        let half = pbr_to_whitted(Texture::Constant(Vec3::ONE), 0.5, 0.5);
+        let base = Vec3::new(1.0, 0.5, 0.0);
+        assert!(
+            (half.fresnel_f0(base) - (Vec3::splat(0.02) + base * 0.5))
+                .abs()
+                .max_element()
+                < 1e-6
         );
         let plastic = pbr_to_whitted(gold, 0.0, 0.5);
         assert_eq!(plastic.reflectivity, 0.0);
