@@ -77,7 +77,7 @@ for cmd in sinfo slurmctld slurmd munged; do
     if ! command -v "$cmd" >/dev/null 2>&1; then
         command -v apt-get >/dev/null 2>&1 || fail "$cmd is missing and apt-get is unavailable"
         say "installing slurm-wlm and munge"
-        { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+        { timeout 900 apt-get update -qq && DEBIAN_FRONTEND=noninteractive timeout 900 apt-get install -y -qq \
             --no-install-recommends slurm-wlm munge >/dev/null; } \
             || fail "apt-get install slurm-wlm munge failed"
         break

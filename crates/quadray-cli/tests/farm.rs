@@ -30,8 +30,11 @@ fn slurm_job_array_is_the_one_process_render() {
             );
             return;
         }
-        // Under CI: start it, or fail with why it cannot start.
-        let up = Command::new(root().join("scripts/farm/slurm-up.sh"))
+        // Under CI: start it, or fail with why it cannot start (bounded: an install that hangs
+        // fails the test instead of the run).
+        let up = Command::new("timeout")
+            .arg("1200")
+            .arg(root().join("scripts/farm/slurm-up.sh"))
             .output()
             .expect("scripts/farm/slurm-up.sh runs");
         assert!(

@@ -13,10 +13,11 @@ pub fn in_plain_words(message: &str) -> String {
         .strip_prefix("invalid type: ")
         .or_else(|| message.strip_prefix("invalid value: "))
     {
-        rest.split_once(", expected ")
+        // The last ", expected ": the found text may itself contain one.
+        rest.rsplit_once(", expected ")
             .map(|(found, expected)| (found_words(found), expected))
     } else if let Some(rest) = message.strip_prefix("invalid length ") {
-        rest.split_once(", expected ")
+        rest.rsplit_once(", expected ")
             .map(|(n, expected)| (length_words(n), expected))
     } else {
         None
@@ -74,11 +75,11 @@ fn length_words(n: &str) -> String {
 
 /// What serde's expectation (a Rust type or a visitor's phrase) asks for.
 fn expected_words(expected: &str) -> String {
-    let integers = [
-        "i8", "i16", "i32", "i64", "i128", "isize", "u8", "u16", "u32", "u64", "u128", "usize",
-    ];
-    if integers.contains(&expected) {
+    if ["i8", "i16", "i32", "i64", "i128", "isize"].contains(&expected) {
         return "a whole number".to_string();
+    }
+    if ["u8", "u16", "u32", "u64", "u128", "usize"].contains(&expected) {
+        return "a whole number ≥ 0".to_string();
     }
     let size = |prefix: &str| expected.strip_prefix(prefix).map(str::to_string);
     if let Some(n) = size("an array of length ").or_else(|| size("a tuple of size ")) {
@@ -112,7 +113,7 @@ mod tests {
             ),
             (
                 "invalid type: floating point `1.5`, expected u32",
-                "expected a whole number, found the number 1.5",
+                "expected a whole number ≥ 0, found the number 1.5",
             ),
             (
                 "invalid type: boolean `true`, expected f64",
@@ -132,7 +133,11 @@ mod tests {
             ),
             (
                 "invalid value: integer `-1`, expected u32",
-                "expected a whole number, found the whole number -1",
+                "expected a whole number ≥ 0, found the whole number -1",
+            ),
+            (
+                r#"invalid type: string "4, expected 5", expected i64"#,
+                r#"expected a whole number, found the text "4, expected 5""#,
             ),
             (
                 "invalid length 2, expected an array of length 3",

@@ -67,6 +67,12 @@ fn transmission_ior_and_volume_make_glass() {
     );
     let t = solid.description.materials[0].transmission.unwrap();
     assert!(!t.thin_walled);
+    // A solid's back faces are where rays leave it: never culled, whatever doubleSided says.
+    assert!(!solid.description.geometry.meshes[0].single_sided());
+    assert!(
+        thin.description.geometry.meshes[0].single_sided(),
+        "a sheet culls as glTF says"
+    );
     assert_eq!(t.ior, 1.5, "KHR_materials_ior's default");
     let a = t.attenuation.unwrap();
     assert_eq!((a.color, a.distance), (Vec3::new(0.5, 0.8, 1.0), 2.0));

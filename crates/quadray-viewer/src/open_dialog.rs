@@ -62,8 +62,10 @@ impl OpenDialog {
         dialog
     }
 
-    /// Lists `folder`: its subfolders and the scene files in it.
+    /// Lists `folder` (made absolute, so that `..` always leads somewhere): its subfolders and
+    /// the scene files in it.
     fn list(&mut self, folder: PathBuf) {
+        let folder = std::path::absolute(&folder).unwrap_or(folder);
         self.entries = std::fs::read_dir(&folder)
             .map_err(|e| format!("cannot list {}: {e}", folder.display()))
             .map(|dir| {
@@ -86,9 +88,9 @@ impl OpenDialog {
                             (false, false) => None,
                         }
                     })
-                    .take(MAX_ENTRIES)
                     .collect();
                 entries.sort();
+                entries.truncate(MAX_ENTRIES);
                 entries
             });
         self.folder = folder;
@@ -150,7 +152,8 @@ impl OpenDialog {
                     let entered =
                         field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
                     if (ui.button("Open file").clicked() || entered) && !self.path.is_empty() {
-                        choice = Choice::Open(PathBuf::from(&self.path));
+                        // A bare name is in the folder listed.
+                        choice = Choice::Open(self.folder.join(&self.path));
                     }
                 });
             });

@@ -131,6 +131,14 @@ impl Worker {
         self.frames.try_iter().last()
     }
 
+    /// Makes every request so far stale without posting a new one (the scene shown is being
+    /// replaced): their frames and failures are not shown. Returns the new number.
+    pub fn cancel(&self) -> u64 {
+        let generation = self.shared.generation.fetch_add(1, Ordering::SeqCst) + 1;
+        *lock(&self.shared.pending) = None;
+        generation
+    }
+
     /// Why a request failed, with its number, once (the window shows it; `quadray render`
     /// would have printed the same).
     pub fn failure(&self) -> Option<(u64, String)> {

@@ -60,7 +60,8 @@ impl Transmission {
 /// `distance` inside comes out with the colour `color`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Attenuation {
-    /// The colour reached after `distance`, each channel in (0, 1].
+    /// The colour reached after `distance`, each channel in [0, 1] (0: that channel is absorbed
+    /// completely by any length inside).
     pub color: Vec3,
     /// The distance, world units, finite and > 0.
     pub distance: f64,
@@ -69,9 +70,9 @@ pub struct Attenuation {
 impl Attenuation {
     /// Checks the ranges stated on the fields.
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.color.cmpgt(Vec3::ZERO).all() && self.color.cmple(Vec3::ONE).all()) {
+        if !(self.color.cmpge(Vec3::ZERO).all() && self.color.cmple(Vec3::ONE).all()) {
             return Err(format!(
-                "the attenuation colour must be in (0, 1] in every channel, got {}",
+                "the attenuation colour must be in [0, 1] in every channel, got {}",
                 self.color
             ));
         }
@@ -199,10 +200,17 @@ mod tests {
         assert_eq!(a.after(0.0), Vec3::ONE);
         assert!(a.validate().is_ok());
         let bad = Attenuation {
-            color: Vec3::new(0.0, 1.0, 1.0),
+            color: Vec3::new(1.5, 1.0, 1.0),
             distance: 1.0,
         };
         assert!(bad.validate().is_err());
+        let opaque_red = Attenuation {
+            color: Vec3::new(0.0, 1.0, 1.0),
+            distance: 1.0,
+        };
+        assert!(opaque_red.validate().is_ok());
+        assert_eq!(opaque_red.after(0.5).x, 0.0);
+        assert_eq!(opaque_red.after(0.0).x, 1.0);
         let t = Transmission {
             ior: 0.5,
             ..Transmission::default()

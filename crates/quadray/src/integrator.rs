@@ -195,13 +195,20 @@ impl Whitted {
             .transmission
             .as_ref()
             .filter(|_| GLASS)
-            .map(|t| Glass::at(t, incoming, ns, facing > 0.0, base));
+            .map(|t| Glass::at(t, incoming, (ns, ng), facing > 0.0, base));
         let opaque = glass.as_ref().map_or(1.0, |g| 1.0 - g.transmission.factor);
-        // glTF's model weighs the mirror by Fresnel, not by `reflectivity` (the diffuse term
-        // already carries the metalness).
-        let ggx = m.specular_model == SpecularModel::Ggx;
+        // glTF's model weighs the mirror by Fresnel, not by `reflectivity`, and what it reflects
+        // is taken from the diffuse and ambient terms (which already carry the metalness):
+        // (1 − F) at the view, F's largest channel (grey for a dielectric, whose diffuse alone
+        // it weighs). A Fresnel-weighted solid opaque surface reflects the rest of the glass.
+        let ggx = m.specular_model == SpecularModel::Ggx && glass.is_none();
+        let view_fresnel = if ggx {
+            schlick(m.fresnel_f0(base), view.dot(ns))
+        } else {
+            Vec3::ZERO
+        };
         let matte = if ggx {
-            opaque
+            1.0 - view_fresnel.max_element()
         } else {
             (1.0 - m.reflectivity) * opaque
         };
@@ -214,10 +221,7 @@ impl Whitted {
 
         // The mirror: the opaque share's reflectivity, plus the Fresnel share of glass.
         let (mirror, mirror_share) = match &glass {
-            None if ggx => {
-                let f = schlick(m.fresnel_f0(base), view.dot(ns));
-                (f, f.max_element())
-            }
+            None if ggx => (view_fresnel, view_fresnel.max_element()),
             None => (m.reflection_color(base), m.reflectivity),
             Some(g) => {
                 let mirror = m.reflection_color(base) * opaque + Vec3::splat(g.reflected);
@@ -414,9 +418,16 @@ struct Glass {
 }
 
 impl Glass {
-    /// The split at a hit seen along unit `incoming`, with unit shading normal `n` facing the
-    /// viewer; `entering` when the viewer is on the front (outward) side; `base` the base colour.
-    fn at(t: &Transmission, incoming: DVec3, n: DVec3, entering: bool, base: Vec3) -> Glass {
+    /// The split at a hit seen along unit `incoming`, with unit shading and geometric normals
+    /// facing the viewer; `entering` when the viewer is on the front (outward) side; `base` the
+    /// base colour.
+    fn at(
+        t: &Transmission,
+        incoming: DVec3,
+        (n, ng): (DVec3, DVec3),
+        entering: bool,
+        base: Vec3,
+    ) -> Glass {
         // n_t / n_i: into the glass from outside, out of it from inside; a thin sheet is entered
         // and left at once, so its reflection is the entering one's.
         let eta = if t.thin_walled || entering {
@@ -426,10 +437,14 @@ impl Glass {
         };
         let cos_i = (-incoming.dot(n)).clamp(0.0, 1.0);
         let f = fresnel(cos_i, eta);
+        // Bent about the interpolated normal, a ray near a smooth mesh's silhouette can turn back
+        // to the viewer's side; it is bent about the true normal instead, or reflected whole.
         let direction = if t.thin_walled {
             Some(incoming)
         } else {
             refract(incoming, n, eta)
+                .filter(|d| d.dot(ng) < 0.0)
+                .or_else(|| refract(incoming, ng, eta))
         };
         Glass {
             transmission: *t,

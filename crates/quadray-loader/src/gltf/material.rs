@@ -222,12 +222,15 @@ impl<'a> Materials<'a> {
                 Some(i) => format!("material {i}"),
                 None => "default".into(),
             });
+        // A glass solid is left through its back faces: culling them would trap every ray that
+        // entered (and its shadow rays, absorbed without end).
+        let solid_glass = material.transmission.is_some_and(|t| !t.thin_walled);
         self.list.push((name, material));
         Ok(MaterialUse {
             id,
             mask,
             uv_transform,
-            single_sided: !m.double_sided(),
+            single_sided: !m.double_sided() && !solid_glass,
             normal_map,
         })
     }

@@ -34,7 +34,20 @@ pub fn transmission_of(
             .and_then(|v| v.get(key))
             .and_then(Value::as_f64)
     };
-    let Some(factor) = number(TRANSMISSION, "transmissionFactor").filter(|f| *f > 0.0) else {
+    // Present but not a number is an error, as is a negative value: never silently opaque.
+    let checked = |ext: &str, key: &str| -> Result<Option<f64>, String> {
+        match m.extension_value(ext).and_then(|v| v.get(key)) {
+            None => Ok(None),
+            Some(v) => match v.as_f64() {
+                Some(x) if x >= 0.0 => Ok(Some(x)),
+                _ => Err(format!(
+                    "{label}: {ext}.{key} must be a number ≥ 0, got {v}"
+                )),
+            },
+        }
+    };
+    let thickness = checked(VOLUME, "thicknessFactor")?.unwrap_or(0.0);
+    let Some(factor) = checked(TRANSMISSION, "transmissionFactor")?.filter(|f| *f > 0.0) else {
         return Ok(None);
     };
     if factor > 1.0 {
@@ -57,7 +70,6 @@ pub fn transmission_of(
             quadray::dielectric::MAX_IOR
         ));
     }
-    let thickness = number(VOLUME, "thicknessFactor").unwrap_or(0.0);
     let thin_walled = m.extension_value(VOLUME).is_none() || thickness <= 0.0;
     let attenuation = if thin_walled {
         None

@@ -152,10 +152,19 @@ impl Builder<'_> {
         {
             return Err(self.err(c.span(), format!("{key}.attenuation_color"), problem));
         }
+        let thin_walled = m.thin_walled.as_ref().is_some_and(|v| *v.get_ref());
+        if let (true, Some(c)) = (thin_walled, &m.attenuation_color) {
+            return Err(self.err(
+                c.span(),
+                format!("{key}.attenuation_color"),
+                "a thin wall absorbs nothing: attenuation applies to solids (thin_walled = false)"
+                    .to_string(),
+            ));
+        }
         let t = Transmission {
             factor: factor as f32,
             ior,
-            thin_walled: m.thin_walled.as_ref().is_some_and(|v| *v.get_ref()),
+            thin_walled,
             attenuation,
         };
         Ok(Some(t))

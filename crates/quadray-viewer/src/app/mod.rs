@@ -65,9 +65,8 @@ fn located(error: &anyhow::Error) -> String {
 /// scene files, in a repository untracked).
 fn file_output(scene: &std::path::Path) -> PathBuf {
     let name = scene.file_stem().unwrap_or(scene.as_os_str());
-    PathBuf::from(OUTPUT_FOLDER)
-        .join(name)
-        .with_extension("png")
+    // Appended, not set: `a.v1.toml` and `a.v2.toml` keep apart as `a.v1.png` and `a.v2.png`.
+    PathBuf::from(OUTPUT_FOLDER).join(format!("{}.png", name.to_string_lossy()))
 }
 
 /// What the viewer shows: the quadric explorer, or a scene file.
@@ -278,8 +277,10 @@ impl Viewer {
         self.rebuild_explorer();
     }
 
-    /// Drops what belongs to the scene shown before (its frame, its picked object, its error).
+    /// Drops what belongs to the scene shown before (its frame, its picked object, its error),
+    /// and the work still under way on it, whose frames would otherwise land under the new one.
     fn forget_scene(&mut self) {
+        self.generation = self.worker.cancel();
         self.shown = None;
         self.frame = None;
         self.texture = None;
@@ -581,5 +582,22 @@ impl Viewer {
             let waker = self.waker.clone();
             file.reload(move || waker.wake());
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_files_default_output_keeps_its_whole_name() {
+        assert_eq!(
+            file_output(std::path::Path::new("scenes/a.v1.toml")),
+            PathBuf::from("renders/a.v1.png")
+        );
+        assert_eq!(
+            file_output(std::path::Path::new("duck.glb")),
+            PathBuf::from("renders/duck.png")
+        );
     }
 }
