@@ -433,3 +433,26 @@ fn refracted_rays_inside_quadrics_agree_with_the_exact_oracle() {
         }
     }
 }
+
+/// Through glass the camera sees its backdrop, not the surroundings reflections show: with an
+/// environment unlike the background, a sphere of index 1 is still invisible against the sky.
+#[test]
+fn through_glass_the_background_shows_not_the_environment() {
+    let text = |sphere: bool| {
+        let mut t = format!(
+            "version = 1\n[camera]\nfrom = [0, -6, 0]\nto = [0, 0, 0]\nvfov = 30\n\
+             [render]\nresolution = [32, 32]\nspp = 1\nbackground = [0.2, 0.4, 0.8]\n\
+             environment = [1, 0, 0]\n{GLASS}ior = 1.0\n"
+        );
+        if sphere {
+            t += "[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"glass\"\n";
+        } else {
+            t += "[[sphere]]\ncenter = [0, 50, 0]\nradius = 0.001\nmaterial = \"glass\"\n";
+        }
+        t
+    };
+    let (with, without) = (render(&text(true)), render(&text(false)));
+    for (a, b) in with.pixels().iter().zip(without.pixels()) {
+        assert!((*a - *b).abs().max_element() < 1e-5, "{a} against {b}");
+    }
+}

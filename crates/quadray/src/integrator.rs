@@ -75,17 +75,14 @@ impl Whitted {
         // Each combination compiles its own path: a scene without filtered textures or glass
         // pays nothing for them.
         match (cone.is_point(), scene.transmits()) {
-            (true, false) => {
-                self.radiance::<false, false>(scene, ray, cone, None, 1, 1.0, None, key, counts)
-            }
-            (false, false) => {
-                self.radiance::<true, false>(scene, ray, cone, None, 1, 1.0, None, key, counts)
-            }
-            (true, true) => {
-                self.radiance::<false, true>(scene, ray, cone, None, 1, 1.0, None, key, counts)
-            }
+            (true, false) => self
+                .radiance::<false, false>(scene, ray, cone, None, 1, 1.0, None, true, key, counts),
+            (false, false) => self
+                .radiance::<true, false>(scene, ray, cone, None, 1, 1.0, None, true, key, counts),
+            (true, true) => self
+                .radiance::<false, true>(scene, ray, cone, None, 1, 1.0, None, true, key, counts),
             (false, true) => {
-                self.radiance::<true, true>(scene, ray, cone, None, 1, 1.0, None, key, counts)
+                self.radiance::<true, true>(scene, ray, cone, None, 1, 1.0, None, true, key, counts)
             }
         }
     }
@@ -105,13 +102,17 @@ impl Whitted {
         let radiance = match &hit {
             Some(h) => match (cone.is_point(), scene.transmits()) {
                 (true, false) => {
-                    self.shade::<false, false>(scene, ray, cone, h, 1, 1.0, key, counts)
+                    self.shade::<false, false>(scene, ray, cone, h, 1, 1.0, true, key, counts)
                 }
                 (false, false) => {
-                    self.shade::<true, false>(scene, ray, cone, h, 1, 1.0, key, counts)
+                    self.shade::<true, false>(scene, ray, cone, h, 1, 1.0, true, key, counts)
                 }
-                (true, true) => self.shade::<false, true>(scene, ray, cone, h, 1, 1.0, key, counts),
-                (false, true) => self.shade::<true, true>(scene, ray, cone, h, 1, 1.0, key, counts),
+                (true, true) => {
+                    self.shade::<false, true>(scene, ray, cone, h, 1, 1.0, true, key, counts)
+                }
+                (false, true) => {
+                    self.shade::<true, true>(scene, ray, cone, h, 1, 1.0, true, key, counts)
+                }
             },
             None => scene.background(),
         };
@@ -125,7 +126,9 @@ impl Whitted {
 
     /// Radiance along `ray` (with its `cone` when `CONES`), the `depth`-th ray of its chain,
     /// whose contribution is weighted by `throughput`, travelling inside a solid that absorbs as
-    /// `medium` (Beer–Lambert over the distance to the hit) or outside when `None`.
+    /// `medium` (Beer–Lambert over the distance to the hit) or outside when `None`. A miss shows
+    /// the camera's background when `backdrop` (the chain so far: the camera ray and rays through
+    /// glass), else the environment reflections show.
     #[allow(clippy::too_many_arguments)]
     fn radiance<const CONES: bool, const GLASS: bool>(
         &self,
@@ -136,20 +139,24 @@ impl Whitted {
         depth: u32,
         throughput: f32,
         medium: Option<Attenuation>,
+        backdrop: bool,
         key: SampleKey,
         counts: &mut RayCounts,
     ) -> Vec3 {
         match self.intersect(scene, ray, from) {
             Some(hit) => {
-                let leaving = self
-                    .shade::<CONES, GLASS>(scene, ray, cone, &hit, depth, throughput, key, counts);
+                let leaving = self.shade::<CONES, GLASS>(
+                    scene, ray, cone, &hit, depth, throughput, backdrop, key, counts,
+                );
                 match medium {
                     Some(a) if GLASS => leaving * a.after(hit.t * ray.dir.length()),
                     _ => leaving,
                 }
             }
-            None if depth > 1 => scene.environment(),
-            None => scene.background(),
+            // The camera's backdrop, seen directly or through glass; reflections show the
+            // surroundings.
+            None if backdrop => scene.background(),
+            None => scene.environment(),
         }
     }
 
@@ -166,6 +173,7 @@ impl Whitted {
         hit: &SurfaceHit,
         depth: u32,
         throughput: f32,
+        backdrop: bool,
         key: SampleKey,
         counts: &mut RayCounts,
     ) -> Vec3 {
@@ -273,14 +281,16 @@ impl Whitted {
                     depth + 1,
                     weight,
                     medium,
+                    false,
                     key,
                     counts,
                 ) * mirror;
             }
         }
         if let Some(glass) = &glass {
-            color += self
-                .refracted::<CONES>(scene, ray, cone, hit, depth, throughput, glass, key, counts);
+            color += self.refracted::<CONES>(
+                scene, ray, cone, hit, depth, throughput, glass, backdrop, key, counts,
+            );
         }
         color
     }
@@ -365,6 +375,7 @@ impl Whitted {
         depth: u32,
         throughput: f32,
         glass: &Glass,
+        backdrop: bool,
         key: SampleKey,
         counts: &mut RayCounts,
     ) -> Vec3 {
@@ -396,6 +407,7 @@ impl Whitted {
             depth + 1,
             weight,
             glass.inside_after_refraction(),
+            backdrop,
             key,
             counts,
         ) * glass.through
