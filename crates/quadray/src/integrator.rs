@@ -205,10 +205,10 @@ impl Whitted {
             .filter(|_| GLASS)
             .map(|t| Glass::at(t, incoming, (ns, ng), facing > 0.0, base));
         let opaque = glass.as_ref().map_or(1.0, |g| 1.0 - g.transmission.factor);
-        // glTF's model weighs the mirror by Fresnel, not by `reflectivity`, and what it reflects
-        // is taken from the diffuse and ambient terms (which already carry the metalness):
-        // (1 − F) at the view, F's largest channel (grey for a dielectric, whose diffuse alone
-        // it weighs). A Fresnel-weighted solid opaque surface reflects the rest of the glass.
+        // glTF's model weighs the mirror by Schlick's Fresnel, not by `reflectivity`, and takes
+        // what it reflects from the diffuse and ambient terms (which already carry the
+        // metalness): (1 − F) at the view, F's largest channel (grey for a dielectric, the only
+        // kind with a diffuse term). Glass keeps its exact Fresnel split instead.
         let ggx = m.specular_model == SpecularModel::Ggx && glass.is_none();
         let view_fresnel = if ggx {
             schlick(m.fresnel_f0(base), view.dot(ns))
@@ -254,11 +254,10 @@ impl Whitted {
                     .filter(|(dir, _)| dir.dot(ng) > 0.0)
                     .map(|(dir, masking)| {
                         // glTF's Fresnel is the microfacet's: at the half vector of view and ray.
-                        let fresnel = match glass {
-                            None if ggx => {
-                                schlick(m.fresnel_f0(base), view.dot((view + dir).normalize()))
-                            }
-                            _ => mirror,
+                        let fresnel = if ggx {
+                            schlick(m.fresnel_f0(base), view.dot((view + dir).normalize()))
+                        } else {
+                            mirror
                         };
                         (dir, fresnel * masking)
                     })
