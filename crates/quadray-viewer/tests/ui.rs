@@ -286,6 +286,15 @@ fn scenes_open_from_the_window_and_by_dropping() {
     assert_eq!(harness.state().file(), Some(gltf.as_path()));
     assert_eq!(harness.state().output(), "renders/gltf-quadrics.png");
     step_until(&mut harness, "the glTF scene", refined);
+    // The panel keeps its place beside the image: its buttons lie right of the image.
+    let image = harness.state().image_rect().unwrap();
+    for button in ["Open…", "Explorer", "Render", "Quit"] {
+        let rect = harness.get_by_label(button).rect();
+        assert!(
+            rect.min.x >= image.max.x,
+            "{button} at {rect:?} under the image {image:?}"
+        );
+    }
     let orbit = *harness.state().orbit();
     assert!(orbit.distance > 2.0, "orbits about the scene: {orbit:?}");
 

@@ -255,8 +255,12 @@ impl Viewer {
 
     /// Open and Explorer, Render (with its output and progress), Sample, Save view, Quit.
     pub(super) fn buttons(&mut self, ui: &mut egui::Ui) {
+        // Short enough for the panel's width: the drop hint is the button's tooltip.
         ui.horizontal(|ui| {
-            if ui.button("Open…").clicked() {
+            let open = ui.button("Open…").on_hover_text(
+                "Open a scene file (.toml, .obj, .gltf, .glb), or drop one on the window",
+            );
+            if open.clicked() {
                 self.show_open_dialog();
             }
             if let Source::File(_) = self.source
@@ -264,7 +268,6 @@ impl Viewer {
             {
                 self.show_explorer();
             }
-            ui.label("or drop a scene file on the window");
         });
         ui.horizontal(|ui| {
             let label = ui.label("output");
