@@ -24,6 +24,16 @@ fn render(text: &str) -> Film {
         .film
 }
 
+/// A deterministic stream of numbers in [0, 1) (xorshift64) starting from `seed`.
+fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 const GLASS: &str = "[[material]]\nname = \"glass\"\ncolor = [1, 1, 1]\ntransmission = 1\n\
                      ambient = 0\ndiffuse = 0\n";
 
@@ -207,13 +217,7 @@ fn refracted_rays_never_leak_from_a_solid() {
                 quadray_loader::parse_scene(&text, std::path::Path::new("lens.toml")).unwrap();
             let scene = Scene::new(loaded.description).unwrap();
             let (mut entries, mut leaks, mut acne) = (0, 0, 0);
-            let mut rng = 0x9e37_79b9_7f4a_7c15u64;
-            let mut next = || {
-                rng ^= rng << 13;
-                rng ^= rng >> 7;
-                rng ^= rng << 17;
-                (rng >> 11) as f64 / (1u64 << 53) as f64
-            };
+            let mut next = uniform(0x9e37_79b9_7f4a_7c15u64);
             for _ in 0..4000 {
                 // From a random point on a sphere of radius 3 around the shape towards a random
                 // point of its bounds: some rays graze, some miss.
@@ -351,13 +355,7 @@ fn refracted_rays_inside_quadrics_agree_with_the_exact_oracle() {
                 quadray_loader::parse_scene(&text, std::path::Path::new("q.toml")).unwrap();
             let scene = Scene::new(loaded.description).unwrap();
             let quadric = &scene.geometry().quadrics[0];
-            let mut rng = 0x2545_f491_4f6c_dd1du64;
-            let mut next = || {
-                rng ^= rng << 13;
-                rng ^= rng >> 7;
-                rng ^= rng << 17;
-                (rng >> 11) as f64 / (1u64 << 53) as f64
-            };
+            let mut next = uniform(0x2545_f491_4f6c_dd1du64);
             let (mut scored, mut ambiguous, mut leaks, mut phantoms, mut acne, mut far) =
                 (0, 0, 0, 0, 0, 0);
             for _ in 0..3000 {

@@ -312,7 +312,11 @@ impl Whitted {
     ) -> Vec3 {
         let m = &scene.materials()[hit.material as usize];
         let g = &hit.geometry;
-        let highlight = m.highlight_color(base);
+        // Phong and Blinn scale their lobe by the highlight colour; GGX's Fresnel starts from F₀.
+        let highlight = match m.specular_model {
+            SpecularModel::Ggx => m.fresnel_f0(base),
+            _ => m.highlight_color(base),
+        };
         for light in scene.lights() {
             let Some(inc) = light.incident(g.point) else {
                 continue;
@@ -346,8 +350,8 @@ impl Whitted {
                     SpecularModel::Blinn => (inc.to_light + view).normalize().dot(ns),
                     SpecularModel::Ggx => {
                         let alpha = (m.roughness * m.roughness) as f64;
-                        let f0 = m.fresnel_f0(base);
-                        response += crate::microfacet::highlight(ns, view, inc.to_light, alpha, f0);
+                        response +=
+                            crate::microfacet::highlight(ns, view, inc.to_light, alpha, highlight);
                         0.0
                     }
                 };

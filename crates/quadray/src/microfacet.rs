@@ -14,6 +14,14 @@ use glam::DVec3;
 /// Roughness below which a surface is a mirror: one ray, no noise (α < 10⁻⁴).
 pub const MIRROR_ROUGHNESS: f32 = 0.01;
 
+/// The GGX distribution of normals, D(h) = α² / (π ((α² − 1) cos² θ_h + 1)²), for a microfacet
+/// normal at cosine `cos_h` to the surface normal.
+fn distribution(alpha: f64, cos_h: f64) -> f64 {
+    let a2 = alpha * alpha;
+    let denominator = (a2 - 1.0) * cos_h * cos_h + 1.0;
+    a2 / (std::f64::consts::PI * denominator * denominator)
+}
+
 /// Smith's Λ for GGX with parameter `alpha` at a direction whose cosine with the normal is
 /// `cos`: Λ = (−1 + √(1 + α² tan²θ)) / 2.
 fn lambda(alpha: f64, cos: f64) -> f64 {
@@ -90,10 +98,7 @@ pub fn highlight(n: DVec3, view: DVec3, light: DVec3, alpha: f64, f0: glam::Vec3
     }
     let alpha = alpha.max(MIN_HIGHLIGHT_ALPHA);
     let h = (view + light).normalize();
-    let a2 = alpha * alpha;
-    let cos_h = n.dot(h);
-    let denominator = (a2 - 1.0) * cos_h * cos_h + 1.0;
-    let d = a2 / (std::f64::consts::PI * denominator * denominator);
+    let d = distribution(alpha, n.dot(h));
     let g2 = 1.0 / (1.0 + lambda(alpha, cos_v) + lambda(alpha, cos_l));
     let lobe = (std::f64::consts::PI * d * g2 / (4.0 * cos_v)) as f32;
     schlick(f0, view.dot(h)) * lobe
@@ -137,11 +142,8 @@ mod tests {
         }
     }
 
-    /// The same albedo by brute-force quadrature of the BRDF D·G2 / (4 cos θ_v cos θ_l) times
-    /// cos θ_l over the hemisphere of light directions (midpoint rule), with GGX's
-    /// D(h) = α² / (π ((α² − 1) cos² θ_h + 1)²): independent of the sampling.
-    fn albedo_by_quadrature(alpha: f64, view_angle: f64) -> f64 {
-        let v = DVec3::new(view_angle.sin(), 0.0, view_angle.cos());
+    /// ∫ f(l) dω over the hemisphere of unit directions l above z = 0 (midpoint rule).
+    fn over_hemisphere(f: impl Fn(DVec3) -> f64) -> f64 {
         let (nt, np) = (300, 600);
         let (dt, dp) = (
             std::f64::consts::FRAC_PI_2 / nt as f64,
@@ -152,19 +154,23 @@ mod tests {
             let theta = (i as f64 + 0.5) * dt;
             for j in 0..np {
                 let phi = (j as f64 + 0.5) * dp;
-                let l = DVec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.sin() * phi.sin(),
-                    theta.cos(),
-                );
-                let h = (v + l).normalize();
-                let a2 = alpha * alpha;
-                let d = a2 / (std::f64::consts::PI * ((a2 - 1.0) * h.z * h.z + 1.0).powi(2));
-                let g2 = 1.0 / (1.0 + lambda(alpha, v.z) + lambda(alpha, l.z));
-                total += d * g2 / (4.0 * v.z * l.z) * l.z * theta.sin() * dt * dp;
+                let (sin, cos) = theta.sin_cos();
+                let l = DVec3::new(sin * phi.cos(), sin * phi.sin(), cos);
+                total += f(l) * sin * dt * dp;
             }
         }
         total
+    }
+
+    /// The same albedo by quadrature of the BRDF D·G2 / (4 cos θ_v cos θ_l) times cos θ_l over
+    /// the hemisphere of light directions: independent of the sampling.
+    fn albedo_by_quadrature(alpha: f64, view_angle: f64) -> f64 {
+        let v = DVec3::new(view_angle.sin(), 0.0, view_angle.cos());
+        over_hemisphere(|l| {
+            let h = (v + l).normalize();
+            let g2 = 1.0 / (1.0 + lambda(alpha, v.z) + lambda(alpha, l.z));
+            distribution(alpha, h.z) * g2 / (4.0 * v.z * l.z) * l.z
+        })
     }
 
     #[test]
@@ -190,25 +196,8 @@ mod tests {
     fn the_highlight_integrates_to_the_albedo() {
         for (alpha, angle) in [(0.25, 0.0), (0.5, 0.7)] {
             let v = DVec3::new(f64::sin(angle), 0.0, f64::cos(angle));
-            let (nt, np) = (300, 600);
-            let (dt, dp) = (
-                std::f64::consts::FRAC_PI_2 / nt as f64,
-                std::f64::consts::TAU / np as f64,
-            );
-            let mut total = 0.0;
-            for i in 0..nt {
-                let theta = (i as f64 + 0.5) * dt;
-                for j in 0..np {
-                    let phi = (j as f64 + 0.5) * dp;
-                    let l = DVec3::new(
-                        theta.sin() * phi.cos(),
-                        theta.sin() * phi.sin(),
-                        theta.cos(),
-                    );
-                    let h = highlight(DVec3::Z, v, l, alpha, glam::Vec3::ONE).x as f64;
-                    total += h * theta.sin() * dt * dp;
-                }
-            }
+            let total =
+                over_hemisphere(|l| highlight(DVec3::Z, v, l, alpha, glam::Vec3::ONE).x as f64);
             let albedo = albedo_by_quadrature(alpha, angle);
             assert!(
                 (total / std::f64::consts::PI - albedo).abs() < 1e-3,

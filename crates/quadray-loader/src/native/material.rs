@@ -13,20 +13,7 @@ impl Builder<'_> {
             .transpose()?;
         let texture = self.texture(m, color, key)?;
         let specular_model = self.specular_model(m, key)?;
-        let reflectivity =
-            self.non_negative(&m.reflectivity, &format!("{key}.reflectivity"), 0.0)?;
-        if reflectivity > 1.0 {
-            let span = m
-                .reflectivity
-                .as_ref()
-                .map(|r| r.span())
-                .unwrap_or_default();
-            return Err(self.err(
-                span,
-                format!("{key}.reflectivity"),
-                format!("must be in [0, 1], got {reflectivity}"),
-            ));
-        }
+        let reflectivity = self.fraction(&m.reflectivity, &format!("{key}.reflectivity"))?;
         Ok(Material {
             texture,
             ambient: self.non_negative(
@@ -51,8 +38,9 @@ impl Builder<'_> {
             )?,
             specular_model,
             reflectivity,
-            reflection_tint: self.tint(&m.reflection_tint, &format!("{key}.reflection_tint"))?,
-            specular_tint: self.tint(&m.specular_tint, &format!("{key}.specular_tint"))?,
+            reflection_tint: self
+                .fraction(&m.reflection_tint, &format!("{key}.reflection_tint"))?,
+            specular_tint: self.fraction(&m.specular_tint, &format!("{key}.specular_tint"))?,
             emission: match &m.emission {
                 Some(v) => Some(Texture::Constant(
                     self.colour(v, &format!("{key}.emission"))?,
@@ -60,29 +48,15 @@ impl Builder<'_> {
                 .filter(|t| t != &Texture::Constant(Vec3::ZERO)),
                 None => None,
             },
-            roughness: self.roughness(m, key)?,
+            roughness: self.fraction(&m.roughness, &format!("{key}.roughness"))?,
             transmission: self.transmission(m, key)?,
         })
-    }
-
-    /// `roughness` in [0, 1]: the glossiness of the mirror reflection.
-    fn roughness(&self, m: &MaterialSpec, key: &str) -> Result<f32, LoadError> {
-        let roughness = self.non_negative(&m.roughness, &format!("{key}.roughness"), 0.0)?;
-        if roughness > 1.0 {
-            let span = m.roughness.as_ref().map(|r| r.span()).unwrap_or_default();
-            return Err(self.err(
-                span,
-                format!("{key}.roughness"),
-                format!("must be in [0, 1], got {roughness}"),
-            ));
-        }
-        Ok(roughness)
     }
 
     /// Glass: `transmission` with `ior`, `thin_walled` and the attenuation pair, which mean
     /// nothing without it; `transmission = 0` is an opaque material.
     fn transmission(&self, m: &MaterialSpec, key: &str) -> Result<Option<Transmission>, LoadError> {
-        let factor = self.non_negative(&m.transmission, &format!("{key}.transmission"), 0.0)?;
+        let factor = self.fraction(&m.transmission, &format!("{key}.transmission"))?;
         if factor == 0.0 {
             let glass_keys = [
                 m.ior.as_ref().map(|v| (v.span(), "ior")),
@@ -127,19 +101,10 @@ impl Builder<'_> {
                 ));
             }
         };
-        // Each range checked where the file states it.
-        let span_of = |v: &Option<Spanned<f64>>| v.as_ref().map(|v| v.span()).unwrap_or_default();
-        if factor > 1.0 {
-            return Err(self.err(
-                span_of(&m.transmission),
-                format!("{key}.transmission"),
-                format!("must be in [0, 1], got {factor}"),
-            ));
-        }
         let ior = m.ior.as_ref().map_or(defaults.ior, |v| *v.get_ref());
         if !(1.0..=quadray::dielectric::MAX_IOR).contains(&ior) {
             return Err(self.err(
-                span_of(&m.ior),
+                m.ior.as_ref().map(|v| v.span()).unwrap_or_default(),
                 format!("{key}.ior"),
                 format!(
                     "must be in [1, {}] (glass is about 1.5), got {ior}",
@@ -162,7 +127,7 @@ impl Builder<'_> {
             ));
         }
         let t = Transmission {
-            factor: factor as f32,
+            factor,
             ior,
             thin_walled,
             attenuation,
@@ -270,8 +235,8 @@ impl Builder<'_> {
         )
     }
 
-    /// A tint in [0, 1], 0 when absent.
-    fn tint(&self, value: &Option<Spanned<f64>>, key: &str) -> Result<f32, LoadError> {
+    /// A share in [0, 1] (a tint, the reflectivity, roughness or transmission), 0 when absent.
+    fn fraction(&self, value: &Option<Spanned<f64>>, key: &str) -> Result<f32, LoadError> {
         let Some(v) = value else {
             return Ok(0.0);
         };

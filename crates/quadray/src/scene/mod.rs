@@ -9,7 +9,7 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Ray, offset_origin};
 use crate::mesh::Mesh;
-use crate::shape::{PrimRef, SurfaceHit};
+use crate::shape::{PrimRef, SurfaceGeometry, SurfaceHit};
 use crate::texture::{Texture, TextureExtent};
 use glam::Vec3;
 use validate::{validate_levels, validate_material};
@@ -106,6 +106,15 @@ enum HitColour<'a> {
 /// Back faces of single-sided meshes one closest-hit query passes through at most; a ray that
 /// meets more stops at the next one (none of the Khronos samples comes near).
 const MAX_PASSED_FACES: u32 = 64;
+
+/// The rest of the shadow ray `ray` (to `t_max`) past the surface `g` it met: a leg starting just
+/// beyond it, with the leg's own `t_max`, ending where `ray`'s did. For the queries that walk
+/// through surfaces (culled back faces, glass).
+fn leg_beyond(ray: &Ray, t_max: f64, g: &SurfaceGeometry) -> (Ray, f64) {
+    let origin = offset_origin(g.point, g.geometric_normal, g.error, ray.dir);
+    let leg_t_max = t_max - (origin - ray.origin).dot(ray.dir) / ray.dir.length_squared();
+    (Ray::new(origin, ray.dir), leg_t_max)
+}
 
 /// A [`SceneError::Invalid`] naming the item and the problem.
 fn invalid(what: impl Into<String>, problem: impl Into<String>) -> SceneError {
@@ -455,11 +464,8 @@ impl Scene {
             if !self.geometry.passes_through(prim, &path, &leg) {
                 return true;
             }
-            // Continue from just beyond the face, skipping it; t_max stays where it was on `ray`.
             let g = self.geometry.surface(prim, &path, &leg, t);
-            let origin = offset_origin(g.point, g.geometric_normal, g.error, leg.dir);
-            leg_t_max = t_max - (origin - ray.origin).dot(ray.dir) / ray.dir.length_squared();
-            leg = Ray::new(origin, leg.dir);
+            (leg, leg_t_max) = leg_beyond(ray, t_max, &g);
             from = Some(prim);
         }
         true

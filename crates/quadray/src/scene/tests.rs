@@ -20,6 +20,16 @@ fn square(single_sided: bool) -> Mesh {
         .with_single_sided(single_sided)
 }
 
+/// A camera 10 units up the z axis looking down at the origin.
+fn looking_down() -> Camera {
+    Camera {
+        from: DVec3::new(0.0, 0.0, 10.0),
+        to: DVec3::ZERO,
+        up: DVec3::Y,
+        projection: Projection::Perspective { vfov_deg: 40.0 },
+    }
+}
+
 /// A square at z = 0 (world, or placed by `placement` as an instance) and a sphere of radius
 /// 0.5 at z = 2, above it.
 fn scene(single_sided: bool, placement: Option<DAffine3>) -> Scene {
@@ -43,12 +53,7 @@ fn scene(single_sided: bool, placement: Option<DAffine3>) -> Scene {
         }
     }
     Scene::new(SceneDescription {
-        camera: Camera {
-            from: DVec3::new(0.0, 0.0, 10.0),
-            to: DVec3::ZERO,
-            up: DVec3::Y,
-            projection: Projection::Perspective { vfov_deg: 40.0 },
-        },
+        camera: looking_down(),
         background: Vec3::ZERO,
         environment: None,
         materials: vec![Material::default()],
@@ -113,12 +118,7 @@ fn shadow_rays_pass_glass_attenuated_and_stop_at_opaque_surfaces() {
     use crate::dielectric::{Attenuation, Transmission};
     let ball = |transmission: Option<Transmission>| {
         Scene::new(SceneDescription {
-            camera: Camera {
-                from: DVec3::new(0.0, 0.0, 10.0),
-                to: DVec3::ZERO,
-                up: DVec3::Y,
-                projection: Projection::Perspective { vfov_deg: 40.0 },
-            },
+            camera: looking_down(),
             background: Vec3::ZERO,
             environment: None,
             materials: vec![Material {

@@ -12,10 +12,10 @@
 //! (or the opaque share of a transmissive one) blocks. Light focused by glass (caustics) is not
 //! followed: Whitted tracing reaches lights only along shadow rays.
 
-use super::{MAX_PASSED_FACES, Scene};
+use super::{MAX_PASSED_FACES, Scene, leg_beyond};
 use crate::dielectric::{Attenuation, fresnel};
 use crate::footprint::HitFootprint;
-use crate::math::{Ray, offset_origin};
+use crate::math::Ray;
 use crate::shape::{PrimRef, SurfaceHit};
 use glam::{DVec3, Vec3};
 
@@ -80,10 +80,7 @@ impl Scene {
                     return Vec3::ZERO;
                 }
             }
-            // Continue from just beyond the surface; t_max stays where it was on `ray`.
-            let origin = offset_origin(g.point, g.geometric_normal, g.error, leg.dir);
-            leg_t_max = t_max - (origin - ray.origin).dot(ray.dir) / ray.dir.length_squared();
-            leg = Ray::new(origin, leg.dir);
+            (leg, leg_t_max) = leg_beyond(ray, t_max, g);
             from = Some(prim);
         }
         Vec3::ZERO
