@@ -71,20 +71,7 @@ impl Whitted {
         key: SampleKey,
         counts: &mut RayCounts,
     ) -> Vec3 {
-        counts.camera += 1;
-        // Each combination compiles its own path: a scene without filtered textures or glass
-        // pays nothing for them.
-        match (cone.is_point(), scene.transmits()) {
-            (true, false) => self
-                .radiance::<false, false>(scene, ray, cone, None, 1, 1.0, None, true, key, counts),
-            (false, false) => self
-                .radiance::<true, false>(scene, ray, cone, None, 1, 1.0, None, true, key, counts),
-            (true, true) => self
-                .radiance::<false, true>(scene, ray, cone, None, 1, 1.0, None, true, key, counts),
-            (false, true) => {
-                self.radiance::<true, true>(scene, ray, cone, None, 1, 1.0, None, true, key, counts)
-            }
-        }
+        self.camera_ray_hit(scene, ray, cone, key, counts).0
     }
 
     /// Radiance arriving along a camera ray, and the ray's first hit (for the AOV passes, which
@@ -99,6 +86,8 @@ impl Whitted {
     ) -> (Vec3, Option<SurfaceHit>) {
         counts.camera += 1;
         let hit = self.intersect(scene, ray, None);
+        // Each combination compiles its own path: a scene without filtered textures or glass
+        // pays nothing for them.
         let radiance = match &hit {
             Some(h) => match (cone.is_point(), scene.transmits()) {
                 (true, false) => {
