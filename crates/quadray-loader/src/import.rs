@@ -94,6 +94,29 @@ pub struct ImportedCamera {
 }
 
 impl ImportedCamera {
+    /// This camera placed in a scene of `geometry` rendered `width` × `height` pixels: unless
+    /// `resolution_given` (the scene file sets one), the height follows the camera's
+    /// aspect; the camera is fitted to the image ([`ImportedCamera::fitted`]) and aimed into the
+    /// geometry ([`crate::framing::aimed_into`]). Returns the camera and the image's height.
+    pub fn placed(
+        &self,
+        geometry: &Geometry,
+        (width, height): (u32, u32),
+        resolution_given: bool,
+    ) -> (Camera, u32) {
+        let height = match self.aspect {
+            Some(aspect) if !resolution_given => {
+                ((width as f64 / aspect).round() as u32).clamp(1, quadray::render::MAX_SIDE)
+            }
+            _ => height,
+        };
+        let camera = crate::framing::aimed_into(
+            self.fitted(width as f64 / height as f64),
+            crate::framing::geometry_bounds(geometry),
+        );
+        (camera, height)
+    }
+
     /// The camera for an image of width / height `image_aspect`, fitted as glTF viewers do: the
     /// view the file describes (its vertical field of view over its aspect ratio) stays whole.
     /// An image wider than the file's aspect shows more at the sides; a narrower one widens the

@@ -3,7 +3,7 @@
 //! default key light), and a note for every assumption.
 
 use crate::error::{LoadError, LoadErrorKind};
-use crate::framing::{aimed_into, default_key_light, framing_camera, framing_points};
+use crate::framing::{default_key_light, framing_camera, framing_points};
 use crate::import::{Imported, Selector};
 use crate::native::{LoadedScene, SceneSettings};
 use glam::Vec3;
@@ -73,16 +73,11 @@ pub fn scene_from_import(
     };
     let camera = match chosen {
         Some(c) => {
-            if let Some(aspect) = c.aspect
-                && imported.hints.resolution.is_none()
-            {
-                settings.height = ((settings.width as f64 / aspect).round() as u32)
-                    .clamp(1, quadray::render::MAX_SIDE);
-            }
-            aimed_into(
-                c.fitted(settings.width as f64 / settings.height as f64),
-                imported.bounds(),
-            )
+            let size = (settings.width, settings.height);
+            let given = imported.hints.resolution.is_some();
+            let camera;
+            (camera, settings.height) = c.placed(&imported.geometry, size, given);
+            camera
         }
         None => {
             notes.push(

@@ -6,7 +6,7 @@
 //! flat table rather than serde-tagged enums, because tagged enums lose spans (toml-rs #535).
 
 use crate::error::{LoadError, LoadErrorKind, Location};
-use crate::framing::{aimed_into, framing_camera, framing_points, geometry_bounds};
+use crate::framing::{framing_camera, framing_points};
 use crate::import::ImportedCamera;
 use crate::import::{ImportOptions, Selector, UpAxis, select_camera};
 use crate::include;
@@ -503,14 +503,11 @@ impl Builder<'_> {
                             .map(|n| format!(" \"{n}\""))
                             .unwrap_or_default()
                     ));
-                    if let (Some(aspect), None) = (c.aspect, &file.render.resolution) {
-                        settings.height =
-                            ((settings.width as f64 / aspect).round() as u32).clamp(1, MAX_SIDE);
-                    }
-                    aimed_into(
-                        c.fitted(settings.width as f64 / settings.height as f64),
-                        geometry_bounds(geometry),
-                    )
+                    let size = (settings.width, settings.height);
+                    let given = file.render.resolution.is_some();
+                    let camera;
+                    (camera, settings.height) = c.placed(geometry, size, given);
+                    camera
                 }
                 None => {
                     notes.push("no [camera] and no included camera: using one that frames what the scene holds".into());
