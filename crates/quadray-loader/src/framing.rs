@@ -249,22 +249,19 @@ const FRAMING_FILL: f64 = 0.9;
 /// margin, its target shifted sideways so the points' projection is centred (as "frame all" does
 /// in a modeller).
 pub fn framing_camera(points: &[DVec3], aspect: f64) -> Camera {
-    const VFOV: f64 = FRAMING_VFOV;
-    const YAW: f64 = FRAMING_YAW;
-    const PITCH: f64 = FRAMING_PITCH;
     let (lo, hi) = points.iter().fold(
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
         |(lo, hi), p| (lo.min(*p), hi.max(*p)),
     );
     if !(lo.is_finite() && hi.is_finite()) {
-        return Camera::orbit(DVec3::ZERO, YAW, PITCH, 3.0, VFOV);
+        return Camera::orbit(DVec3::ZERO, FRAMING_YAW, FRAMING_PITCH, 3.0, FRAMING_VFOV);
     }
     let centre = (lo + hi) * 0.5;
     let radius = ((hi - lo).length() * 0.5).max(1e-6);
     let (forward, right, up) = framing_axes();
-    let half_height = (VFOV * 0.5).to_radians().tan() * FRAMING_FILL;
+    let half_height = (FRAMING_VFOV * 0.5).to_radians().tan() * FRAMING_FILL;
     let half_width = half_height * aspect.clamp(1e-3, 1e3);
-    // Each corner as (depth offset along the view, x, y) relative to the centre: at distance d
+    // Each point as (depth offset along the view, x, y) relative to the centre: at distance d
     // its depth is d + offset, and it is inside when |x − shift| ≤ half_width · depth (same in y).
     let seen: Vec<DVec3> = points
         .iter()
@@ -273,7 +270,7 @@ pub fn framing_camera(points: &[DVec3], aspect: f64) -> Camera {
             DVec3::new(v.dot(forward), v.dot(right), v.dot(up))
         })
         .collect();
-    // The shifts that keep every corner inside, per axis, at distance d: an interval (maybe empty).
+    // The shifts that keep every point inside, per axis, at distance d: an interval (maybe empty).
     let shifts = |d: f64, axis: usize, half: f64| {
         seen.iter()
             .fold((f64::NEG_INFINITY, f64::INFINITY), |(low, high), c| {
@@ -302,7 +299,7 @@ pub fn framing_camera(points: &[DVec3], aspect: f64) -> Camera {
             near = mid;
         }
     }
-    // Centre the projected box: the shift at which its projections reach equally far to both
+    // Centre the projected points: the shift at which they reach equally far to both
     // sides, (max + min) of (c − s) / depth = 0, decreasing in s; it lies in the shifts that fit.
     let centred = |axis: usize, half: f64| {
         let (mut low, mut high) = shifts(far, axis, half);
@@ -323,7 +320,7 @@ pub fn framing_camera(points: &[DVec3], aspect: f64) -> Camera {
         0.5 * (low + high)
     };
     let target = centre + right * centred(1, half_width) + up * centred(2, half_height);
-    Camera::orbit(target, YAW, PITCH, far, VFOV)
+    Camera::orbit(target, FRAMING_YAW, FRAMING_PITCH, far, FRAMING_VFOV)
 }
 
 #[cfg(test)]
