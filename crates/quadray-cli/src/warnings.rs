@@ -178,7 +178,7 @@ fn missing_texture_coordinates<'a>(
         };
         let shapes: Vec<String> = kinds
             .iter()
-            .map(|(kind, n)| format!("{n} {kind}{}", if *n == 1 { "" } else { "s" }))
+            .map(|(kind, n)| crate::counted(n, kind))
             .collect();
         format!(
             "{name} has an image texture read through texture coordinates (set {set}), which {} \
