@@ -550,11 +550,14 @@ fn one_filtered_sample_gives_a_checkered_pixel_its_exact_integral() {
 fn adaptive_rounds_filter_textures_as_the_final_count_does() {
     let (scene, exact) = head_on_checker();
     let every_pixel_to_64 = |min_spp: u32| RenderSettings {
+        // The pixel rule at target 0 takes every pixel to the maximum, round by round.
         adaptive: Some(Adaptive {
+            rule: adaptive::ErrorRule::Pixel,
             target_error: 0.0,
             min_spp,
             max_spp: 64,
             time_limit: None,
+            spp_budget: None,
         }),
         ..settings(CHECKER_SIDE, CHECKER_SIDE)
     };

@@ -179,6 +179,9 @@ pub struct Comparison {
     /// (code difference / 255): the error a viewer of the PNG sees, and the one measure that
     /// treats an 8-bit image (another renderer's PNG) like a float one.
     pub rmse_display: f64,
+    /// Root mean square of the per-channel differences of the sRGB-encoded values in [0, 1]
+    /// before 8-bit rounding: the error `--target-error` estimates (docs/sampling.md).
+    pub rmse_srgb: f64,
     /// Largest display per-channel difference, in 8-bit steps.
     pub max_display: f32,
     /// Pixels with some channel's display difference over the threshold.
@@ -227,7 +230,11 @@ pub fn compare(
     let (ref_disp, test_disp) = (reference.display_steps(), test.display_steps());
     let mut max_display = 0.0f32;
     let mut over = 0;
+    let mut srgb_sq = 0.0f64;
     for (a, b) in ref_disp.iter().zip(&test_disp) {
+        srgb_sq += (0..3)
+            .map(|c| ((a[c] - b[c]) as f64 / 255.0).powi(2))
+            .sum::<f64>();
         let d = (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0, f32::max);
         max_display = max_display.max(d);
         if d > thresholds.pixel {
@@ -253,6 +260,7 @@ pub fn compare(
         rmse_linear: (sum_sq / (3 * n) as f64).sqrt(),
         max_linear,
         rmse_display,
+        rmse_srgb: (srgb_sq / (3 * n) as f64).sqrt(),
         max_display,
         over,
         over_share: over as f64 / n as f64,
@@ -291,10 +299,11 @@ impl Comparison {
     /// One line of every measure, for logs and reports.
     pub fn summary(&self, t: &Thresholds) -> String {
         format!(
-            "{}x{}: RMSE {:.2e} (linear), max |diff| {:.4} linear / {:.1}/255 display, {} pixels ({:.3}%) over {}/255, FLIP mean {:.4} max {:.4}",
+            "{}x{}: RMSE {:.2e} (linear), {:.2e} (sRGB), max |diff| {:.4} linear / {:.1}/255 display, {} pixels ({:.3}%) over {}/255, FLIP mean {:.4} max {:.4}",
             self.width,
             self.height,
             self.rmse_linear,
+            self.rmse_srgb,
             self.max_linear,
             self.max_display,
             self.over,

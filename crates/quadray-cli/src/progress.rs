@@ -39,13 +39,21 @@ impl quadray::Progress for RowBar {
         if round.active == 0 {
             return;
         }
-        self.0.set_message(format!(
-            "round {}: {:.1}% of pixels above error {} (worst {:.3})",
-            round.round + 1,
-            100.0 * round.active as f64 / round.pixels.max(1) as f64,
-            round.target_error,
-            round.worst_error
-        ));
+        let share = 100.0 * round.active as f64 / round.pixels.max(1) as f64;
+        self.0.set_message(match round.rule {
+            quadray::adaptive::ErrorRule::Image => format!(
+                "round {}: refining {share:.1}% of pixels, estimated error {:.2e} (target {})",
+                round.round + 1,
+                round.estimated_error,
+                round.target_error
+            ),
+            quadray::adaptive::ErrorRule::Pixel => format!(
+                "round {}: {share:.1}% of pixels above error {} (worst {:.3})",
+                round.round + 1,
+                round.target_error,
+                round.worst_error
+            ),
+        });
         self.0.set_position(0);
     }
 }

@@ -1,23 +1,34 @@
-//! The command line's adaptive sampling options (`--target-error`, `--time-limit`, `--min-spp`,
-//! `--max-spp`) and how they combine with `--spp` and a scene's `[render]` table.
+//! The command line's adaptive sampling options (`--target-error`, `--pixel-error`,
+//! `--time-limit`, `--spp-budget`, `--min-spp`, `--max-spp`) and how they combine with `--spp`
+//! and a scene's `[render]` table.
 
 use crate::StatusError;
 use clap::Args;
 use quadray::Adaptive;
+use quadray::adaptive::ErrorRule;
 use quadray::render::MAX_SPP;
 
 /// Adaptive sampling on the command line; each option overrides the scene's value.
 #[derive(Args, Debug, Default)]
 pub struct SamplingArgs {
-    /// Sample adaptively until every pixel's estimated relative error is at most E: the standard
-    /// error of its mean sRGB-encoded value over that value, below 0.1 over 0.1 (docs/sampling.md).
-    /// Replaces the scene's fixed spp.
-    #[arg(long, value_name = "E", value_parser = parse_positive, conflicts_with = "spp")]
+    /// Sample adaptively until the image's estimated error is at most E: the RMSE of its
+    /// sRGB-encoded values in [0, 1] against the converged image (docs/sampling.md), with samples
+    /// where they lower it most. Replaces the scene's fixed spp.
+    #[arg(long, value_name = "E", value_parser = parse_positive, conflicts_with_all = ["spp", "pixel_error"])]
     pub target_error: Option<f64>,
-    /// Stop adaptive sampling after this many seconds and keep the image reached (alone: refine
-    /// every pixel until then or --max-spp).
+    /// Sample adaptively until every pixel's estimated relative error is at most E: the standard
+    /// error of its mean sRGB-encoded value over that value, below 0.1 over 0.1 (a bound on
+    /// every pixel, at more samples than --target-error for the same image error).
+    #[arg(long, value_name = "E", value_parser = parse_positive, conflicts_with = "spp")]
+    pub pixel_error: Option<f64>,
+    /// Stop adaptive sampling after about this many seconds and keep the image reached (alone:
+    /// spend them where they lower the image's error most).
     #[arg(long, value_name = "SECONDS", value_parser = parse_positive, conflicts_with = "spp")]
     pub time_limit: Option<f64>,
+    /// Spend this many samples per pixel on average, where they lower the image's error most:
+    /// the same image on any machine (with --target-error: whichever comes first).
+    #[arg(long, value_name = "N", value_parser = parse_positive, conflicts_with_all = ["spp", "pixel_error"])]
+    pub spp_budget: Option<f64>,
     /// Samples every pixel takes in the first adaptive round: a power of two, at least 2
     /// (default 8; 2 or 4 make a quick preview, cheaper where the image is flat but able to miss
     /// small features).
@@ -43,8 +54,9 @@ fn parse_positive(s: &str) -> Result<f64, String> {
 
 impl SamplingArgs {
     /// The adaptive sampling to render with, given the scene's (`None`: a fixed spp). `--spp`
-    /// (`fixed_spp`) turns adaptive sampling off; `--target-error` or `--time-limit` turns it
-    /// on; `--min-spp` and `--max-spp` tune whichever is on, and are refused when none is.
+    /// (`fixed_spp`) turns adaptive sampling off; `--target-error`, `--pixel-error`,
+    /// `--time-limit` or `--spp-budget` turns it on; `--min-spp` and `--max-spp` tune whichever
+    /// is on, and are refused when none is.
     pub fn resolve(
         &self,
         fixed_spp: Option<u32>,
@@ -53,21 +65,34 @@ impl SamplingArgs {
         if fixed_spp.is_some() {
             return Ok(None);
         }
-        let asked = self.target_error.is_some() || self.time_limit.is_some();
+        let asked = self.target_error.is_some()
+            || self.pixel_error.is_some()
+            || self.time_limit.is_some()
+            || self.spp_budget.is_some();
         let Some(mut a) = scene.or(asked.then_some(Adaptive {
             target_error: 0.0,
             ..Adaptive::default()
         })) else {
             if self.min_spp.is_some() || self.max_spp.is_some() {
                 return Err(StatusError::usage(
-                    "--min-spp and --max-spp tune adaptive sampling: add --target-error E or \
-                     --time-limit SECONDS (or give the scene a render.target_error)",
+                    "--min-spp and --max-spp tune adaptive sampling: add --target-error E, \
+                     --time-limit SECONDS or --spp-budget N (or give the scene a \
+                     render.target_error)",
                 ));
             }
             return Ok(None);
         };
         if let Some(e) = self.target_error {
+            a.rule = ErrorRule::Image;
             a.target_error = e;
+        }
+        if let Some(e) = self.pixel_error {
+            a.rule = ErrorRule::Pixel;
+            a.target_error = e;
+            a.spp_budget = None;
+        }
+        if let Some(n) = self.spp_budget {
+            a.spp_budget = Some(n);
         }
         if let Some(t) = self.time_limit {
             a.time_limit = Some(

@@ -51,7 +51,8 @@ pub struct Frame {
     pub preview: bool,
     /// Millions of rays per second over the request's full-resolution steps so far.
     pub mrays_per_s: f64,
-    /// Mean relative error of the pixels ([`ProgressiveFilm::mean_relative_error`]), from 8 spp.
+    /// The estimated RMSE of the image's display values ([`ProgressiveFilm::estimated_error`]), from
+    /// 8 spp.
     pub error: Option<f64>,
     /// Time from the worker taking up the request to this frame.
     pub latency: Duration,
@@ -292,7 +293,7 @@ impl Looper {
                 spp: count,
                 done: count == target,
                 mrays_per_s: rays as f64 / seconds / 1e6,
-                error: film.mean_relative_error(),
+                error: film.estimated_error(),
                 ..frame(width, height, &film.film().to_srgb8())
             });
         }

@@ -5,9 +5,16 @@
 use glam::Vec3;
 
 /// The display value of a sample: the mean of its three channels after the sRGB transfer
-/// function, clamped to [0, 1] (within 1e-5 of [`encode_srgb`], from a table: this runs once per
-/// sample, where three `powf`s cost about 2% of an adaptive render).
+/// function, clamped to [0, 1] (see [`display_channels`]).
 pub fn display_value(radiance: Vec3) -> f32 {
+    let [r, g, b] = display_channels(radiance);
+    (r + g + b) / 3.0
+}
+
+/// The sRGB-encoded channels of a sample, clamped to [0, 1] (within 1e-5 of [`encode_srgb`],
+/// from a table: this runs once per adaptive sample, where three `powf`s cost about 2% of an
+/// adaptive render).
+pub fn display_channels(radiance: Vec3) -> [f32; 3] {
     let table = &*SRGB_BY_ROOT;
     let encode = |linear: f32| {
         // The table is indexed by √linear, where the transfer function is smooth enough for
@@ -18,7 +25,7 @@ pub fn display_value(radiance: Vec3) -> f32 {
         let t = position - index as f32;
         table[index] + t * (table[index + 1] - table[index])
     };
-    (encode(radiance.x) + encode(radiance.y) + encode(radiance.z)) / 3.0
+    radiance.to_array().map(encode)
 }
 
 /// Intervals of the table behind [`display_value`].

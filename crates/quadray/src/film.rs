@@ -4,7 +4,9 @@
 use glam::{DVec3, Vec3};
 
 // The sRGB curve, where the film's users have always found it.
-pub use crate::colour::{decode_srgb, decode_srgb8, display_value, encode_srgb, encode_srgb8};
+pub use crate::colour::{
+    decode_srgb, decode_srgb8, display_channels, display_value, encode_srgb, encode_srgb8,
+};
 
 /// A linear, scene-referred RGB image, row-major from the top-left pixel.
 #[derive(Clone, Debug, PartialEq)]
@@ -93,7 +95,9 @@ pub const ERROR_BATCHES: u32 = 8;
 /// The **display value** of a sample is the mean of its three sRGB-encoded channels
 /// ([`display_value`]: clamped to [0, 1], the value a viewer sees). The pixel's **relative error**
 /// ([`PixelEstimate::relative_error`]) is the standard error of its mean display value divided by
-/// that mean, or by [`ERROR_FLOOR`] where the mean is below it.
+/// that mean, or by [`ERROR_FLOOR`] where the mean is below it. Its **squared error**
+/// ([`PixelEstimate::squared_error`]) is the squared standard error of each display channel's
+/// mean, averaged over the three: its share of the image's mean squared error.
 ///
 /// The standard error is estimated by **batch means**: the n samples (n = 2^k, n >= 8) are split
 /// into [`ERROR_BATCHES`] aligned runs of n/8, and SE² = Σ(bᵢ − b̄)² / (8 · 7) over the runs'
@@ -108,8 +112,8 @@ pub struct PixelEstimate {
     count: u32,
     rgb_mean: DVec3,
     rgb_m2: DVec3,
-    /// Sums of the display values of each aligned run of `batch_size` samples.
-    batch_sums: [f32; ERROR_BATCHES as usize],
+    /// Sums of the display channels of each aligned run of `batch_size` samples.
+    batch_sums: [[f32; 3]; ERROR_BATCHES as usize],
 }
 
 impl PixelEstimate {
@@ -127,11 +131,15 @@ impl PixelEstimate {
         if index >= ERROR_BATCHES && index.is_power_of_two() {
             let half = ERROR_BATCHES as usize / 2;
             for i in 0..half {
-                self.batch_sums[i] = self.batch_sums[2 * i] + self.batch_sums[2 * i + 1];
+                let (a, b) = (self.batch_sums[2 * i], self.batch_sums[2 * i + 1]);
+                self.batch_sums[i] = [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
             }
-            self.batch_sums[half..].fill(0.0);
+            self.batch_sums[half..].fill([0.0; 3]);
         }
-        self.batch_sums[(index / Self::batch_size(index + 1)) as usize] += display_value(radiance);
+        let batch = &mut self.batch_sums[(index / Self::batch_size(index + 1)) as usize];
+        for (sum, value) in batch.iter_mut().zip(display_channels(radiance)) {
+            *sum += value;
+        }
     }
 
     /// The length of the runs when `count` samples are taken: the smallest power of two that
@@ -162,21 +170,79 @@ impl PixelEstimate {
     /// infinite below [`MIN_ERROR_SAMPLES`], where it is unknown. At a count that is not a power
     /// of two only the complete runs count.
     pub fn relative_error(&self) -> f64 {
-        if self.count < MIN_ERROR_SAMPLES {
+        let Some((batches, size)) = self.complete_batches() else {
             return f64::INFINITY;
+        };
+        // A run's display value is the mean of its channels' (the encoding is per channel).
+        let values = batches
+            .iter()
+            .map(|b| (b[0] as f64 + b[1] as f64 + b[2] as f64) / 3.0);
+        let (mean, squared_error) = batch_means(values, size);
+        squared_error.sqrt() / mean.max(ERROR_FLOOR)
+    }
+
+    /// The squared standard error of each display channel's mean, by batch means, averaged over
+    /// the three channels (see the type's documentation): infinite below
+    /// [`MIN_ERROR_SAMPLES`], where it is unknown.
+    pub fn squared_error(&self) -> f64 {
+        let Some((batches, size)) = self.complete_batches() else {
+            return f64::INFINITY;
+        };
+        channel_squared_error(batches, size)
+    }
+
+    /// The batch-means squared errors ([`PixelEstimate::squared_error`]) from the 8 runs, and
+    /// from the same samples in 4 and 2 runs (adjacent runs merged), when the pixel has 8
+    /// complete runs. Under stratification runs of n/8 samples are closer to each other than
+    /// independent estimates would be, and how the estimate changes with the run length tells
+    /// the rate the error falls at ([`crate::adaptive`]'s error model).
+    pub fn squared_errors_by_runs(&self) -> Option<[f64; 3]> {
+        let (batches, size) = self.complete_batches()?;
+        if batches.len() < ERROR_BATCHES as usize {
+            return None;
+        }
+        let merge = |runs: &[[f32; 3]]| -> Vec<[f32; 3]> {
+            runs.chunks(2)
+                .map(|p| [p[0][0] + p[1][0], p[0][1] + p[1][1], p[0][2] + p[1][2]])
+                .collect()
+        };
+        let fours = merge(batches);
+        let twos = merge(&fours);
+        Some([
+            channel_squared_error(batches, size),
+            channel_squared_error(&fours, 2 * size),
+            channel_squared_error(&twos, 4 * size),
+        ])
+    }
+
+    /// The complete runs of samples and their length, if there are at least two.
+    fn complete_batches(&self) -> Option<(&[[f32; 3]], u32)> {
+        if self.count < MIN_ERROR_SAMPLES {
+            return None;
         }
         let size = Self::batch_size(self.count);
         let full = (self.count / size).min(ERROR_BATCHES) as usize;
-        let batch_mean = |sum: &f32| *sum as f64 / size as f64;
-        let batches = &self.batch_sums[..full];
-        let mean = batches.iter().map(batch_mean).sum::<f64>() / full as f64;
-        let spread = batches
-            .iter()
-            .map(|sum| (batch_mean(sum) - mean).powi(2))
-            .sum::<f64>();
-        let standard_error = (spread / ((full - 1) * full) as f64).sqrt();
-        standard_error / mean.max(ERROR_FLOOR)
+        Some((&self.batch_sums[..full], size))
     }
+}
+
+/// The batch-means squared error of the mean of each channel over `batches` (sums of runs of
+/// `size` samples), averaged over the three channels.
+fn channel_squared_error(batches: &[[f32; 3]], size: u32) -> f64 {
+    (0..3)
+        .map(|c| batch_means(batches.iter().map(|b| b[c] as f64), size).1)
+        .sum::<f64>()
+        / 3.0
+}
+
+/// The mean of the runs' means and the squared standard error of that mean, from the sums of
+/// runs of `size` samples: SE² = Σ(bᵢ − b̄)² / (k (k − 1)) over the k runs' means bᵢ.
+fn batch_means(sums: impl ExactSizeIterator<Item = f64> + Clone, size: u32) -> (f64, f64) {
+    let k = sums.len() as f64;
+    let run_mean = |sum: f64| sum / size as f64;
+    let mean = sums.clone().map(run_mean).sum::<f64>() / k;
+    let spread = sums.map(|sum| (run_mean(sum) - mean).powi(2)).sum::<f64>();
+    (mean, spread / (k * (k - 1.0)))
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 
 use super::*;
 use quadray::Adaptive;
+use quadray::adaptive::{AdaptiveError, ErrorRule};
 
 impl Builder<'_> {
     /// The settings, the background and the environment (when set) of `[render]`.
@@ -46,10 +47,17 @@ impl Builder<'_> {
         Ok((s, background, environment))
     }
 
-    /// Adaptive sampling, on when `target_error` or `time_limit` is given; `min_spp` and
-    /// `max_spp` tune it and mean nothing without it, and `spp` (a fixed count) excludes it.
+    /// Adaptive sampling, on when `target_error`, `pixel_error`, `time_limit` or `spp_budget` is
+    /// given; `min_spp` and `max_spp` tune it and mean nothing without it, and `spp` (a fixed
+    /// count) excludes it.
     fn adaptive(&self, r: &RenderSpec) -> Result<Option<Adaptive>, LoadError> {
-        if r.target_error.is_none() && r.time_limit.is_none() {
+        let asked = [
+            &r.target_error,
+            &r.pixel_error,
+            &r.time_limit,
+            &r.spp_budget,
+        ];
+        if asked.iter().all(|v| v.is_none()) {
             for (v, key) in [
                 (&r.min_spp, "render.min_spp"),
                 (&r.max_spp, "render.max_spp"),
@@ -58,8 +66,8 @@ impl Builder<'_> {
                     return Err(self.err(
                         v.span(),
                         key,
-                        "applies to adaptive sampling only: give render.target_error or \
-                         render.time_limit as well",
+                        "applies to adaptive sampling only: give render.target_error, \
+                         render.time_limit or render.spp_budget as well",
                     ));
                 }
             }
@@ -69,8 +77,9 @@ impl Builder<'_> {
             return Err(self.err(
                 spp.span(),
                 "render.spp",
-                "a fixed sample count excludes adaptive sampling (render.target_error or \
-                 render.time_limit): give render.max_spp to bound the adaptive count",
+                "a fixed sample count excludes adaptive sampling (render.target_error, \
+                 render.pixel_error, render.time_limit or render.spp_budget): give \
+                 render.max_spp to bound the adaptive count",
             ));
         }
         let mut a = Adaptive {
@@ -79,6 +88,18 @@ impl Builder<'_> {
         };
         if let Some(v) = &r.target_error {
             a.target_error = self.positive(v, "render.target_error")?;
+        }
+        if let Some(v) = &r.pixel_error {
+            if r.target_error.is_some() {
+                return Err(self.err(
+                    v.span(),
+                    "render.pixel_error",
+                    "give either render.target_error (the image's error) or \
+                     render.pixel_error (every pixel's), not both",
+                ));
+            }
+            a.rule = ErrorRule::Pixel;
+            a.target_error = self.positive(v, "render.pixel_error")?;
         }
         if let Some(v) = &r.max_spp {
             a = a.with_max_spp(self.count(v, "render.max_spp", MAX_SPP)?);
@@ -93,12 +114,20 @@ impl Builder<'_> {
                     .map_err(|e| self.err(v.span(), "render.time_limit", e.to_string()))?,
             );
         }
-        // Only the two counts can disagree here (the others were checked above).
-        a.validate().map_err(|e| match (&r.min_spp, &r.max_spp) {
-            (Some(v), _) => self.err(v.span(), "render.min_spp", e.to_string()),
-            (None, Some(v)) => self.err(v.span(), "render.max_spp", e.to_string()),
-            (None, None) => self.err(0..0, "render", e.to_string()),
-        })?;
+        if let Some(v) = &r.spp_budget {
+            a.spp_budget = Some(self.positive(v, "render.spp_budget")?);
+        }
+        // Only the counts and the budget can disagree here (the others were checked above).
+        a.validate()
+            .map_err(|e| match (&e, &r.spp_budget, &r.min_spp, &r.max_spp) {
+                (AdaptiveError::SppBudget { .. }, Some(v), ..)
+                | (AdaptiveError::BudgetWithPixelRule, Some(v), ..) => {
+                    self.err(v.span(), "render.spp_budget", e.to_string())
+                }
+                (_, _, Some(v), _) => self.err(v.span(), "render.min_spp", e.to_string()),
+                (_, _, None, Some(v)) => self.err(v.span(), "render.max_spp", e.to_string()),
+                _ => self.err(0..0, "render", e.to_string()),
+            })?;
         Ok(Some(a))
     }
 }

@@ -116,6 +116,8 @@ pub(super) struct RenderSpec {
     pub(super) resolution: Option<Spanned<Exact<i64, 2>>>,
     pub(super) spp: Option<Spanned<i64>>,
     pub(super) target_error: Option<Spanned<f64>>,
+    pub(super) pixel_error: Option<Spanned<f64>>,
+    pub(super) spp_budget: Option<Spanned<f64>>,
     pub(super) min_spp: Option<Spanned<i64>>,
     pub(super) max_spp: Option<Spanned<i64>>,
     pub(super) time_limit: Option<Spanned<f64>>,

@@ -167,7 +167,7 @@ impl Viewer {
                     f.width, f.height, f.spp, target, f.mrays_per_s
                 );
                 if let Some(error) = f.error {
-                    text += &format!(", estimated error {error:.4}");
+                    text += &format!(", estimated image error {error:.1e} RMSE");
                 }
                 if !f.done {
                     text += ", refining…";

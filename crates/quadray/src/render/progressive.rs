@@ -8,7 +8,7 @@
 //! reaches ([`crate::footprint::footprint_scale`]), so a 1-spp preview is filtered over the whole
 //! pixel and later steps over smaller shares.
 
-use crate::adaptive::sample_row;
+use crate::adaptive::{Calibration, Twin, TwinOdds, sample_pixel, sample_twin};
 use crate::aov::AovSelection;
 use crate::film::{Film, PixelEstimate};
 use crate::integrator::RayCounts;
@@ -22,6 +22,9 @@ use std::sync::Mutex;
 pub struct ProgressiveFilm {
     settings: RenderSettings,
     estimates: Vec<PixelEstimate>,
+    /// The pixels with twins, which measure the true error ([`Calibration`]), and their twins:
+    /// chosen at the first step that gives the error estimate its samples.
+    twins: Option<Vec<((u32, u32), Twin)>>,
     samples: u32,
 }
 
@@ -34,6 +37,7 @@ impl ProgressiveFilm {
         Ok(ProgressiveFilm {
             settings,
             estimates: vec![PixelEstimate::default(); (window.width() * window.height()) as usize],
+            twins: None,
             samples: 0,
         })
     }
@@ -52,7 +56,6 @@ impl ProgressiveFilm {
         }
         let context = SampleContext::new(scene, &self.settings, AovSelection::NONE)?;
         let window = context.window;
-        let refine_all = vec![true; window.width() as usize];
         let totals = Mutex::new(RayCounts::default());
         self.estimates
             .par_chunks_mut(window.width() as usize)
@@ -62,15 +65,60 @@ impl ProgressiveFilm {
                     return;
                 }
                 let y = window.y0 + row_index as u32;
-                let counts = sample_row(&context, y, row, &refine_all, None, (count, count));
+                let mut counts = RayCounts::default();
+                for (column, estimate) in row.iter_mut().enumerate() {
+                    let at = (window.x0 + column as u32, y);
+                    sample_pixel(&context, at, estimate, None, (count, count), &mut counts);
+                }
                 *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
                 progress.row_done();
             });
         if progress.cancelled() {
             return Err(RenderError::Cancelled);
         }
+        if self.twins.is_none() && count >= crate::film::ERROR_BATCHES {
+            self.twins = Some(self.choose_twins());
+        }
+        let twin_counts = (self.twins.iter_mut().flatten())
+            .par_bridge()
+            .map(|(at, twin)| {
+                let mut counts = RayCounts::default();
+                sample_twin(
+                    &context,
+                    *at,
+                    &mut twin.estimate,
+                    (count, count),
+                    &mut counts,
+                );
+                counts
+            })
+            .reduce(RayCounts::default, |mut a, b| {
+                a += b;
+                a
+            });
+        if progress.cancelled() {
+            return Err(RenderError::Cancelled);
+        }
+        *totals.lock().unwrap_or_else(|e| e.into_inner()) += twin_counts;
         self.samples = self.samples.max(count);
         Ok(totals.into_inner().unwrap_or_else(|e| e.into_inner()))
+    }
+
+    /// The twins of the pixels, chosen by their samples so far.
+    fn choose_twins(&self) -> Vec<((u32, u32), Twin)> {
+        let window = self.settings.window();
+        let width = window.width() as usize;
+        let odds = TwinOdds::of(self.estimates.iter());
+        let seed = self.settings.seed;
+        (self.estimates.iter().enumerate())
+            .filter_map(|(i, estimate)| {
+                let at = (
+                    window.x0 + (i % width) as u32,
+                    window.y0 + (i / width) as u32,
+                );
+                Some((at, odds.twin(seed, at, estimate)?))
+            })
+            .collect()
     }
 
     /// Samples every pixel has (0 before the first step).
@@ -89,25 +137,35 @@ impl ProgressiveFilm {
         Film::of_estimates(window.width(), window.height(), &self.estimates)
     }
 
-    /// The mean over pixels of the relative standard error adaptive sampling uses
-    /// ([`PixelEstimate::relative_error`]); `None` below 8 samples, where it is too coarse to
+    /// The estimated RMSE of the image's display values against the converged image
+    /// ([`crate::adaptive::estimated_rmse`]); `None` below 8 samples, where it is too coarse to
     /// report.
-    pub fn mean_relative_error(&self) -> Option<f64> {
+    pub fn estimated_error(&self) -> Option<f64> {
         if self.samples < crate::film::ERROR_BATCHES || self.estimates.is_empty() {
             return None;
         }
-        let sum: f64 = self
+        let window = self.settings.window();
+        let width = window.width() as usize;
+        let pairs = self.twins.iter().flatten().map(|((x, y), twin)| {
+            let i = (y - window.y0) as usize * width + (x - window.x0) as usize;
+            (&self.estimates[i], twin)
+        });
+        let population = self
             .estimates
-            .par_iter()
-            .map(PixelEstimate::relative_error)
-            .sum();
-        Some(sum / self.estimates.len() as f64)
+            .iter()
+            .map(|e| (e.count(), e.squared_error()));
+        let calibration = Calibration::fit(pairs, population);
+        Some(crate::adaptive::estimated_rmse(
+            &self.estimates,
+            &calibration,
+        ))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::adaptive::ErrorRule;
     use crate::*;
     use glam::{DVec3, Vec3};
     use std::sync::atomic::{AtomicUsize, Ordering};
@@ -158,6 +216,7 @@ mod tests {
         let adaptive = RenderSettings {
             adaptive: Some(
                 Adaptive {
+                    rule: ErrorRule::Pixel,
                     target_error: 1e-9,
                     ..Adaptive::default()
                 }
@@ -168,11 +227,11 @@ mod tests {
         };
         let reference = render(&scene, &adaptive, &NoProgress).unwrap().film;
         assert_eq!(reference.pixels(), once.film().pixels());
-        let error = once.mean_relative_error().unwrap();
+        let error = once.estimated_error().unwrap();
         assert!(error.is_finite() && error > 0.0, "{error}");
         let mut short = ProgressiveFilm::new(settings()).unwrap();
         short.refine(&scene, 4, &NoProgress).unwrap();
-        assert_eq!(short.mean_relative_error(), None);
+        assert_eq!(short.estimated_error(), None);
     }
 
     /// Cancels after a number of rows.

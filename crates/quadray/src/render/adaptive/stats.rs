@@ -1,7 +1,8 @@
 //! What an adaptive render reports: where it stands after each round, and the sample counts and
 //! error it reached (also the plain statistics of a uniform render).
 
-use super::Adaptive;
+use super::calibration::Calibration;
+use super::{Adaptive, ErrorRule};
 use crate::film::PixelEstimate;
 
 /// Where an adaptive render stands after a round (reported to [`Progress::round_done`]).
@@ -14,42 +15,39 @@ pub struct RoundSummary {
     pub active: u64,
     /// Pixels in the render.
     pub pixels: u64,
-    /// The largest relative error of any pixel.
+    /// The largest relative error of any pixel (pixel rule; NaN under the image rule).
     pub worst_error: f64,
+    /// The estimated RMSE of the image's display values ([`estimated_rmse`]).
+    pub estimated_error: f64,
+    /// The rule the render samples by.
+    pub rule: ErrorRule,
     /// The target error.
     pub target_error: f64,
-}
-
-impl RoundSummary {
-    /// The summary of `round` over a window's pixels: their errors after it, and which of them
-    /// the next round samples.
-    pub(super) fn of_window(round: u32, errors: &[f64], refine: &[bool], target: f64) -> Self {
-        RoundSummary {
-            round,
-            active: refine.iter().filter(|&&r| r).count() as u64,
-            pixels: errors.len() as u64,
-            worst_error: worst_error(errors),
-            target_error: target,
-        }
-    }
 }
 
 /// Why an adaptive render stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stop {
-    /// Every pixel reached the target error.
+    /// The target was reached: the image's estimated error, or every pixel's.
     Converged,
-    /// Some pixels reached the maximum sample count above the target.
+    /// Pixels that could lower the error further reached the maximum sample count.
     MaxSpp,
-    /// The time limit ran out with pixels still above the target.
+    /// The time limit ran out first.
     TimeLimit,
+    /// The sample budget was spent first.
+    Budget,
 }
 
 /// The error an adaptive render reached.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ErrorStats {
-    /// The target error.
+    /// The rule the render sampled by.
+    pub rule: ErrorRule,
+    /// The target error (0: none).
     pub target: f64,
+    /// The estimated RMSE of the image's display values against the converged image
+    /// ([`estimated_rmse`]).
+    pub estimated_rmse: f64,
     /// The largest relative error of any pixel.
     pub worst: f64,
     /// The mean relative error over the pixels.
@@ -99,7 +97,11 @@ impl SamplingStats {
         let error = first.error.map(|e| {
             let errors = || parts.iter().filter_map(|(s, _)| s.error);
             ErrorStats {
+                rule: e.rule,
                 target: e.target,
+                // Root of the pixel-weighted mean of the squares: the windows' MSEs add up.
+                estimated_rmse: weighted(&|s| s.error.map_or(0.0, |e| e.estimated_rmse.powi(2)))
+                    .sqrt(),
                 worst: errors().map(|e| e.worst).fold(0.0, f64::max),
                 mean: weighted(&|s| s.error.map_or(0.0, |e| e.mean)),
                 met: weighted(&|s| s.error.map_or(0.0, |e| e.met)),
@@ -112,7 +114,8 @@ impl SamplingStats {
                     .max_by_key(|s| match s {
                         Stop::Converged => 0,
                         Stop::MaxSpp => 1,
-                        Stop::TimeLimit => 2,
+                        Stop::Budget => 2,
+                        Stop::TimeLimit => 3,
                     })
                     .unwrap_or(Stop::Converged),
             }
@@ -131,62 +134,77 @@ impl SamplingStats {
         let Some(e) = self.error else {
             return format!("{} spp", self.min_spp);
         };
-        let stop = match e.stop {
-            Stop::Converged => "every pixel at the target".to_string(),
-            Stop::MaxSpp => format!(
-                "{} pixels ({:.2}%) stopped at max spp {} above the target",
-                e.above,
-                100.0 * (1.0 - e.met),
-                self.max_spp
-            ),
-            Stop::TimeLimit => format!(
-                "the time limit ran out with {} pixels ({:.2}%) above the target",
-                e.above,
-                100.0 * (1.0 - e.met)
-            ),
-        };
-        format!(
-            "adaptive, {:.1} spp mean ({}..{}) in {} rounds, error target {}, worst {:.3}, mean {:.4}: {stop}",
-            self.mean_spp, self.min_spp, self.max_spp, e.rounds, e.target, e.worst, e.mean
-        )
+        let spp = format!(
+            "{:.1} spp mean ({}..{}) in {} rounds",
+            self.mean_spp, self.min_spp, self.max_spp, e.rounds
+        );
+        match e.rule {
+            ErrorRule::Image => {
+                let target = if e.target > 0.0 {
+                    format!(" (target {})", e.target)
+                } else {
+                    String::new()
+                };
+                let stop = match e.stop {
+                    Stop::Converged => "the target reached".to_string(),
+                    Stop::MaxSpp => format!("stopped at max spp {}", self.max_spp),
+                    Stop::TimeLimit => "the time limit reached".to_string(),
+                    Stop::Budget => "the sample budget spent".to_string(),
+                };
+                format!(
+                    "adaptive, {spp}, estimated image error {:.2e} RMSE{target}: {stop}",
+                    e.estimated_rmse
+                )
+            }
+            ErrorRule::Pixel => {
+                let stop = match e.stop {
+                    Stop::Converged => "every pixel at the target".to_string(),
+                    Stop::MaxSpp => format!(
+                        "{} pixels ({:.2}%) stopped at max spp {} above the target",
+                        e.above,
+                        100.0 * (1.0 - e.met),
+                        self.max_spp
+                    ),
+                    Stop::TimeLimit | Stop::Budget => format!(
+                        "the time limit ran out with {} pixels ({:.2}%) above the target",
+                        e.above,
+                        100.0 * (1.0 - e.met)
+                    ),
+                };
+                format!(
+                    "adaptive per pixel, {spp}, error target {}, worst {:.3}, mean {:.4}, estimated image error {:.2e} RMSE: {stop}",
+                    e.target, e.worst, e.mean, e.estimated_rmse
+                )
+            }
+        }
     }
 }
 
-/// The sample counts and error of a finished adaptive render of `rounds` rounds, from each
-/// pixel's estimate and its relative error (`errors`, in the same order).
+/// The sample counts and error of a finished adaptive render of `rounds` rounds that stopped
+/// for `stop`, from each pixel's estimate and the calibration of the error estimate.
 pub(super) fn sampling_stats(
     estimates: &[PixelEstimate],
-    errors: &[f64],
     adaptive: &Adaptive,
     rounds: u32,
-    timed_out: bool,
+    stop: Stop,
+    calibration: &Calibration,
 ) -> SamplingStats {
     let n = estimates.len().max(1) as f64;
     let counts = estimates.iter().map(PixelEstimate::count);
+    let errors = relative_errors(estimates);
     let met = errors
         .iter()
         .filter(|&&e| e <= adaptive.target_error)
         .count();
-    let wanting_more = || {
-        estimates
-            .iter()
-            .zip(errors)
-            .any(|(estimate, &error)| adaptive.wants_more(estimate.count(), error))
-    };
-    let stop = if met == estimates.len() {
-        Stop::Converged
-    } else if timed_out || wanting_more() {
-        Stop::TimeLimit
-    } else {
-        Stop::MaxSpp
-    };
     SamplingStats {
         min_spp: counts.clone().min().unwrap_or(0),
         max_spp: counts.clone().max().unwrap_or(0),
         mean_spp: counts.map(|c| c as f64).sum::<f64>() / n,
         error: Some(ErrorStats {
+            rule: adaptive.rule,
             target: adaptive.target_error,
-            worst: worst_error(errors),
+            estimated_rmse: estimated_rmse(estimates, calibration),
+            worst: worst_error(&errors),
             mean: errors.iter().sum::<f64>() / n,
             met: met as f64 / n,
             above: (estimates.len() - met) as u64,
@@ -194,6 +212,22 @@ pub(super) fn sampling_stats(
             stop,
         }),
     }
+}
+
+/// The estimated RMSE of the display values of the pixels of `estimates` against their
+/// converged values: the root of the mean of [`PixelEstimate::squared_error`] corrected by
+/// `calibration` (0 for none).
+pub fn estimated_rmse(estimates: &[PixelEstimate], calibration: &Calibration) -> f64 {
+    let sum: f64 = estimates.iter().map(|e| calibration.squared_error(e)).sum();
+    (sum / estimates.len().max(1) as f64).sqrt()
+}
+
+/// Each pixel's relative error ([`PixelEstimate::relative_error`]).
+fn relative_errors(estimates: &[PixelEstimate]) -> Vec<f64> {
+    estimates
+        .iter()
+        .map(PixelEstimate::relative_error)
+        .collect()
 }
 
 /// The largest of the pixels' relative errors (0 for none).

@@ -2,14 +2,16 @@
 
 use super::*;
 use crate::aov::AovSelection;
+use crate::render::MAX_SPP;
 use crate::render::{NoProgress, PixelWindow, RenderSettings, render_with_aovs};
 use crate::*;
 use glam::{DVec3, Vec3};
+use std::time::Duration;
 
 /// A white unit disc (a sphere without lights shows its ambient colour, flat) on a black
 /// background, seen from above by an orthographic camera 4 units tall: flat regions and one
 /// circular edge whose position is known.
-fn disc() -> Scene {
+pub(super) fn disc() -> Scene {
     Scene::new(SceneDescription {
         camera: Camera {
             from: DVec3::new(0.0, 0.0, 10.0),
@@ -37,7 +39,7 @@ fn disc() -> Scene {
     .unwrap()
 }
 
-fn settings(adaptive: Adaptive) -> RenderSettings {
+pub(super) fn settings(adaptive: Adaptive) -> RenderSettings {
     RenderSettings {
         width: 48,
         height: 48,
@@ -97,6 +99,8 @@ fn edges_get_more_samples_than_flat_regions() {
         min_spp: 8,
         max_spp: 4096,
         time_limit: None,
+        rule: ErrorRule::Pixel,
+        spp_budget: None,
     };
     let (rendered, aovs) =
         render_with_aovs(&disc(), &settings(adaptive), counts_pass(), &NoProgress).unwrap();
@@ -164,6 +168,8 @@ fn a_preview_from_two_samples_stops_flat_pixels_at_two_and_refines_the_edge() {
         min_spp: 2,
         max_spp: 256,
         time_limit: None,
+        rule: ErrorRule::Pixel,
+        spp_budget: None,
     };
     let (rendered, aovs) =
         render_with_aovs(&disc(), &settings(adaptive), counts_pass(), &NoProgress).unwrap();
@@ -180,14 +186,22 @@ fn a_preview_from_two_samples_stops_flat_pixels_at_two_and_refines_the_edge() {
     assert!((area - std::f64::consts::PI).abs() < 0.02, "{area}");
 }
 
+/// Both rules, the image rule's pilot included: the same image for any thread count and window.
 #[test]
 fn adaptive_renders_do_not_depend_on_threads_or_windows() {
-    let adaptive = Adaptive {
-        target_error: 0.02,
-        min_spp: 8,
-        max_spp: 128,
-        time_limit: None,
-    };
+    for (rule, target_error) in [(ErrorRule::Pixel, 0.02), (ErrorRule::Image, 0.002)] {
+        renders_do_not_depend_on_threads_or_windows(Adaptive {
+            target_error,
+            min_spp: 8,
+            max_spp: 128,
+            time_limit: None,
+            rule,
+            spp_budget: None,
+        });
+    }
+}
+
+fn renders_do_not_depend_on_threads_or_windows(adaptive: Adaptive) {
     let s = settings(adaptive);
     let run = |threads: usize, settings: RenderSettings| {
         rayon::ThreadPoolBuilder::new()
@@ -231,14 +245,17 @@ fn a_round_samples_pixels_above_the_target_and_their_neighbours() {
         min_spp: 8,
         max_spp: 1024,
         time_limit: None,
+        rule: ErrorRule::Pixel,
+        spp_budget: None,
     };
-    assert_eq!(adaptive.refinement_rounds(), 7);
-    assert_eq!(adaptive.round_count(0), 8);
-    assert_eq!(adaptive.round_count(3), 64);
-    assert_eq!(adaptive.round_count(7), 1024);
-    assert_eq!(adaptive.round_count(40), 1024);
-    assert_eq!(adaptive.with_max_spp(100).refinement_rounds(), 4);
-    assert_eq!(adaptive.with_max_spp(100).round_count(4), 100);
+    use pixel_rule::{refinement_rounds, round_count};
+    assert_eq!(refinement_rounds(&adaptive), 7);
+    assert_eq!(round_count(&adaptive, 0), 8);
+    assert_eq!(round_count(&adaptive, 3), 64);
+    assert_eq!(round_count(&adaptive, 7), 1024);
+    assert_eq!(round_count(&adaptive, 40), 1024);
+    assert_eq!(refinement_rounds(&adaptive.with_max_spp(100)), 4);
+    assert_eq!(round_count(&adaptive.with_max_spp(100), 4), 100);
     // A 5x4 image of pixels with 8 samples, one of them (2, 1) above the target.
     let (width, height) = (5, 4);
     let mut sampled = PixelEstimate::default();
@@ -248,7 +265,6 @@ fn a_round_samples_pixels_above_the_target_and_their_neighbours() {
     let estimates = vec![sampled; width * height];
     let mut errors = vec![0.0; width * height];
     errors[width + 2] = 0.5;
-    let mut refine = vec![false; width * height];
     let selected = |refine: &[bool]| {
         (0..height)
             .map(|y| {
@@ -258,26 +274,20 @@ fn a_round_samples_pixels_above_the_target_and_their_neighbours() {
             })
             .collect::<Vec<_>>()
     };
-    adaptive.select(1, &estimates, &errors, width, &mut refine);
+    let refine = pixel_rule::select(&adaptive, 1, &estimates, &errors, width);
     assert_eq!(selected(&refine), [".xxx.", ".xxx.", ".xxx.", "....."]);
     // After the neighbour rounds, only the pixel itself.
-    adaptive.select(
-        NEIGHBOUR_ROUNDS + 1,
-        &estimates,
-        &errors,
-        width,
-        &mut refine,
-    );
+    let refine = pixel_rule::select(&adaptive, NEIGHBOUR_ROUNDS + 1, &estimates, &errors, width);
     assert_eq!(selected(&refine), [".....", "..x..", ".....", "....."]);
     // Below the target but not below the first round's margin: refined (with its neighbours)
     // after the first round only.
     errors[width + 2] = 0.1 * (1.0 + FIRST_ROUND_MARGIN) / 2.0;
-    adaptive.select(1, &estimates, &errors, width, &mut refine);
+    let refine = pixel_rule::select(&adaptive, 1, &estimates, &errors, width);
     assert_eq!(selected(&refine), [".xxx.", ".xxx.", ".xxx.", "....."]);
-    adaptive.select(2, &estimates, &errors, width, &mut refine);
+    let refine = pixel_rule::select(&adaptive, 2, &estimates, &errors, width);
     assert!(!refine.contains(&true));
     errors[width + 2] = 0.1 * FIRST_ROUND_MARGIN * 0.9;
-    adaptive.select(1, &estimates, &errors, width, &mut refine);
+    let refine = pixel_rule::select(&adaptive, 1, &estimates, &errors, width);
     assert!(!refine.contains(&true));
     // A pixel at the maximum, above the target again, is not sampled again, nor are its
     // neighbours for its sake.
@@ -286,7 +296,7 @@ fn a_round_samples_pixels_above_the_target_and_their_neighbours() {
         max_spp: 8,
         ..adaptive
     };
-    at_max.select(1, &estimates, &errors, width, &mut refine);
+    let refine = pixel_rule::select(&at_max, 1, &estimates, &errors, width);
     assert!(!refine.contains(&true));
 }
 
@@ -294,12 +304,19 @@ fn a_round_samples_pixels_above_the_target_and_their_neighbours() {
 /// its neighbours': each tile is sampled with a border.
 #[test]
 fn adaptive_tiles_equal_the_whole_render() {
-    let adaptive = Adaptive {
-        target_error: 0.01,
-        min_spp: 8,
-        max_spp: 256,
-        time_limit: None,
-    };
+    for (rule, target_error) in [(ErrorRule::Pixel, 0.01), (ErrorRule::Image, 0.002)] {
+        tiles_equal_the_whole_render(Adaptive {
+            target_error,
+            min_spp: 8,
+            max_spp: 256,
+            time_limit: None,
+            rule,
+            spp_budget: None,
+        });
+    }
+}
+
+fn tiles_equal_the_whole_render(adaptive: Adaptive) {
     let s = settings(adaptive);
     let (whole, whole_aovs) = render_with_aovs(&disc(), &s, counts_pass(), &NoProgress).unwrap();
     let whole_aovs = whole_aovs.unwrap();
@@ -337,8 +354,11 @@ fn adaptive_tiles_equal_the_whole_render() {
             }
         }
     }
-    assert!(whole_aovs.get(16, 16).sample_count > 8);
-    assert_eq!(whole_aovs.get(20, 20).sample_count, 8);
+    if adaptive.rule == ErrorRule::Pixel {
+        assert!(whole_aovs.get(16, 16).sample_count > 8);
+        assert_eq!(whole_aovs.get(20, 20).sample_count, 8);
+    }
+    assert!(whole.sampling.max_spp > 8, "{:?}", whole.sampling);
 }
 
 #[test]
@@ -348,6 +368,8 @@ fn an_impossible_target_stops_at_the_maximum() {
         min_spp: 8,
         max_spp: 64,
         time_limit: None,
+        rule: ErrorRule::Pixel,
+        spp_budget: None,
     };
     let (rendered, _) = render_with_aovs(
         &disc(),
@@ -371,6 +393,8 @@ fn a_time_limit_keeps_the_first_round() {
         min_spp: 8,
         max_spp: MAX_SPP,
         time_limit: Some(Duration::from_nanos(1)),
+        rule: ErrorRule::Pixel,
+        spp_budget: None,
     };
     let (rendered, _) = render_with_aovs(
         &disc(),
