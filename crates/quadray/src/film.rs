@@ -229,20 +229,33 @@ impl PixelEstimate {
 /// The batch-means squared error of the mean of each channel over `batches` (sums of runs of
 /// `size` samples), averaged over the three channels.
 fn channel_squared_error(batches: &[[f32; 3]], size: u32) -> f64 {
-    (0..3)
-        .map(|c| batch_means(batches.iter().map(|b| b[c] as f64), size).1)
-        .sum::<f64>()
-        / 3.0
+    let k = batches.len() as f64;
+    let mut totals = [0.0f64; 3];
+    for batch in batches {
+        for (total, &sum) in totals.iter_mut().zip(batch) {
+            *total += sum as f64;
+        }
+    }
+    let means = totals.map(|t| t / k);
+    let mut spread = 0.0;
+    for batch in batches {
+        for (&mean, &sum) in means.iter().zip(batch) {
+            spread += (sum as f64 - mean).powi(2);
+        }
+    }
+    // The runs' sums are size times their means: one division for all of them.
+    spread / (3.0 * (size as f64).powi(2) * k * (k - 1.0))
 }
 
 /// The mean of the runs' means and the squared standard error of that mean, from the sums of
-/// runs of `size` samples: SE² = Σ(bᵢ − b̄)² / (k (k − 1)) over the k runs' means bᵢ.
+/// runs of `size` samples: SE² = Σ(bᵢ − b̄)² / (k (k − 1)) over the k runs' means bᵢ (computed on
+/// the sums, which are `size` times the means, with one division).
 fn batch_means(sums: impl ExactSizeIterator<Item = f64> + Clone, size: u32) -> (f64, f64) {
     let k = sums.len() as f64;
-    let run_mean = |sum: f64| sum / size as f64;
-    let mean = sums.clone().map(run_mean).sum::<f64>() / k;
-    let spread = sums.map(|sum| (run_mean(sum) - mean).powi(2)).sum::<f64>();
-    (mean, spread / (k * (k - 1.0)))
+    let mean_sum = sums.clone().sum::<f64>() / k;
+    let spread = sums.map(|sum| (sum - mean_sum).powi(2)).sum::<f64>();
+    let size = size as f64;
+    (mean_sum / size, spread / (size * size * k * (k - 1.0)))
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@
 //! reaches ([`crate::footprint::footprint_scale`]), so a 1-spp preview is filtered over the whole
 //! pixel and later steps over smaller shares.
 
-use crate::adaptive::{Calibration, Twin, TwinOdds, sample_pixel, sample_twin};
+use crate::adaptive::{Calibration, Twin, TwinOdds, is_flat, sample_pixel, sample_twin};
 use crate::aov::AovSelection;
 use crate::film::{Film, PixelEstimate};
 use crate::integrator::RayCounts;
@@ -83,13 +83,7 @@ impl ProgressiveFilm {
             .par_bridge()
             .map(|(at, twin)| {
                 let mut counts = RayCounts::default();
-                sample_twin(
-                    &context,
-                    *at,
-                    &mut twin.estimate,
-                    (count, count),
-                    &mut counts,
-                );
+                sample_twin(&context, *at, twin, (count, count), &mut counts);
                 counts
             })
             .reduce(RayCounts::default, |mut a, b| {
@@ -108,15 +102,16 @@ impl ProgressiveFilm {
     fn choose_twins(&self) -> Vec<((u32, u32), Twin)> {
         let window = self.settings.window();
         let width = window.width() as usize;
-        let odds = TwinOdds::of(self.estimates.iter());
+        let flat: Vec<bool> = self.estimates.par_iter().map(is_flat).collect();
+        let odds = TwinOdds::of(flat.iter().copied());
         let seed = self.settings.seed;
-        (self.estimates.iter().enumerate())
-            .filter_map(|(i, estimate)| {
+        (flat.into_iter().enumerate())
+            .filter_map(|(i, flat)| {
                 let at = (
                     window.x0 + (i % width) as u32,
                     window.y0 + (i / width) as u32,
                 );
-                Some((at, odds.twin(seed, at, estimate)?))
+                Some((at, odds.twin(seed, at, flat)?))
             })
             .collect()
     }

@@ -183,25 +183,16 @@ impl Budget {
     }
 }
 
-/// The count a threshold `lambda` on the value takes a pixel to: where its value, falling as
-/// n^−α, reaches `lambda`, without bound (its own count for a pixel at the maximum).
-fn optimal_count(state: &PixelState, aim: &Aim, lambda: f64) -> f64 {
-    let n = state.count as f64;
-    let value = state.value();
-    if state.count >= aim.max_spp || value <= 0.0 {
-        return n;
-    }
-    if lambda <= 0.0 {
-        return f64::INFINITY;
-    }
-    (n * (value / lambda).powf(1.0 / aim.alpha)).max(n)
-}
-
-/// The image MSE the threshold `lambda` is predicted to reach.
+/// The image MSE the threshold `lambda` is predicted to reach: a pixel taken to its
+/// optimal count n' (where its value, falling as n^−α, reaches λ) keeps s (n/n')^α of its squared error s, and since (n/n')^α = λ/v there
+/// that is λ c, its value brought to the threshold times its cost (no power to evaluate).
 fn predicted_mse(states: &[PixelState], aim: &Aim, lambda: f64) -> f64 {
     states
         .iter()
-        .map(|s| s.squared_error * (s.count as f64 / optimal_count(s, aim, lambda)).powf(aim.alpha))
+        .map(|s| match s.count < aim.max_spp && s.value() > lambda {
+            true => lambda * s.cost,
+            false => s.squared_error,
+        })
         .sum::<f64>()
         / states.len().max(1) as f64
 }
@@ -228,6 +219,20 @@ fn solve(highest: f64, enough: impl Fn(f64) -> bool) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The count a threshold `lambda` on the value takes a pixel to: where its value, falling as
+    /// n^−α, reaches `lambda`, without bound (its own count for a pixel at the maximum).
+    fn optimal_count(state: &PixelState, aim: &Aim, lambda: f64) -> f64 {
+        let n = state.count as f64;
+        let value = state.value();
+        if state.count >= aim.max_spp || value <= 0.0 {
+            return n;
+        }
+        if lambda <= 0.0 {
+            return f64::INFINITY;
+        }
+        (n * (value / lambda).powf(1.0 / aim.alpha)).max(n)
+    }
 
     fn pixel(count: u32, squared_error: f64, cost: f64) -> PixelState {
         PixelState {

@@ -37,7 +37,7 @@ fn reference(scene: &Scene, base: &RenderSettings) -> Film {
 fn image_rule(target_error: f64) -> Adaptive {
     Adaptive {
         target_error,
-        max_spp: 256,
+        max_spp: 1024,
         ..Adaptive::default()
     }
 }

@@ -30,7 +30,7 @@ use crate::integrator::RayCounts;
 use crate::render::{PixelWindow, Progress, RenderError, Rendered, SampleContext};
 use crate::sampler::{SampleKey, pixel_pattern, progressive_2d};
 pub use calibration::Calibration;
-pub(crate) use calibration::{Twin, TwinOdds, sample_twin};
+pub(crate) use calibration::{Twin, TwinOdds, is_flat, sample_twin};
 use image_rule::PixelState;
 use pilot::{Plan, state_of};
 use rayon::prelude::*;
@@ -150,8 +150,8 @@ struct WindowState {
     /// For pilot pixels inside the window, the rounds that sample them (bit k: round k), which
     /// the pilot took already; `None` for the others.
     pilot_rounds: Vec<Option<u64>>,
-    /// Each row's twins ([`calibration`], chosen after the first round among the pixels outside
-    /// the pilot): the column and the twin.
+    /// Each row's twins ([`calibration`]): the pilot's pixels' own, and those chosen after the
+    /// first round among the other pixels; the column and the twin.
     twins: Vec<Vec<(usize, Twin)>>,
 }
 
@@ -186,6 +186,10 @@ impl WindowState {
             state.rays[i] = pixel.rays;
             state.targets[i] = 0;
             state.pilot_rounds[i] = Some(pixel.rounds);
+            if let Some(twin) = &pixel.twin {
+                let row = (y - window.y0) as usize;
+                state.twins[row].push(((x - window.x0) as usize, twin.clone()));
+            }
             if let (Some(aov), Some(slot)) = (pixel.aov, state.aov_samples.get_mut(i)) {
                 *slot = aov;
             }
@@ -193,27 +197,23 @@ impl WindowState {
         state
     }
 
-    /// Chooses the twins among the pixels outside the pilot, after their first round.
+    /// Chooses the twins among the pixels outside the pilot, after their first round (the pilot's
+    /// pixels brought theirs).
     fn choose_twins(&mut self, context: &SampleContext<'_>) {
-        let own = || {
-            self.estimates
-                .iter()
-                .zip(&self.pilot_rounds)
-                .enumerate()
-                .filter(|(_, (_, pilot))| pilot.is_none())
-                .map(|(i, (e, _))| (i, e))
-        };
-        let odds = TwinOdds::of(own().map(|(_, e)| e));
+        // Each pixel outside the pilot: whether its first samples are flat.
+        let flat: Vec<Option<bool>> = (self.estimates.par_iter().zip(&self.pilot_rounds))
+            .map(|(e, pilot)| pilot.is_none().then(|| calibration::is_flat(e)))
+            .collect();
+        let odds = TwinOdds::of(flat.iter().flatten().copied());
         let window = context.window;
-        let mut twins = vec![Vec::new(); self.twins.len()];
-        for (i, estimate) in own() {
+        for (i, flat) in flat.into_iter().enumerate() {
+            let Some(flat) = flat else { continue };
             let (row, column) = (i / self.width, i % self.width);
             let at = (window.x0 + column as u32, window.y0 + row as u32);
-            if let Some(twin) = odds.twin(context.settings.seed, at, estimate) {
-                twins[row].push((column, twin));
+            if let Some(twin) = odds.twin(context.settings.seed, at, flat) {
+                self.twins[row].push((column, twin));
             }
         }
-        self.twins = twins;
     }
 
     /// Chooses round `round`'s pixels by the pixel rule; `Err` with the reason to stop when it
@@ -283,10 +283,14 @@ impl WindowState {
             .collect();
         if round <= NEIGHBOUR_ROUNDS {
             let counts: Vec<u32> = states.iter().map(|s| s.count).collect();
-            // Pilot pixels follow too: the pilot sampled them by their own estimates only, and a
-            // pilot pixel whose first samples all missed an edge was left with them.
+            // Pilot pixels follow too, unless the pilot followed neighbours itself: a sparse pilot
+            // samples its pixels by their own estimates only, and a pilot pixel whose first
+            // samples all missed an edge was left with them.
+            let pilot_followed = plan.is_some_and(|p| p.followed);
             let follow = follow_neighbours(&own, self.width, |i, j| {
-                counts[i] < max_spp && counts[i] <= counts[j]
+                counts[i] < max_spp
+                    && counts[i] <= counts[j]
+                    && !(pilot_followed && self.pilot_rounds[i].is_some())
             });
             for ((target, &count), (&followed, &own)) in
                 targets.iter_mut().zip(&counts).zip(follow.iter().zip(&own))

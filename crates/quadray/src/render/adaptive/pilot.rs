@@ -8,9 +8,9 @@
 //! In a whole render the pilot's pixels are part of the image and cost nothing extra; a crop or a
 //! tile also renders those outside it (1/16 of the rest of the image, at the pilot's counts).
 
-use super::calibration::{self, Calibration, Twin, TwinOdds};
+use super::calibration::{self, Calibration, Twin, TwinOdds, is_flat};
 use super::image_rule::{self, Aim, Budget, PixelState, Step};
-use super::{Adaptive, Stop, sample_pixel};
+use super::{Adaptive, NEIGHBOUR_ROUNDS, Stop, follow_neighbours, sample_pixel};
 use crate::aov::AovSample;
 use crate::film::PixelEstimate;
 use crate::integrator::RayCounts;
@@ -81,6 +81,9 @@ pub(super) struct Plan {
     pub stop: Stop,
     /// The calibration of the error estimate after the last round.
     pub calibration: Calibration,
+    /// Whether the pilot followed neighbours itself (it holds every pixel), so that its pixels
+    /// need not follow them again in the image's rounds.
+    pub followed: bool,
 }
 
 /// Renders the pilot of `context`'s image through its rounds (see the module documentation).
@@ -108,6 +111,8 @@ pub(super) fn plan(
             twin: None,
         })
         .collect();
+    // A pilot of every pixel follows neighbours as the image does.
+    let whole_width = (stride == 1).then_some(width as usize);
     let target_mse = (adaptive.target_error > 0.0).then(|| adaptive.target_error.powi(2));
     let budget = adaptive.spp_budget.map(|spp| spp * pixels.len() as f64);
     let mut decisions = Vec::new();
@@ -116,11 +121,13 @@ pub(super) fn plan(
     let mut stop = Stop::MaxSpp;
     let mut calibration = Calibration::NONE;
     for round in 0..MAX_ROUNDS {
-        counts += sample_round(context, adaptive, &mut pixels, round, step);
+        let targets = round_targets(adaptive, &pixels, round, step, whole_width);
+        counts += sample_round(context, adaptive, &mut pixels, round, targets);
         if round == 0 {
-            let odds = TwinOdds::of(pixels.iter().map(|p| &p.estimate));
-            for pixel in &mut pixels {
-                pixel.twin = odds.twin(context.settings.seed, pixel.at, &pixel.estimate);
+            let flat: Vec<bool> = pixels.par_iter().map(|p| is_flat(&p.estimate)).collect();
+            let odds = TwinOdds::of(flat.iter().copied());
+            for (pixel, flat) in pixels.iter_mut().zip(flat) {
+                pixel.twin = odds.twin(context.settings.seed, pixel.at, flat);
             }
             counts += catch_up_twins(context, adaptive, &mut pixels);
         }
@@ -164,6 +171,7 @@ pub(super) fn plan(
         counts,
         stop,
         calibration,
+        followed: whole_width.is_some(),
     })
 }
 
@@ -182,44 +190,79 @@ fn why_stopped(states: &[PixelState], aim: &Aim) -> Stop {
     }
 }
 
-/// Samples `round` in the pilot: every pixel in round 0, then each to the count `step` gives it
-/// under its calibration, and its twin as far.
-fn sample_round(
-    context: &SampleContext<'_>,
+/// Each pilot pixel's count after `round`: `min_spp` in round 0, then the count `step` gives it
+/// under its calibration. When the pilot holds every pixel of the image (`width` wide), the
+/// neighbour rounds follow as in the image ([`super::follow_neighbours`]); the second element
+/// tells which pixels are sampled by their own estimate.
+fn round_targets(
     adaptive: &Adaptive,
-    pixels: &mut [PilotPixel],
+    pixels: &[PilotPixel],
     round: usize,
     step: Option<(Step, Calibration)>,
-) -> RayCounts {
-    sum_counts(pixels.par_iter_mut().map(|pixel| {
-        let count = pixel.estimate.count();
-        let target = match step {
+    whole_width: Option<usize>,
+) -> (Vec<u32>, Vec<bool>) {
+    let mut targets: Vec<u32> = pixels
+        .par_iter()
+        .map(|pixel| match step {
             None => adaptive.min_spp,
             Some((step, calibration)) => {
-                let estimated = (count, pixel.estimate.squared_error());
+                let estimated = (pixel.estimate.count(), pixel.estimate.squared_error());
                 step.target(
                     &state_of(estimated, pixel.rays, &calibration),
                     adaptive.max_spp,
                 )
             }
-        };
-        if target <= count {
-            return RayCounts::default();
+        })
+        .collect();
+    let counts: Vec<u32> = pixels.iter().map(|p| p.estimate.count()).collect();
+    let own: Vec<bool> = targets.iter().zip(&counts).map(|(t, c)| t > c).collect();
+    if let Some(width) = whole_width
+        && (1..=NEIGHBOUR_ROUNDS as usize).contains(&round)
+    {
+        let max_spp = adaptive.max_spp;
+        let follow = follow_neighbours(&own, width, |i, j| {
+            counts[i] < max_spp && counts[i] <= counts[j]
+        });
+        for (i, target) in targets.iter_mut().enumerate() {
+            if follow[i] && !own[i] {
+                *target = (*target).max((2 * counts[i]).min(max_spp));
+            }
         }
-        pixel.rounds |= 1 << round;
-        let mut counts = RayCounts::default();
-        sample_pixel(
-            context,
-            pixel.at,
-            &mut pixel.estimate,
-            pixel.aov.as_mut(),
-            (target, adaptive.max_spp),
-            &mut counts,
-        );
-        pixel.rays += counts.total();
-        counts += catch_up_twin(context, adaptive, pixel);
-        counts
-    }))
+    }
+    (targets, own)
+}
+
+/// Samples `round` in the pilot: each pixel to its count in `targets` (see [`round_targets`]),
+/// and its twin as far; `own` marks the pixels the round samples by their own estimate.
+fn sample_round(
+    context: &SampleContext<'_>,
+    adaptive: &Adaptive,
+    pixels: &mut [PilotPixel],
+    round: usize,
+    (targets, own): (Vec<u32>, Vec<bool>),
+) -> RayCounts {
+    sum_counts(
+        (pixels.par_iter_mut().zip(targets).zip(own)).map(|((pixel, target), own)| {
+            if target <= pixel.estimate.count() {
+                return RayCounts::default();
+            }
+            if own {
+                pixel.rounds |= 1 << round;
+            }
+            let mut counts = RayCounts::default();
+            sample_pixel(
+                context,
+                pixel.at,
+                &mut pixel.estimate,
+                pixel.aov.as_mut(),
+                (target, adaptive.max_spp),
+                &mut counts,
+            );
+            pixel.rays += counts.total();
+            counts += catch_up_twin(context, adaptive, pixel);
+            counts
+        }),
+    )
 }
 
 /// Brings every pilot pixel's twin to its pixel's count.
@@ -244,13 +287,7 @@ fn catch_up_twin(
     let mut counts = RayCounts::default();
     if let Some(twin) = &mut pixel.twin {
         let footprint = (pixel.estimate.count(), adaptive.max_spp);
-        calibration::sample_twin(
-            context,
-            pixel.at,
-            &mut twin.estimate,
-            footprint,
-            &mut counts,
-        );
+        calibration::sample_twin(context, pixel.at, twin, footprint, &mut counts);
     }
     counts
 }

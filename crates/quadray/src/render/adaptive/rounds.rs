@@ -142,7 +142,7 @@ impl Rounds<'_> {
                 for (column, twin) in twins.iter_mut() {
                     let at = (window.x0 + *column as u32, y);
                     let footprint = (row[*column].count(), self.adaptive.max_spp);
-                    sample_twin(self.context, at, &mut twin.estimate, footprint, &mut counts);
+                    sample_twin(self.context, at, twin, footprint, &mut counts);
                 }
                 *self.totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
             });
