@@ -81,7 +81,7 @@ impl Twin {
     /// expectation given a is (a − μ)², whatever chose the pixel or stopped its sampling. Half of
     /// (a − b)² would be unbiased only over pixels taken whatever their samples say: given a,
     /// its expectation is ((a − μ)² + V) / 2.
-    fn squared_error_of(&self, pixel: &PixelEstimate) -> f64 {
+    pub(super) fn squared_error_of(&self, pixel: &PixelEstimate) -> f64 {
         let (a, b, c) = self.display_values(pixel);
         (0..3).map(|i| (a[i] - b[i]) * (a[i] - c[i])).sum::<f64>() / 3.0
     }

@@ -42,27 +42,37 @@ fn image_rule(target_error: f64) -> Adaptive {
     }
 }
 
-/// The render stops when its estimate reaches the target, and the estimate is the true error
-/// (against a 4096-sample reference) within ±30%: the twins' calibration corrects the batch
-/// means, which overstate an edge's error under stratification (without it the estimate is
-/// about 2× the truth here).
+/// The audited estimate ([`super::audit`]) is unbiased: over seeds, its mean is the true error
+/// (against a 4096-sample reference) within ±20%, and no render's estimate is off by 2× or
+/// more; the true error reaches the target (on average within 1.25× of it) and falls with it.
+/// The audit's spread is a single render's, measured on the bundled scenes in docs/sampling.md.
 #[test]
 fn the_estimate_follows_the_true_error_down_to_the_target() {
     let scene = disc();
     let converged = reference(&scene, &settings(image_rule(0.01)));
     let mut previous = f64::INFINITY;
-    for target in [0.004, 0.002, 0.001] {
-        let rendered = render(&scene, &settings(image_rule(target)), &NoProgress).unwrap();
-        let error = rendered.sampling.error.unwrap();
-        let truth = true_rmse(&rendered.film, &converged);
-        assert_eq!(error.stop, Stop::Converged, "{error:?}");
-        assert!(error.estimated_rmse <= target * 1.3, "{error:?}");
-        let ratio = error.estimated_rmse / truth;
+    for target in [0.004, 0.002] {
+        let (mut ratios, mut truths) = (Vec::new(), Vec::new());
+        for seed in 0..8 {
+            let s = RenderSettings {
+                seed,
+                ..settings(image_rule(target))
+            };
+            let rendered = render(&scene, &s, &NoProgress).unwrap();
+            let error = rendered.sampling.error.unwrap();
+            let truth = true_rmse(&rendered.film, &converged);
+            assert_eq!(error.stop, Stop::Converged, "{error:?}");
+            ratios.push(error.estimated_rmse / truth);
+            truths.push(truth);
+        }
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        let (ratio, truth) = (mean(&ratios), mean(&truths));
+        assert!((0.8..=1.2).contains(&ratio), "target {target}: {ratios:?}");
+        assert!(ratios.iter().all(|r| (0.5..2.0).contains(r)), "{ratios:?}");
         assert!(
-            (0.7..=1.3).contains(&ratio),
-            "target {target}: {error:?}, true {truth}"
+            truth < 1.25 * target && truth < previous,
+            "target {target}: {truths:?}"
         );
-        assert!(truth < previous);
         previous = truth;
     }
 }

@@ -93,7 +93,9 @@ pub(crate) fn render_adaptive(
     let mut round = 0u32;
     let stop = loop {
         rounds.sample(round, &mut state);
-        if round == 0 {
+        // A planned render takes its calibration from the pilot, and its reported error from the
+        // audit: twins of its own would only cost.
+        if round == 0 && plan.is_none() {
             state.choose_twins(rounds.context);
         }
         rounds.sample_twins(&mut state);
@@ -118,8 +120,16 @@ pub(crate) fn render_adaptive(
         *rounds.totals.lock().unwrap_or_else(|e| e.into_inner()) += plan.counts;
     }
     let calibration = state.calibration_or(plan.as_ref().map(|p| &p.calibration));
+    let inner_context = context.with_window(inner);
+    let inner_pixels = (
+        &crop(&state.estimates, window, inner)[..],
+        &crop(&state.rays, window, inner)[..],
+    );
+    let (estimated_mse, audit_counts) =
+        audit::audit(&inner_context, inner_pixels, &calibration, adaptive.max_spp);
+    *rounds.totals.lock().unwrap_or_else(|e| e.into_inner()) += audit_counts;
     let sampled = Sampled {
-        calibration,
+        estimated_mse,
         estimates: state.estimates,
         aov_samples: state.aov_samples,
         rounds: round,
@@ -150,8 +160,8 @@ struct WindowState {
     /// For pilot pixels inside the window, the rounds that sample them (bit k: round k), which
     /// the pilot took already; `None` for the others.
     pilot_rounds: Vec<Option<u64>>,
-    /// Each row's twins ([`calibration`]): the pilot's pixels' own, and those chosen after the
-    /// first round among the other pixels; the column and the twin.
+    /// Each row's twins ([`calibration`]), chosen after the first round when the render has no
+    /// plan (the pixel rule, or a time limit): the column and the twin.
     twins: Vec<Vec<(usize, Twin)>>,
 }
 
@@ -186,10 +196,6 @@ impl WindowState {
             state.rays[i] = pixel.rays;
             state.targets[i] = 0;
             state.pilot_rounds[i] = Some(pixel.rounds);
-            if let Some(twin) = &pixel.twin {
-                let row = (y - window.y0) as usize;
-                state.twins[row].push(((x - window.x0) as usize, twin.clone()));
-            }
             if let (Some(aov), Some(slot)) = (pixel.aov, state.aov_samples.get_mut(i)) {
                 *slot = aov;
             }
@@ -197,8 +203,7 @@ impl WindowState {
         state
     }
 
-    /// Chooses the twins among the pixels outside the pilot, after their first round (the pilot's
-    /// pixels brought theirs).
+    /// Chooses the twins among the pixels outside the pilot, after their first round.
     fn choose_twins(&mut self, context: &SampleContext<'_>) {
         // Each pixel outside the pilot: whether its first samples are flat.
         let flat: Vec<Option<bool>> = (self.estimates.par_iter().zip(&self.pilot_rounds))
@@ -493,7 +498,8 @@ fn sample_sequence(
 
 /// What the rounds left over the bordered window.
 struct Sampled {
-    calibration: Calibration,
+    /// The audited MSE of the inner window ([`audit`]).
+    estimated_mse: f64,
     estimates: Vec<PixelEstimate>,
     aov_samples: Vec<AovSample>,
     rounds: u32,
@@ -526,7 +532,7 @@ impl Sampled {
             adaptive,
             self.rounds,
             self.stop,
-            &self.calibration,
+            self.estimated_mse,
         );
         (
             Rendered {
@@ -567,6 +573,7 @@ fn crop<T: Clone>(values: &[T], outer: PixelWindow, inner: PixelWindow) -> Cow<'
         .into()
 }
 
+mod audit;
 mod calibration;
 mod image_rule;
 #[cfg(test)]

@@ -187,7 +187,7 @@ pub(super) fn sampling_stats(
     adaptive: &Adaptive,
     rounds: u32,
     stop: Stop,
-    calibration: &Calibration,
+    estimated_mse: f64,
 ) -> SamplingStats {
     let n = estimates.len().max(1) as f64;
     let counts = estimates.iter().map(PixelEstimate::count);
@@ -203,7 +203,7 @@ pub(super) fn sampling_stats(
         error: Some(ErrorStats {
             rule: adaptive.rule,
             target: adaptive.target_error,
-            estimated_rmse: estimated_rmse(estimates, calibration),
+            estimated_rmse: estimated_mse.sqrt(),
             worst: worst_error(&errors),
             mean: errors.iter().sum::<f64>() / n,
             met: met as f64 / n,
