@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Speed against image error, quadray (uniform spp and adaptive targets) against POV-Ray 3.7 (its
-# adaptive anti-aliasing at several thresholds and depths), on four scenes:
+# Speed against image error, quadray (uniform spp at every power of two to 64, image-error
+# targets, per-pixel targets, time limits and previews) against POV-Ray 3.7 (its adaptive
+# anti-aliasing at several thresholds and depths), each against its own reference whose own
+# error is measured, on four scenes:
 #   - defense and reflective: scenes/*.toml, translated to POV-Ray by scenes/pov/toml2pov.py;
 #   - grid and mesh (the kitchen): the POV-Ray harness's own .pov files and quadray ports of its
 #     renderer-neutral scenes.json (scripts/harness_scenes.py).

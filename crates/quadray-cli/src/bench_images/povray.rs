@@ -2,7 +2,7 @@
 //! anti-aliasing options, its image and the CPU time of its trace phase, and the measurement of
 //! every anti-aliasing setting against POV-Ray's own converged image.
 
-use super::{ImagesArgs, Method, PovReport, Row};
+use super::{ImagesArgs, Method, POV_CHECK_SCALE, POV_REFERENCE_SCALE, PovReport, Row};
 use crate::compare::{LinearImage, Thresholds, compare, read_image};
 use anyhow::{Context, Result, bail};
 use std::path::Path;
@@ -22,8 +22,22 @@ pub fn measure(a: &ImagesArgs, pov: &Path, progress: &mut dyn FnMut(&str)) -> Re
     let scratch = a
         .out
         .join(format!(".{}-povray-{}.png", a.name, std::process::id()));
-    progress(&format!("POV-Ray reference: {}", a.pov_reference));
-    let reference = render(pov, a.res, &a.pov_reference, &scratch)?;
+    progress(&format!(
+        "POV-Ray reference: {} at {POV_REFERENCE_SCALE}x the resolution",
+        a.pov_reference
+    ));
+    let reference = render_scaled(pov, a.res, POV_REFERENCE_SCALE, &a.pov_reference, &scratch)?;
+    let reference_check = if a.no_reference_check {
+        None
+    } else {
+        progress(&format!(
+            "second POV-Ray reference: {} at {POV_CHECK_SCALE}x the resolution",
+            a.pov_reference
+        ));
+        let check = render_scaled(pov, a.res, POV_CHECK_SCALE, &a.pov_reference, &scratch)?;
+        let between = compare(&reference.image, &check.image, &Thresholds::default())?;
+        Some(between.rmse_display)
+    };
     let mut rows = Vec::new();
     for options in &a.pov_aa {
         progress(&format!("POV-Ray {options}, {} runs", a.runs));
@@ -49,8 +63,53 @@ pub fn measure(a: &ImagesArgs, pov: &Path, progress: &mut dyn FnMut(&str)) -> Re
         file: pov.to_path_buf(),
         reference_options: a.pov_reference.clone(),
         reference_cpu: reference.trace_cpu,
+        reference_check,
         rows,
     })
+}
+
+/// Renders `pov` at `scale` times `width` × `height` with `options` and averages each
+/// `scale` × `scale` block of linear pixels into one: the pixel's box integral, as quadray's
+/// samples estimate it.
+pub fn render_scaled(
+    pov: &Path,
+    (width, height): (u32, u32),
+    scale: u32,
+    options: &str,
+    scratch: &Path,
+) -> Result<PovRender> {
+    let fine = render(pov, (width * scale, height * scale), options, scratch)?;
+    Ok(PovRender {
+        image: box_down(&fine.image, scale),
+        trace_cpu: fine.trace_cpu,
+    })
+}
+
+/// `image` averaged over blocks of `scale` × `scale` pixels (its size a multiple of `scale`).
+fn box_down(image: &LinearImage, scale: u32) -> LinearImage {
+    let (width, height) = (image.width / scale, image.height / scale);
+    let area = (scale * scale) as f32;
+    let pixels = (0..height)
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let mut sum = [0.0f32; 3];
+            for dy in 0..scale {
+                let row = (y * scale + dy) * image.width;
+                for dx in 0..scale {
+                    let p = image.pixels[(row + x * scale + dx) as usize];
+                    for c in 0..3 {
+                        sum[c] += p[c];
+                    }
+                }
+            }
+            sum.map(|v| v / area)
+        })
+        .collect();
+    LinearImage {
+        width,
+        height,
+        pixels,
+    }
 }
 
 /// Renders `pov` at `width` × `height` on one thread with `options` (e.g. `+A0.1 +AM2 +R3`, or
@@ -111,6 +170,20 @@ fn trace_cpu_seconds(log: &str) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Averaging blocks keeps a flat image and halves a two-pixel ramp's blocks to their mean.
+    #[test]
+    fn box_down_averages_blocks() {
+        let image = LinearImage {
+            width: 4,
+            height: 2,
+            pixels: (0..8).map(|i| [i as f32, 1.0, 0.5]).collect(),
+        };
+        let down = box_down(&image, 2);
+        assert_eq!((down.width, down.height), (2, 1));
+        // Block (0, 0) holds pixels 0, 1, 4, 5; block (1, 0) holds 2, 3, 6, 7.
+        assert_eq!(down.pixels, vec![[2.5, 1.0, 0.5], [4.5, 1.0, 0.5]]);
+    }
 
     #[test]
     fn the_trace_cpu_time_is_read_from_the_statistics() {

@@ -24,6 +24,10 @@ fn error_falls_with_samples_and_the_files_are_written() {
         "64x36",
         "--reference-spp",
         "256",
+        "--spp",
+        "1,4,16,64",
+        "--time-limit",
+        "0.05,0.1",
         "--runs",
         "1",
         "--quiet",
@@ -60,14 +64,21 @@ fn error_falls_with_samples_and_the_files_are_written() {
     assert_eq!(adaptive.len(), 4, "{md}");
     let display_rmse: Vec<f64> = adaptive.iter().map(|r| r[7].parse().unwrap()).collect();
     assert!(display_rmse[3] < display_rmse[0], "{display_rmse:?}");
-    // The previews: from 2 samples, fewer samples at the same target.
+    // The per-pixel rows, and the previews: from 2 samples, fewer samples at the same target.
+    let pixel = table("| pixel ");
+    assert_eq!(pixel.len(), 3, "{md}");
     let preview = table("| preview ");
     assert_eq!(preview.len(), 3, "{md}");
     let mean_spp = |r: &Vec<String>| -> f64 { r[2].split(' ').next().unwrap().parse().unwrap() };
-    assert!(mean_spp(&preview[1]) < mean_spp(&adaptive[0]), "{md}");
+    assert_eq!((pixel[0][1].as_str(), preview[1][1].as_str()), ("pixel 0.04", "preview 0.04"));
+    assert!(mean_spp(&preview[1]) < mean_spp(&pixel[0]), "{md}");
+    // The time-limited rows: a longer limit, more samples.
+    let timed = table("| time ");
+    assert_eq!(timed.len(), 2, "{md}");
+    assert!(mean_spp(&timed[1]) > mean_spp(&timed[0]), "{md}");
     let svg = std::fs::read_to_string(dir.path().join("image-error.svg")).unwrap();
-    assert!(svg.starts_with("<svg") && svg.contains("64 spp") && svg.contains("adaptive"));
-    assert!(svg.contains("preview 0.04"), "{svg}");
+    assert!(svg.starts_with("<svg") && svg.contains("64 spp") && svg.contains("image target"));
+    assert!(svg.contains("preview 0.04") && svg.contains("time 0.1 s"), "{svg}");
     let png = image::open(dir.path().join("image-error-reference.png")).unwrap();
     assert_eq!((png.width(), png.height()), (64, 36));
     // Nothing but the three outputs (no temporary files left behind).
