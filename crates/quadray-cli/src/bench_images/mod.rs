@@ -78,7 +78,7 @@ pub struct ImagesArgs {
         long,
         value_name = "E,E,...",
         value_delimiter = ',',
-        default_value = "0.004,0.002,0.001,0.0005"
+        default_value = "0.016,0.008,0.004,0.002,0.001,0.0005"
     )]
     pub adaptive: Vec<f64>,
     /// Per-pixel error targets of the test renders (`--pixel-error`), comma-separated (none:
@@ -87,7 +87,7 @@ pub struct ImagesArgs {
         long,
         value_name = "E,E,...",
         value_delimiter = ',',
-        default_value = "0.04,0.02,0.01"
+        default_value = "0.16,0.08,0.04,0.02,0.01"
     )]
     pub pixel: Vec<f64>,
     /// Time limits of the test renders in seconds (`--time-limit`, no target), comma-separated
@@ -96,7 +96,7 @@ pub struct ImagesArgs {
         long,
         value_name = "S,S,...",
         value_delimiter = ',',
-        default_value = "0.25,0.5,1,2"
+        default_value = "0.1,0.2,0.4,0.8,1.6"
     )]
     pub time_limit: Vec<f64>,
     /// Per-pixel error targets rendered as previews, from a first round of 2 samples

@@ -61,17 +61,17 @@ fn error_falls_with_samples_and_the_files_are_written() {
     assert!(md.contains("reference's own error"), "{md}");
     // The adaptive rows: more samples and less error as the target tightens.
     let adaptive = table("| target ");
-    assert_eq!(adaptive.len(), 4, "{md}");
+    assert_eq!(adaptive.len(), 6, "{md}");
     let display_rmse: Vec<f64> = adaptive.iter().map(|r| r[7].parse().unwrap()).collect();
-    assert!(display_rmse[3] < display_rmse[0], "{display_rmse:?}");
+    assert!(display_rmse[5] < display_rmse[0], "{display_rmse:?}");
     // The per-pixel rows, and the previews: from 2 samples, fewer samples at the same target.
     let pixel = table("| pixel ");
-    assert_eq!(pixel.len(), 3, "{md}");
+    assert_eq!(pixel.len(), 5, "{md}");
     let preview = table("| preview ");
     assert_eq!(preview.len(), 3, "{md}");
     let mean_spp = |r: &Vec<String>| -> f64 { r[2].split(' ').next().unwrap().parse().unwrap() };
-    assert_eq!((pixel[0][1].as_str(), preview[1][1].as_str()), ("pixel 0.04", "preview 0.04"));
-    assert!(mean_spp(&preview[1]) < mean_spp(&pixel[0]), "{md}");
+    assert_eq!((pixel[2][1].as_str(), preview[1][1].as_str()), ("pixel 0.04", "preview 0.04"));
+    assert!(mean_spp(&preview[1]) < mean_spp(&pixel[2]), "{md}");
     // The time-limited rows: a longer limit, more samples.
     let timed = table("| time ");
     assert_eq!(timed.len(), 2, "{md}");

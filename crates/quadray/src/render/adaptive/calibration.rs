@@ -18,7 +18,8 @@
 //! error falls at follows from it: factor = (k − 1) / (k^α − 1) with k = 8. One twin and half of
 //! (a − b)², unbiased only over pixels taken whatever their samples say, measured 0.54–0.84× the
 //! true image error on defense and reflective (480x270, targets 0.002 to 0.0005); the pair,
-//! 0.80–1.16×.
+//! 0.80–1.16×. The calibration steers the rounds; the error a render reports is measured by
+//! [`super::audit`], on pixels drawn when the rounds are over.
 //!
 //! Which pixels get twins ([`TwinOdds`]) is decided once, after the first samples, in two strata:
 //! pixels whose first samples disagree (rough) and those whose samples all agree (flat). Each

@@ -23,6 +23,9 @@
 //!   the image) and computes the same pilot, so its pixels equal those of the whole render. A time
 //!   limit ([`Adaptive::time_limit`]) trades that for a bound: its rounds are planned from the
 //!   rendered pixels and the time left, and which pixels got the last one depends on timing.
+//! - **The reported error** is an audit of the finished window ([`audit`]): pixels drawn by their
+//!   estimated error are sampled twice more, which measures their actual error without bias.
+//!   The calibration by twins ([`calibration`]) steers the rounds; the audit says where they got.
 
 use crate::aov::{AovSample, Aovs};
 use crate::film::{Film, PixelEstimate};
