@@ -12,6 +12,8 @@ use std::path::PathBuf;
 
 /// The benchmarks.
 #[derive(Subcommand, Debug)]
+// The arguments are parsed once per process: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 pub enum BenchCommand {
     /// Every intersector variant on every hard-case family: ns/ray, relative t error, holes,
     /// phantoms and acne against the exact oracle; writes accuracy.md and accuracy.svg.

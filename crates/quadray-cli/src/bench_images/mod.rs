@@ -460,13 +460,14 @@ pub fn measure(a: &ImagesArgs, progress: &mut dyn FnMut(&str)) -> Result<ImageRe
         let preview = pixel(a, t).with_min_spp(PREVIEW_MIN_SPP);
         (Method::Preview(t), preview)
     });
-    let adaptive_renders = (targets.chain(pixels).chain(limits).chain(previews)).map(|(method, adaptive)| {
-        let s = RenderSettings {
-            adaptive: Some(adaptive),
-            ..settings(1, TEST_SEED)
-        };
-        (method, s)
-    });
+    let adaptive_renders =
+        (targets.chain(pixels).chain(limits).chain(previews)).map(|(method, adaptive)| {
+            let s = RenderSettings {
+                adaptive: Some(adaptive),
+                ..settings(1, TEST_SEED)
+            };
+            (method, s)
+        });
     let mut rows = Vec::new();
     for (method, s) in uniform.chain(adaptive_renders) {
         progress(&format!("{}, {} runs", method.label(), a.runs));

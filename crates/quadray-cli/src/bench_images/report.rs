@@ -68,11 +68,16 @@ pub fn error_at(points: &[(f64, f64)], time: f64) -> Option<f64> {
         .reduce(f64::min)
 }
 
+/// A kind of quadray render in the race: its name, and which methods belong to it.
+type Racer = (&'static str, fn(&Method) -> bool);
+
 /// The kinds of quadray render the race compares with POV-Ray, each a curve of its own.
-const RACERS: [(&str, fn(&Method) -> bool); 4] = [
+const RACERS: [Racer; 4] = [
     ("uniform", |m| matches!(m, Method::Uniform(_))),
     ("image target", |m| matches!(m, Method::Adaptive(_))),
-    ("per-pixel", |m| matches!(m, Method::Pixel(_) | Method::Preview(_))),
+    ("per-pixel", |m| {
+        matches!(m, Method::Pixel(_) | Method::Preview(_))
+    }),
     ("time limit", |m| matches!(m, Method::TimeLimit(_))),
 ];
 
@@ -193,7 +198,10 @@ impl ImageReport {
                 let reach = time_to_reach(curve, error);
                 let _ = write!(s, " {} | {} |", reach.cell(), reach.ratio(time));
             }
-            let best = curves.iter().filter_map(|c| error_at(c, time)).reduce(f64::min);
+            let best = curves
+                .iter()
+                .filter_map(|c| error_at(c, time))
+                .reduce(f64::min);
             let (at, ratio) = best.map_or(("none as fast".into(), "–".into()), |e| {
                 (format!("{e:.2e}"), format!("{:.2}", e / error))
             });

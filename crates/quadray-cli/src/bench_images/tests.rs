@@ -70,7 +70,10 @@ fn error_falls_with_samples_and_the_files_are_written() {
     let preview = table("| preview ");
     assert_eq!(preview.len(), 3, "{md}");
     let mean_spp = |r: &Vec<String>| -> f64 { r[2].split(' ').next().unwrap().parse().unwrap() };
-    assert_eq!((pixel[2][1].as_str(), preview[1][1].as_str()), ("pixel 0.04", "preview 0.04"));
+    assert_eq!(
+        (pixel[2][1].as_str(), preview[1][1].as_str()),
+        ("pixel 0.04", "preview 0.04")
+    );
     assert!(mean_spp(&preview[1]) < mean_spp(&pixel[2]), "{md}");
     // The time-limited rows: a longer limit, more samples.
     let timed = table("| time ");
@@ -78,7 +81,10 @@ fn error_falls_with_samples_and_the_files_are_written() {
     assert!(mean_spp(&timed[1]) > mean_spp(&timed[0]), "{md}");
     let svg = std::fs::read_to_string(dir.path().join("image-error.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("64 spp") && svg.contains("image target"));
-    assert!(svg.contains("preview 0.04") && svg.contains("time 0.1 s"), "{svg}");
+    assert!(
+        svg.contains("preview 0.04") && svg.contains("time 0.1 s"),
+        "{svg}"
+    );
     let png = image::open(dir.path().join("image-error-reference.png")).unwrap();
     assert_eq!((png.width(), png.height()), (64, 36));
     // Nothing but the three outputs (no temporary files left behind).

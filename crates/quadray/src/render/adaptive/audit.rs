@@ -12,13 +12,17 @@
 //! error sᵢ over the root of the rays rᵢ the pixel traced, and F ([`UNIFORM_PIXELS`]) spread
 //! evenly, so that pixels whose samples all agreed are drawn too. Auditing a pixel costs its rays
 //! twice, and for a fixed cost the estimate's variance, Σ eᵢ² / pᵢ, is least with pᵢ ∝ eᵢ / √rᵢ
-//! (Lagrange, as Neyman allocation). Drawn by sᵢ alone, 512 pixels cost 8–15% of the render on
-//! the bundled scenes: the pixels with most error hold the most samples. Each drawn pixel is sampled twice more, as many samples as it holds, with
-//! independent seeds; with a its value and b, c the two new ones, (a − b)(a − c) has expectation
-//! (a − μ)² given a, its actual squared error ([`super::Twin`]). The image's MSE is estimated by
-//! Σ (a − b)(a − c) / pᵢ over the drawn pixels, divided by N (Horvitz–Thompson): unbiased
-//! whatever the calibration says, and precise where the sᵢ follow the actual errors. The draw
-//! depends only on the pixels and the seed, so it is the same for any thread count.
+//! (Lagrange, as in Neyman allocation). Drawn by sᵢ alone, 512 pixels cost 8–15% of the render on
+//! the bundled scenes: the pixels with most error hold the most samples.
+//!
+//! Each drawn pixel is sampled twice more, as many samples as it holds, with independent seeds;
+//! with a its value and b, c the two new ones, (a − b)(a − c) has expectation (a − μ)² given a,
+//! its actual squared error ([`super::Twin`]). The image's MSE is estimated by
+//! Σ (a − b)(a − c) / pᵢ over the drawn pixels, divided by N (Horvitz–Thompson): unbiased whatever
+//! the calibration says, and precise where the sᵢ follow the actual errors. Over 60 renders of
+//! four scenes (docs/image-error/estimate.md) it was within ±25% of the truth in 45, where the
+//! calibrated estimates summed were in 29. The draw depends only on the pixels and the seed, so
+//! it is the same for any thread count.
 
 use super::Twin;
 use super::calibration::{Calibration, sample_twin};
