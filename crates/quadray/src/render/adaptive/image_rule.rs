@@ -163,7 +163,8 @@ pub(super) fn next_step(states: &[PixelState], aim: &Aim) -> Option<Step> {
     // for. Spending it all on the next round instead doubled nearly every pixel under a time
     // limit (defense, 0.8 s at 480x270: 16 to 32 spp everywhere, uniform sampling's image).
     // n' = n (v/λ)^(1/α): each open pixel's n v^(1/α) once, so that a λ costs a multiply a pixel
-    // (a power a pixel in each of the bisection's steps cost a time-limited grid render 25%).
+    // (a power a pixel in each of the bisection's steps made a 0.1 s time limit on defense take
+    // 0.51 s where the first round alone takes 0.43 s).
     let open_pixels: Vec<(f64, f64, f64, f64)> = states
         .iter()
         .filter(|s| s.count < aim.max_spp && s.value() > 0.0)
