@@ -25,23 +25,31 @@
 //! it is the same for any thread count.
 
 use super::Twin;
-use super::calibration::{Calibration, sample_twin};
+use super::calibration::{Calibration, sample_sets};
 use crate::film::PixelEstimate;
 use crate::integrator::RayCounts;
 use crate::render::SampleContext;
 use crate::sampler::pixel_pattern;
 use rayon::prelude::*;
 
-/// Pixels the audit draws in proportion to their estimated error, about.
+/// Pixels the audit of a whole image draws in proportion to their estimated error, about (a crop
+/// or a tile, its share).
 pub const AUDIT_PIXELS: f64 = 1024.0;
 
 /// Pixels the audit draws evenly over the image, about: pixels whose samples all agreed have
 /// no estimated error to be drawn by, and may still have missed a feature.
 pub const UNIFORM_PIXELS: f64 = 1024.0;
 
+/// The fewest pixels a crop's or a tile's audit draws in each way.
+const MIN_AUDIT_PIXELS: f64 = 32.0;
+
 /// What the audit's draw is hashed with, so that it follows neither the image's samples nor the
 /// twins' choice.
 const AUDIT_SEED: u32 = 0xA0D1_7ED5;
+
+/// What the audited pixels' two new sample sets are keyed with: not the calibration twins' sets,
+/// which helped decide the pixels' counts and so are not independent of where they stopped.
+const AUDIT_SETS: u32 = 0x5A3E_0A7D;
 
 /// The audited MSE of the display values of the window of `context`, whose pixels are
 /// `estimates` (row-major) having traced `rays`, with their squared errors estimated by
@@ -64,9 +72,15 @@ pub(super) fn audit(
         .map(|w| if w.is_finite() { w } else { 0.0 })
         .collect();
     let total: f64 = weights.iter().sum();
-    let uniform = (UNIFORM_PIXELS / pixels as f64).min(1.0);
+    // A crop or a tile draws its share of the image's audit (at least a few pixels): auditing
+    // every pixel of a 32x32 tile would triple its rays.
+    let settings = context.settings;
+    let share = pixels as f64 / (settings.width as f64 * settings.height as f64);
+    let drawn_pixels = |wanted: f64| (wanted * share).max(MIN_AUDIT_PIXELS);
+    let uniform = (drawn_pixels(UNIFORM_PIXELS) / pixels as f64).min(1.0);
+    let by_error = drawn_pixels(AUDIT_PIXELS);
     let chance = |s: f64| match total > 0.0 {
-        true => (AUDIT_PIXELS * s / total + uniform).min(1.0),
+        true => (by_error * s / total + uniform).min(1.0),
         false => uniform,
     };
     let seed = context.settings.seed ^ AUDIT_SEED;
@@ -93,7 +107,7 @@ pub(super) fn audit(
             let mut twin = Twin::default();
             let mut counts = RayCounts::default();
             let footprint = (pixel.count(), footprint_spp);
-            sample_twin(context, at, &mut twin, footprint, &mut counts);
+            sample_sets(context, at, &mut twin, footprint, &mut counts, AUDIT_SETS);
             let m = twin.squared_error_of(pixel);
             (m / p, counts)
         })

@@ -45,8 +45,8 @@ const TWIN_CHOICE_SEED: u32 = 0x0C40_1CE5;
 pub const MIN_TWINS: usize = 16;
 
 /// The twins the rough stratum is given, about (all its pixels where it has fewer). The summed
-/// error of m twins has a relative spread near √(3/m) (half a squared difference has the
-/// spread of χ² with one degree of freedom, and pixels differ): about 8% here.
+/// error of m twins has a relative spread near 2/√m at best ((a − b)(a − c) has a standard
+/// deviation near 1.7 times its mean, and pixels differ): about 9% here.
 pub const ROUGH_TWINS: f64 = 512.0;
 
 /// The twins the flat stratum is given, about: enough that a feature every first sample missed,
@@ -87,12 +87,15 @@ impl Twin {
         (0..3).map(|i| (a[i] - b[i]) * (a[i] - c[i])).sum::<f64>() / 3.0
     }
 
-    /// The squared error of a flat `pixel` (one whose samples all agreed), on the safe side: the
-    /// mean of (a − b)² and (a − c)², whose expectation given a is (a − μ)² + V, less the twins'
-    /// own batch-means variance. Where the pixel's samples all missed a feature that a sample
-    /// meets with chance p, (a − b)(a − c) is not zero only when both twins meet it, p² of the
-    /// time: unbiased, but on the dots of `features_the_first_samples_miss_are_found` (p near
-    /// 1/4) the pilot's flat twins then saw nothing and the render stopped with the dots missed.
+    /// The squared error of a flat `pixel` (one whose samples all agreed): the mean of (a − b)²
+    /// and (a − c)², whose expectation given a is (a − μ)² + V, less the twins' own batch-means
+    /// variance. That variance overstates V under stratification (about 3× for an edge), so
+    /// this can fall below the truth by up to 2V where the twins see an edge; it is not on the
+    /// safe side. It is kept over (a − b)(a − c), unbiased, for rare features: where the pixel's
+    /// samples all missed a feature that a sample meets with chance p, (a − b)(a − c) is not
+    /// zero only when both twins meet it, p² of the time, and on the dots of
+    /// `features_the_first_samples_miss_are_found` (p near 1/4) the pilot's flat twins then saw
+    /// nothing and the render stopped with the dots missed.
     fn flat_squared_error_of(&self, pixel: &PixelEstimate) -> f64 {
         let (a, b, c) = self.display_values(pixel);
         let spread = (0..3)
@@ -330,12 +333,25 @@ pub(crate) fn sample_twin(
     context: &SampleContext<'_>,
     at: (u32, u32),
     twin: &mut Twin,
+    footprint: (u32, u32),
+    counts: &mut RayCounts,
+) {
+    sample_sets(context, at, twin, footprint, counts, TWIN_SEED_OFFSET);
+}
+
+/// [`sample_twin`] with the sample sets keyed by the render's seed plus `offset` (and the set's
+/// index): another offset gives sets independent of the twins'.
+pub(super) fn sample_sets(
+    context: &SampleContext<'_>,
+    at: (u32, u32),
+    twin: &mut Twin,
     (count, footprint_spp): (u32, u32),
     counts: &mut RayCounts,
+    offset: u32,
 ) {
     for (set, estimate) in twin.estimates.iter_mut().enumerate() {
         let seed = (context.settings.seed)
-            .wrapping_add(TWIN_SEED_OFFSET)
+            .wrapping_add(offset)
             .wrapping_add(set as u32);
         let pattern = pixel_pattern(at.0, at.1, seed);
         let footprint = (count, footprint_spp);

@@ -18,8 +18,9 @@
 //! it is taken to the count where its value falls to it, nᵢ' = nᵢ (vᵢ/λ)^(1/α) at most
 //! 2^[`MAX_DOUBLINGS`] times its count, which this round doubles when nᵢ' ≥ √2 nᵢ (the geometric
 //! midpoint of keeping and doubling). λ is chosen each round from the latest estimates so that
-//! the predicted MSE meets the target, and raised where the round would cost more than the
-//! budget left.
+//! the predicted MSE meets the target; with a budget, it is at least the least λ whose whole
+//! allocation (every pixel taken to nᵢ') the budget left pays for, and the round never costs
+//! more than that budget.
 
 /// One pixel as the allocation sees it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -108,7 +109,7 @@ impl Step {
 }
 
 /// The next round's step, or `None` when sampling should stop: the target is met, the budget
-/// cannot pay for one more doubling, or no pixel can improve.
+/// left cannot pay for a round that refines anything, or no pixel can improve.
 pub(super) fn next_step(states: &[PixelState], aim: &Aim) -> Option<Step> {
     let open = |s: &&PixelState| s.count < aim.max_spp && s.value() > 0.0;
     let highest = states
@@ -276,7 +277,7 @@ mod tests {
         }
     }
 
-    /// Samples go where the squared error per sample and per ray is highest: a noisy pixel is
+    /// Samples go where the squared error per ray (s / c) is highest: a noisy pixel is
     /// refined before a quiet one, and a costly one after a cheap one of equal error.
     #[test]
     fn the_highest_value_pixels_are_refined_first() {

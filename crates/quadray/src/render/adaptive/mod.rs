@@ -3,7 +3,7 @@
 //!
 //! - **Image rule** (the default, `--target-error`): the image's mean squared error is the sum of
 //!   its pixels' ([`PixelEstimate::squared_error`]); each round doubles the pixels whose estimated
-//!   squared error per sample and per ray is above a threshold chosen so that the predicted image
+//!   squared error per ray (sᵢ/cᵢ) is above a threshold chosen so that the predicted image
 //!   error meets the target, or the work meets the budget ([`image_rule`]). The thresholds come
 //!   from a pilot, a fixed lattice of the image's pixels ([`pilot`]).
 //! - **Pixel rule** (`--pixel-error`): every pixel is brought to one relative error of its display

@@ -6,7 +6,8 @@
 //! as the whole render, so its pixels follow the same thresholds and equal the whole render's.
 //!
 //! In a whole render the pilot's pixels are part of the image and cost nothing extra; a crop or a
-//! tile also renders those outside it (1/16 of the rest of the image, at the pilot's counts).
+//! tile also renders those outside it, at the pilot's counts, with their twins: 1/16 of the rest of
+//! the image at the usual stride of 4, a quarter at 2, all of it at 1 (images under 4096 pixels).
 
 use super::calibration::{self, Calibration, Twin, TwinOdds, is_flat};
 use super::image_rule::{self, Aim, Budget, PixelState, Step};

@@ -33,7 +33,7 @@ pub struct Adaptive {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ErrorRule {
     /// Lower the image's mean squared error the most for the samples spent: each round doubles
-    /// the pixels whose estimated squared error per sample and per ray is highest, until the
+    /// the pixels whose estimated squared error per ray is highest, until the
     /// image's estimated RMSE reaches the target or a budget runs out (`--target-error`).
     #[default]
     Image,
