@@ -20,7 +20,7 @@
 //! its actual squared error ([`super::Twin`]). The image's MSE is estimated by
 //! Σ (a − b)(a − c) / pᵢ over the drawn pixels, divided by N (Horvitz–Thompson): unbiased whatever
 //! the calibration says, and precise where the sᵢ follow the actual errors. Over 60 renders of
-//! four scenes (docs/image-error/estimate.md) it was within ±25% of the truth in 45, where the
+//! four scenes (docs/image-error/estimate.md) it was within ±25% of the truth in 46, where the
 //! calibrated estimates summed were in 29. The draw depends only on the pixels and the seed, so
 //! it is the same for any thread count.
 
