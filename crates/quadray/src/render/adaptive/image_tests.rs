@@ -1,12 +1,12 @@
 //! Tests of the image rule: the target met in the true error, the estimate checked against it,
 //! the budgets, and features the first samples miss.
 
-use super::tests::{disc, settings};
+use super::tests::{disc, settings, white_on_black};
 use super::*;
 use crate::film::encode_srgb;
 use crate::render::{NoProgress, RenderSettings, render};
 use crate::*;
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 
 /// The true RMSE of `film`'s display values against `reference`'s.
 fn true_rmse(film: &Film, reference: &Film) -> f64 {
@@ -116,27 +116,7 @@ fn dots() -> Scene {
             material: 0,
         })
         .collect();
-    Scene::new(SceneDescription {
-        camera: Camera {
-            from: DVec3::new(0.0, 0.0, 10.0),
-            to: DVec3::ZERO,
-            up: DVec3::Y,
-            projection: Projection::Orthographic { height: 4.0 },
-        },
-        background: Vec3::ZERO,
-        environment: None,
-        materials: vec![Material {
-            texture: Texture::Constant(Vec3::ONE),
-            ambient: 1.0,
-            ..Material::default()
-        }],
-        lights: vec![],
-        geometry: Geometry {
-            spheres,
-            ..Geometry::default()
-        },
-    })
-    .unwrap()
+    white_on_black(spheres)
 }
 
 /// Dots a fifth of a pixel wide, far apart: 8 samples miss a dot in about 3 of 4 of the pixels

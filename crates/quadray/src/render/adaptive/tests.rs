@@ -12,6 +12,16 @@ use std::time::Duration;
 /// background, seen from above by an orthographic camera 4 units tall: flat regions and one
 /// circular edge whose position is known.
 pub(super) fn disc() -> Scene {
+    white_on_black(vec![Sphere {
+        center: DVec3::ZERO,
+        radius: 1.0,
+        material: 0,
+    }])
+}
+
+/// White `spheres` (flat, ambient only) on a black background, seen from above by an
+/// orthographic camera 4 units tall centred on the origin (48 pixels: 12 to a unit).
+pub(super) fn white_on_black(spheres: Vec<Sphere>) -> Scene {
     Scene::new(SceneDescription {
         camera: Camera {
             from: DVec3::new(0.0, 0.0, 10.0),
@@ -28,11 +38,7 @@ pub(super) fn disc() -> Scene {
         }],
         lights: vec![],
         geometry: Geometry {
-            spheres: vec![Sphere {
-                center: DVec3::ZERO,
-                radius: 1.0,
-                material: 0,
-            }],
+            spheres,
             ..Geometry::default()
         },
     })
