@@ -8,7 +8,7 @@
 //! reaches ([`crate::footprint::footprint_scale`]), so a 1-spp preview is filtered over the whole
 //! pixel and later steps over smaller shares.
 
-use crate::adaptive::{Calibration, Twin, TwinOdds, is_flat, sample_pixel, sample_twin};
+use crate::adaptive::{Calibration, Twin, sample_pixel, sample_twin};
 use crate::aov::AovSelection;
 use crate::film::{Film, PixelEstimate};
 use crate::integrator::RayCounts;
@@ -102,17 +102,18 @@ impl ProgressiveFilm {
     fn choose_twins(&self) -> Vec<((u32, u32), Twin)> {
         let window = self.settings.window();
         let width = window.width() as usize;
-        let flat: Vec<bool> = self.estimates.par_iter().map(is_flat).collect();
-        let odds = TwinOdds::of(flat.iter().copied());
-        let seed = self.settings.seed;
-        (flat.into_iter().enumerate())
-            .filter_map(|(i, flat)| {
+        let candidates: Vec<_> = (self.estimates.iter().enumerate())
+            .map(|(i, e)| {
                 let at = (
                     window.x0 + (i % width) as u32,
                     window.y0 + (i / width) as u32,
                 );
-                Some((at, odds.twin(seed, at, flat)?))
+                (at, e)
             })
+            .collect();
+        let twins = crate::adaptive::choose_twins(self.settings.seed, &candidates);
+        (candidates.iter().zip(twins))
+            .filter_map(|(&(at, _), twin)| Some((at, twin?)))
             .collect()
     }
 

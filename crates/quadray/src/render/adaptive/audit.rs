@@ -25,11 +25,10 @@
 //! it is the same for any thread count.
 
 use super::Twin;
-use super::calibration::{Calibration, sample_sets};
+use super::calibration::{Calibration, sample_sets, uniform_draw};
 use crate::film::PixelEstimate;
 use crate::integrator::RayCounts;
 use crate::render::SampleContext;
-use crate::sampler::pixel_pattern;
 use rayon::prelude::*;
 
 /// Pixels the audit of a whole image draws in proportion to their estimated error, about (a crop
@@ -83,26 +82,21 @@ pub(super) fn audit(
         true => (by_error * s / total + uniform).min(1.0),
         false => uniform,
     };
-    let seed = context.settings.seed ^ AUDIT_SEED;
-    let drawn: Vec<(usize, f64)> = (weights.iter().enumerate())
+    let seed = settings.seed ^ AUDIT_SEED;
+    let drawn: Vec<(usize, (u32, u32), f64)> = (weights.iter().enumerate())
         .filter_map(|(i, &s)| {
             let at = (
                 window.x0 + (i % width) as u32,
                 window.y0 + (i / width) as u32,
             );
-            let draw = pixel_pattern(at.0, at.1, seed) as f64 / 2f64.powi(32);
             let p = chance(s);
-            (draw < p).then_some((i, p))
+            (uniform_draw(seed, at) < p).then_some((i, at, p))
         })
         .collect();
     // Collected in order and summed in order: the same estimate for any thread count.
     let audited: Vec<(f64, RayCounts)> = drawn
         .par_iter()
-        .map(|&(i, p)| {
-            let at = (
-                window.x0 + (i % width) as u32,
-                window.y0 + (i / width) as u32,
-            );
+        .map(|&(i, at, p)| {
             let pixel = &estimates[i];
             let mut twin = Twin::default();
             let mut counts = RayCounts::default();

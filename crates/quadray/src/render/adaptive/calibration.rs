@@ -33,6 +33,7 @@ use crate::film::{ERROR_BATCHES, PixelEstimate, encode_srgb};
 use crate::integrator::RayCounts;
 use crate::render::SampleContext;
 use crate::sampler::pixel_pattern;
+use rayon::prelude::*;
 
 /// What a twin's seed differs from the image's by: any other value gives an independent sample
 /// set.
@@ -151,16 +152,30 @@ impl TwinOdds {
             true => self.flat,
             false => self.rough,
         };
-        let draw = pixel_pattern(at.0, at.1, seed ^ TWIN_CHOICE_SEED) as f64 / 2f64.powi(32);
-        (draw < chance).then(|| Twin {
+        (uniform_draw(seed ^ TWIN_CHOICE_SEED, at) < chance).then(|| Twin {
             estimates: Default::default(),
             weight: 1.0 / chance,
         })
     }
 }
 
+/// The twins of `candidates` (each pixel's position and first samples), in their order: the
+/// strata and their odds ([`TwinOdds`]) are those of the candidates.
+pub fn choose_twins(seed: u32, candidates: &[((u32, u32), &PixelEstimate)]) -> Vec<Option<Twin>> {
+    let flat: Vec<bool> = candidates.par_iter().map(|(_, e)| is_flat(e)).collect();
+    let odds = TwinOdds::of(flat.iter().copied());
+    (candidates.iter().zip(flat))
+        .map(|(&(at, _), flat)| odds.twin(seed, at, flat))
+        .collect()
+}
+
+/// A number in [0, 1) fixed by the pixel at `at` and `seed`, for drawing pixels with a chance.
+pub(super) fn uniform_draw(seed: u32, at: (u32, u32)) -> f64 {
+    pixel_pattern(at.0, at.1, seed) as f64 / 2f64.powi(32)
+}
+
 /// Whether a pixel's samples all agree (an unknown error is not flat).
-pub fn is_flat(estimate: &PixelEstimate) -> bool {
+fn is_flat(estimate: &PixelEstimate) -> bool {
     estimate.squared_error() <= FLAT
 }
 

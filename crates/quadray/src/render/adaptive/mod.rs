@@ -33,7 +33,7 @@ use crate::integrator::RayCounts;
 use crate::render::{PixelWindow, Progress, RenderError, Rendered, SampleContext};
 use crate::sampler::{SampleKey, pixel_pattern, progressive_2d};
 pub use calibration::Calibration;
-pub(crate) use calibration::{Twin, TwinOdds, is_flat, sample_twin};
+pub(crate) use calibration::{Twin, choose_twins, sample_twin};
 use image_rule::PixelState;
 use pilot::{Plan, state_of};
 use rayon::prelude::*;
@@ -208,18 +208,23 @@ impl WindowState {
 
     /// Chooses the twins among the pixels outside the pilot, after their first round.
     fn choose_twins(&mut self, context: &SampleContext<'_>) {
-        // Each pixel outside the pilot: whether its first samples are flat.
-        let flat: Vec<Option<bool>> = (self.estimates.par_iter().zip(&self.pilot_rounds))
-            .map(|(e, pilot)| pilot.is_none().then(|| calibration::is_flat(e)))
-            .collect();
-        let odds = TwinOdds::of(flat.iter().flatten().copied());
         let window = context.window;
-        for (i, flat) in flat.into_iter().enumerate() {
-            let Some(flat) = flat else { continue };
-            let (row, column) = (i / self.width, i % self.width);
-            let at = (window.x0 + column as u32, window.y0 + row as u32);
-            if let Some(twin) = odds.twin(context.settings.seed, at, flat) {
-                self.twins[row].push((column, twin));
+        let (indices, candidates): (Vec<usize>, Vec<_>) = (self.estimates.iter())
+            .zip(&self.pilot_rounds)
+            .enumerate()
+            .filter(|(_, (_, pilot))| pilot.is_none())
+            .map(|(i, (e, _))| {
+                let at = (
+                    window.x0 + (i % self.width) as u32,
+                    window.y0 + (i / self.width) as u32,
+                );
+                (i, (at, e))
+            })
+            .unzip();
+        let twins = calibration::choose_twins(context.settings.seed, &candidates);
+        for (i, twin) in indices.into_iter().zip(twins) {
+            if let Some(twin) = twin {
+                self.twins[i / self.width].push((i % self.width, twin));
             }
         }
     }

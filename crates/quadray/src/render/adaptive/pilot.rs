@@ -9,7 +9,7 @@
 //! tile also renders those outside it, at the pilot's counts, with their twins: 1/16 of the rest of
 //! the image at the usual stride of 4, a quarter at 2, all of it at 1 (images under 4096 pixels).
 
-use super::calibration::{self, Calibration, Twin, TwinOdds, is_flat};
+use super::calibration::{self, Calibration, Twin};
 use super::image_rule::{self, Aim, Budget, PixelState, Step};
 use super::{Adaptive, NEIGHBOUR_ROUNDS, Stop, follow_neighbours, sample_pixel};
 use crate::aov::AovSample;
@@ -125,10 +125,10 @@ pub(super) fn plan(
         let targets = round_targets(adaptive, &pixels, round, step, whole_width);
         counts += sample_round(context, adaptive, &mut pixels, round, targets);
         if round == 0 {
-            let flat: Vec<bool> = pixels.par_iter().map(|p| is_flat(&p.estimate)).collect();
-            let odds = TwinOdds::of(flat.iter().copied());
-            for (pixel, flat) in pixels.iter_mut().zip(flat) {
-                pixel.twin = odds.twin(context.settings.seed, pixel.at, flat);
+            let candidates: Vec<_> = pixels.iter().map(|p| (p.at, &p.estimate)).collect();
+            let twins = calibration::choose_twins(context.settings.seed, &candidates);
+            for (pixel, twin) in pixels.iter_mut().zip(twins) {
+                pixel.twin = twin;
             }
             counts += catch_up_twins(context, adaptive, &mut pixels);
         }
