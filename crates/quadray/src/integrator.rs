@@ -7,7 +7,7 @@ use crate::material::SpecularModel;
 use crate::math::{Ray, offset_origin};
 use crate::microfacet::{MIRROR_ROUGHNESS, reflect_glossy, schlick};
 use crate::sampler::SampleKey;
-use crate::scene::Scene;
+use crate::scene::{Scene, Seen};
 use crate::shape::{PrimRef, SurfaceHit};
 use glam::{DVec3, Vec3};
 use std::ops::AddAssign;
@@ -71,7 +71,12 @@ impl Whitted {
         key: SampleKey,
         counts: &mut RayCounts,
     ) -> Vec3 {
-        self.camera_ray_hit(scene, ray, cone, key, counts).0
+        counts.camera += 1;
+        match scene.seen_from(ray, None) {
+            Seen::Surface(hit) => self.shade_camera_hit(scene, ray, cone, &hit, key, counts),
+            Seen::Constant { radiance, .. } => radiance,
+            Seen::Nothing => scene.background(),
+        }
     }
 
     /// Radiance arriving along a camera ray, and the ray's first hit (for the AOV passes, which
@@ -86,26 +91,40 @@ impl Whitted {
     ) -> (Vec3, Option<SurfaceHit>) {
         counts.camera += 1;
         let hit = self.intersect(scene, ray, None);
-        // Each combination compiles its own path: a scene without filtered textures or glass
-        // pays nothing for them.
         let radiance = match &hit {
-            Some(h) => match (cone.is_point(), scene.transmits()) {
-                (true, false) => {
-                    self.shade::<false, false>(scene, ray, cone, h, 1, 1.0, true, key, counts)
-                }
-                (false, false) => {
-                    self.shade::<true, false>(scene, ray, cone, h, 1, 1.0, true, key, counts)
-                }
-                (true, true) => {
-                    self.shade::<false, true>(scene, ray, cone, h, 1, 1.0, true, key, counts)
-                }
-                (false, true) => {
-                    self.shade::<true, true>(scene, ray, cone, h, 1, 1.0, true, key, counts)
-                }
-            },
+            Some(h) => self.shade_camera_hit(scene, ray, cone, h, key, counts),
             None => scene.background(),
         };
         (radiance, hit)
+    }
+
+    /// Radiance leaving a camera ray's first hit towards the camera.
+    #[inline(always)]
+    fn shade_camera_hit(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        cone: RayCone,
+        hit: &SurfaceHit,
+        key: SampleKey,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
+        // Each combination compiles its own path: a scene without filtered textures or glass
+        // pays nothing for them.
+        match (cone.is_point(), scene.transmits()) {
+            (true, false) => {
+                self.shade::<false, false>(scene, ray, cone, hit, 1, 1.0, true, key, counts)
+            }
+            (false, false) => {
+                self.shade::<true, false>(scene, ray, cone, hit, 1, 1.0, true, key, counts)
+            }
+            (true, true) => {
+                self.shade::<false, true>(scene, ray, cone, hit, 1, 1.0, true, key, counts)
+            }
+            (false, true) => {
+                self.shade::<true, true>(scene, ray, cone, hit, 1, 1.0, true, key, counts)
+            }
+        }
     }
 
     /// The nearest hit of `ray` with its full surface record (phase two runs once, here).
@@ -132,20 +151,22 @@ impl Whitted {
         key: SampleKey,
         counts: &mut RayCounts,
     ) -> Vec3 {
-        match self.intersect(scene, ray, from) {
-            Some(hit) => {
-                let leaving = self.shade::<CONES, GLASS>(
+        let (leaving, t) = match scene.seen_from(ray, from) {
+            Seen::Surface(hit) => (
+                self.shade::<CONES, GLASS>(
                     scene, ray, cone, &hit, depth, throughput, backdrop, key, counts,
-                );
-                match medium {
-                    Some(a) if GLASS => leaving * a.after(hit.t * ray.dir.length()),
-                    _ => leaving,
-                }
-            }
+                ),
+                hit.t,
+            ),
+            Seen::Constant { t, radiance } => (radiance, t),
             // The camera's backdrop, seen directly or through glass; reflections show the
             // surroundings.
-            None if backdrop => scene.background(),
-            None => scene.environment(),
+            Seen::Nothing if backdrop => return scene.background(),
+            Seen::Nothing => return scene.environment(),
+        };
+        match medium {
+            Some(a) if GLASS => leaving * a.after(t * ray.dir.length()),
+            _ => leaving,
         }
     }
 

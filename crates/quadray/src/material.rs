@@ -76,6 +76,30 @@ impl Material {
         self.texture.eval_at(point, attributes) * attributes.color.truncate()
     }
 
+    /// The radiance this material's surfaces leave in a scene without lights and without vertex
+    /// colours, when it depends on nothing about the hit: an opaque, non-reflective, non-GGX
+    /// material of constant colour and emission leaves its ambient term plus its emission (what
+    /// `Whitted::shade` computes for it, operation for operation); `None` for any other material.
+    pub fn unlit_constant_radiance(&self) -> Option<Vec3> {
+        let Texture::Constant(base) = self.texture else {
+            return None;
+        };
+        let emission = match &self.emission {
+            None => None,
+            Some(Texture::Constant(c)) => Some(*c),
+            Some(_) => return None,
+        };
+        let opaque_matte = self.reflectivity == 0.0
+            && self.transmission.is_none()
+            && self.specular_model != SpecularModel::Ggx;
+        // shade: base × (ambient × matte) with matte = (1 − reflectivity) × 1 = 1 exactly, then
+        // the emission added where there is one.
+        opaque_matte.then(|| {
+            let ambient = base * (self.ambient * (1.0 - self.reflectivity));
+            emission.map_or(ambient, |e| ambient + e)
+        })
+    }
+
     /// The specular lobe `alignment^shininess` for an alignment in (0, 1]: by repeated
     /// multiplication when the exponent is a whole number up to 1024 (as in every bundled scene),
     /// which is exact to a few ulps and several times cheaper than `powf`; by `powf` otherwise.

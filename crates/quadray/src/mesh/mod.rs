@@ -263,6 +263,12 @@ impl Mesh {
         v * per_vertex + self.indices.len() * 12
     }
 
+    /// Whether the vertices carry colours (which multiply the material's colour).
+    #[inline]
+    pub fn has_colors(&self) -> bool {
+        self.colors.is_some()
+    }
+
     /// Whether hits carry interpolated attributes (texture coordinates or colours).
     #[inline]
     pub fn has_attributes(&self) -> bool {

@@ -16,8 +16,11 @@ use validate::{validate_levels, validate_material};
 
 pub use crate::math::MAX_COORDINATE;
 
+mod seen;
 mod transmittance;
 mod validate;
+
+pub use seen::Seen;
 
 /// Everything a scene holds, before validation.
 #[derive(Clone, Debug)]
@@ -93,6 +96,9 @@ pub struct Scene {
     filters_textures: bool,
     /// Whether any material lets light through ([`Scene::transmittance`]).
     transmits: bool,
+    /// Per material, its radiance when shading it needs no surface record ([`Scene::seen_from`]);
+    /// empty when no material's does.
+    constant_radiance: Vec<Option<Vec3>>,
 }
 
 /// Which colour [`Scene::colour_at`] looks up.
@@ -204,6 +210,10 @@ impl Scene {
             m.texture.is_filtered() || m.emission.as_ref().is_some_and(Texture::is_filtered)
         });
         let transmits = d.materials.iter().any(|m| m.transmission.is_some());
+        let vertex_colors = (0..d.geometry.level_count())
+            .any(|l| d.geometry.level(l).meshes.iter().any(Mesh::has_colors));
+        let constant_radiance =
+            seen::constant_radiances(&d.materials, !d.lights.is_empty(), vertex_colors);
         Ok(Scene {
             camera: d.camera,
             background: d.background,
@@ -215,6 +225,7 @@ impl Scene {
             single_sided,
             filters_textures,
             transmits,
+            constant_radiance,
         })
     }
 
@@ -405,12 +416,26 @@ impl Scene {
             .closest(&self.geometry, ray, f64::INFINITY, from)?;
         let mut slot = None;
         let path = self.path_in(prim.placement, &mut slot);
-        Some(SurfaceHit {
+        let material = self.geometry.material(prim, path);
+        Some(self.surface_hit(ray, (t, prim), path, material))
+    }
+
+    /// The full record of the hit `(t, prim)` of `ray` on `material`, `prim` placed by `path`
+    /// (phase two).
+    #[inline(always)]
+    fn surface_hit(
+        &self,
+        ray: &Ray,
+        (t, prim): (f64, PrimRef),
+        path: &InstancePath,
+        material: crate::material::MaterialId,
+    ) -> SurfaceHit {
+        SurfaceHit {
             t,
             prim,
-            material: self.geometry.material(prim, path),
+            material,
             geometry: self.geometry.surface(prim, path, ray, t),
-        })
+        }
     }
 
     /// `hit`, or while it is the back of a single-sided mesh the next surface beyond it along

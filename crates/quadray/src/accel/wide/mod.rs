@@ -150,10 +150,12 @@ impl Node4 {
                 n += 1;
             }
         }
-        for &(child, _) in &order[..n - 1] {
-            prefetch(child);
+        // One push per entry: `extend_from_slice` of a run this short compiled to a call to
+        // `memcpy` (4% of a camera-ray frame's profile).
+        for &entry in &order[..n - 1] {
+            prefetch(entry.0);
+            stack.push(entry);
         }
-        stack.extend_from_slice(&order[..n - 1]);
         order[n - 1].0
     }
 
