@@ -5,6 +5,9 @@
 #
 #   scripts/bench-speed.sh [ROUNDS=3] [MESHES="kitchen bunny dragon"]
 #
+# Each round also renders a camera-rays-only frame of each mesh (the coherent rays' camera, no
+# lights, 1 spp) and sets its rays per CPU-second against `bench rays` on the same rays.
+#
 # The meshes, the ray files and the Embree program come from the shared harness: its
 # convert_meshes.py, its obvhs-bench `genrays` and its embree_bench.cpp, built under /tmp (nothing
 # of ../shared is copied into the repository). Prints a markdown table of medians and ratios and
@@ -50,17 +53,61 @@ for m in $MESHES; do
   [ -f "$T/rays/$m.incoherent.rays" ] || "$T/obvhs-bench/target/release/obvhs-bench" genrays "$T/meshes/$m.obj" "$m" "$T/rays" >/dev/null
 done
 
-# 5. Interleaved rounds: Embree then quadray on the same mesh, back to back.
+# 5. A camera-rays-only frame of each mesh: the coherent rays' camera (the harness's genrays:
+# the kitchen's interior view, else the model framed at 40 degrees), the file's own axes, no
+# lights, one constant material, 1 spp, so the frame casts exactly the coherent ray set.
+for m in $MESHES; do
+  python3 - "$T/meshes/$m.obj" "$m" > "$T/$m.frame.toml" <<'PY'
+import math, sys
+path, name = sys.argv[1], sys.argv[2]
+if name == "kitchen":
+    eye, look, fov = (3.0, 1.5, 1.4), (-3.9, 1.5, -1.7), 90.0
+else:
+    lo, hi = [math.inf] * 3, [-math.inf] * 3
+    for line in open(path):
+        if line.startswith("v "):
+            v = [float(x) for x in line.split()[1:4]]
+            lo, hi = [min(a, b) for a, b in zip(lo, v)], [max(a, b) for a, b in zip(hi, v)]
+    c = [(a + b) / 2 for a, b in zip(lo, hi)]
+    r = math.dist(lo, hi) / 2
+    fov = 40.0
+    d = r / math.sin(math.radians(fov) / 2) * 0.8
+    n = math.hypot(0.35, 0.25, 1.0)
+    eye, look = [ci + k / n * d for ci, k in zip(c, (0.35, 0.25, 1.0))], c
+f = lambda v: "[" + ", ".join(repr(float(x)) for x in v) + "]"
+print(f'''version = 1
+[camera]
+from = {f(eye)}
+to = {f(look)}
+up = [0.0, 1.0, 0.0]
+vfov = {fov}
+[render]
+resolution = [1280, 720]
+spp = 1
+max_depth = 1
+[[material]]
+name = "flat"
+color = [0.8, 0.8, 0.8]
+ambient = 1.0
+[[mesh]]
+path = "{path}"
+up = "z"
+material = "flat"''')
+PY
+done
+
+# 6. Interleaved rounds: Embree then quadray on the same mesh, back to back, then the frame.
 for r in $(seq "$ROUNDS"); do
   for m in $MESHES; do
     echo "round $r $m (load $(cut -d' ' -f1 /proc/loadavg))" >&2
     "$T/embree_bench" "$T/meshes/$m.obj" "$T/rays/$m" 3 > "$OUT/$m.embree.$r.txt"
     "$QR" bench rays "$T/meshes/$m.obj" "$T/rays/$m.coherent.rays" "$T/rays/$m.incoherent.rays" \
       --runs 3 -t 1 > "$OUT/$m.quadray.$r.txt"
+    "$QR" render "$T/$m.frame.toml" -o "$T/$m.frame.png" -t 1 --stats 2> "$OUT/$m.frame.$r.txt"
   done
 done
 
-# 6. The table: medians over rounds of each program's in-process medians.
+# 7. The tables: medians over rounds of each program's in-process medians.
 python3 - "$OUT" "$MESHES" <<'PY'
 import re, statistics, sys, glob, os
 out, meshes = sys.argv[1], sys.argv[2].split()
@@ -96,4 +143,14 @@ for m in meshes:
     bpt = q[qk][0]["bytes_per_tri"] if qk in q else "?"
     simd = q[qk][0].get("simd", "?") if qk in q else "?"
     print(f"| {m} | {eb:.1f} | {qb:.1f} | {bpt} | {simd} |")
+print()
+print("| mesh | camera-rays-only frame, Mrays/s (render CPU) | the same rays, `bench rays` closest hit | frame / bench |")
+print("|---|---|---|---|")
+for m in meshes:
+    q = results(f"{m}.quadray.*.txt")
+    frames = [float(x) for path in glob.glob(os.path.join(out, f"{m}.frame.*.txt"))
+              for x in re.findall(r"\(([0-9.]+) Mrays/s\)", open(path).read())]
+    fv = statistics.median(frames) if frames else float("nan")
+    qv = med(q, ("RESULT", "coherent", "intersect1", None, "1"), "cpu_mrays")
+    print(f"| {m} | {fv:.2f} | {qv:.2f} | {fv / qv:.2f} |")
 PY

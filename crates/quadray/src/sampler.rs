@@ -162,9 +162,21 @@ fn multi_jittered(
     let jx = rand_float(s, pattern.wrapping_mul(JITTER_X_KEY));
     let jy = rand_float(s, pattern.wrapping_mul(JITTER_Y_KEY));
     (
-        (sx as f64 + (sy as f64 + jx) / n as f64) / m as f64,
-        (s as f64 + jy) / count as f64,
+        divide(sx as f64 + divide(sy as f64 + jx, n), m),
+        divide(s as f64 + jy, count),
     )
+}
+
+/// `x / d` (`d` > 0), by a multiplication where `d` is a power of two, whose reciprocal 2^-k is
+/// exact, so the quotient is bit-identical (as [`remainder`] does for integers): the divisions
+/// were most of a sample point's cost at the usual counts (4, 16, 64).
+#[inline(always)]
+fn divide(x: f64, d: u32) -> f64 {
+    if d.is_power_of_two() {
+        x * f64::from_bits((1023 - d.trailing_zeros() as u64) << 52)
+    } else {
+        x / d as f64
+    }
 }
 
 /// Sample `s` of `count` within the unit pixel: the centre for one sample, else stratified jitter.
@@ -337,6 +349,28 @@ mod tests {
             assert_ne!(pixel_pattern(x, y, 0), pixel_pattern(x, y, 1));
             let other = points(1024, 1);
             assert!(reference.iter().all(|p| !other.contains(p)));
+        }
+    }
+
+    #[test]
+    fn divisions_by_powers_of_two_are_exact_multiplications() {
+        for d in [1, 2, 3, 4, 6, 8, 64, 100, 1 << 20, 1 << 31] {
+            for x in [
+                0.0,
+                0.3,
+                0.999_999_999,
+                1.0,
+                7.25,
+                63.999,
+                1e9,
+                4294967295.0,
+            ] {
+                assert_eq!(
+                    divide(x, d).to_bits(),
+                    (x / d as f64).to_bits(),
+                    "{x} / {d}"
+                );
+            }
         }
     }
 
