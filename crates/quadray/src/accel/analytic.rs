@@ -21,7 +21,7 @@ use super::round_up;
 use super::sphere_clusters::{CLUSTER, CLUSTER_FROM, morton_order};
 use super::sphere4::{FilterRay, Sphere4};
 use super::stack::{Stacks, with_stack};
-use super::wide::{BoxRay, LEAF, LEAF_WEIGHT, Node4, collapse, pop_nearer};
+use super::wide::{BoxRay, LEAF, LEAF_WEIGHT, Node4, collapse, leaf_blocks, pop_nearer};
 use crate::geometry::Level;
 use crate::math::Ray;
 use crate::shape::LocalPrim;
@@ -127,9 +127,8 @@ impl AnalyticBvh {
             None if is_sphere(p) => 1,
             _ => LEAF_WEIGHT,
         };
-        let mut blocks: Vec<Block> = Vec::new();
-        let nodes = collapse(&bvh2, weight, |prims| {
-            pack_leaf(&mut blocks, level, prims, sphere_items, &spheres_of)
+        let (nodes, blocks) = collapse(&bvh2, weight, |prims, blocks: &mut Vec<Block>| {
+            pack_leaf(blocks, level, prims, sphere_items, &spheres_of)
         });
         Some(AnalyticBvh {
             nodes: nodes.into_boxed_slice().into_vec(),
@@ -158,9 +157,7 @@ impl AnalyticBvh {
     /// The blocks of leaf reference `leaf`.
     #[inline(always)]
     fn leaf_blocks(&self, leaf: u32) -> &[Block] {
-        let first = ((leaf & !LEAF) >> LEAF_COUNT_BITS) as usize;
-        let count = (leaf & ((1 << LEAF_COUNT_BITS) - 1)) as usize;
-        &self.blocks[first..first + count]
+        &self.blocks[leaf_blocks(leaf)]
     }
 
     /// Lowers `best_t` to the nearest hit in (0, `best_t`), returning its primitive if there is one.
@@ -251,17 +248,16 @@ impl AnalyticBvh {
     }
 }
 
-/// Packs a leaf's items into blocks (the spheres of its sphere items four to a block, then one
-/// block per quadric) and returns the leaf's payload: its first block and their count.
+/// Packs a leaf's items into blocks appended to `blocks`: the spheres of its sphere items four to
+/// a block, then one block per quadric.
 fn pack_leaf(
     blocks: &mut Vec<Block>,
     level: Level<'_>,
     items: &[u32],
     sphere_items: usize,
     spheres_of: &impl Fn(u32) -> ([u32; CLUSTER], usize),
-) -> u32 {
+) {
     let is_sphere = |p: u32| (p as usize) < sphere_items;
-    let first = blocks.len() as u32;
     let mut lane = 4;
     for &p in items.iter().filter(|&&p| is_sphere(p)) {
         let (group, n) = spheres_of(p);
@@ -287,13 +283,6 @@ fn pack_leaf(
             prims,
         });
     }
-    let count = blocks.len() as u32 - first;
-    // A BVH2 leaf holds one item, and a leaf at most four spheres' weight: one block.
-    assert!(
-        count < 1 << LEAF_COUNT_BITS && blocks.len() <= 1 << 28,
-        "an analytic BVH leaf holds at most 7 blocks, and a BVH 2^28 blocks"
-    );
-    (first << LEAF_COUNT_BITS) | count
 }
 
 /// The ray in f32 for the node test and the sphere filter, or `None` when its origin or direction
@@ -306,9 +295,6 @@ fn f32_rays(ray: &Ray) -> Option<(BoxRay, FilterRay)> {
     (origin.is_finite() && dir.is_finite())
         .then(|| (BoxRay::new(origin, dir), FilterRay::new(origin, dir)))
 }
-
-/// A leaf's payload: its first [`Block`], shifted past the low bits that hold the block count.
-const LEAF_COUNT_BITS: u32 = 3;
 
 /// The nearest hit in (0, `t_max`) among a block's primitives, skipping self-hits of `from`.
 #[inline(always)]

@@ -1,37 +1,102 @@
-//! Collapsing obvhs' BVH2 (built down to single primitives) into 4-wide nodes over leaves whose
-//! contents the caller packs, without recursion (trees of degenerate input can be deep).
+//! Collapsing obvhs' BVH2 (built down to single primitives) into 4-wide nodes over leaves of
+//! blocks the caller packs, without recursion below the top (trees of degenerate input can be
+//! deep), in parallel over subtrees.
+//!
+//! The tree's top is collapsed first; every subtree it reaches whose weight is at most
+//! 1/[`TASKS`] of the whole (and more than a leaf's) is set aside as a task, and the tasks are
+//! collapsed in parallel, each into nodes and blocks of its own, then appended in the order they
+//! were set aside. Which subtrees become tasks depends on the tree alone, so the nodes and blocks
+//! are the same for any number of threads.
 
-use super::{EMPTY_NODE, LEAF, Node4};
+use super::{EMPTY, EMPTY_NODE, LEAF, Node4};
 use obvhs::bvh2::Bvh2;
+use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Most weight one leaf holds: a leaf is a block of four lanes.
 pub(in crate::accel) const LEAF_WEIGHT: u32 = 4;
 
-/// Total weight of the primitives under each BVH2 node, without recursion (trees of degenerate
-/// input can be deep): nodes in pre-order, then summed in reverse.
-fn subtree_weights(bvh2: &Bvh2, weight: &impl Fn(u32) -> u32) -> Vec<u32> {
-    let mut order = Vec::with_capacity(bvh2.nodes.len());
-    let mut stack = vec![0u32];
-    while let Some(i) = stack.pop() {
-        order.push(i);
+/// A leaf reference's payload: its first block, shifted past the low bits that hold its count.
+const LEAF_COUNT_BITS: u32 = 3;
+
+/// Roughly how many subtrees the collapse is split into (enough for two cores to share evenly).
+const TASKS: u32 = 64;
+
+/// Subtrees smaller than this are never tasks of their own: below it a task costs more than it
+/// saves.
+const MIN_TASK_WEIGHT: u32 = 4096;
+
+/// The reference of a leaf of `count` blocks from block `first`.
+fn leaf_reference(first: usize, count: usize) -> u32 {
+    assert!(
+        count < 1 << LEAF_COUNT_BITS && first + count <= 1 << 28,
+        "a BVH leaf holds at most 7 blocks, and a BVH at most 2^28 blocks"
+    );
+    LEAF | ((first as u32) << LEAF_COUNT_BITS) | count as u32
+}
+
+/// The blocks of leaf reference `leaf` (made by the collapse).
+#[inline(always)]
+pub(in crate::accel) fn leaf_blocks(leaf: u32) -> Range<usize> {
+    let first = ((leaf & !LEAF) >> LEAF_COUNT_BITS) as usize;
+    let count = (leaf & ((1 << LEAF_COUNT_BITS) - 1)) as usize;
+    first..first + count
+}
+
+/// Subtrees of at least this many nodes have their weights summed in parallel halves.
+const PARALLEL_WEIGHTS: usize = 1 << 14;
+
+/// Total weight of the primitives under each BVH2 node: the root's halves in parallel to a depth
+/// of a few levels, below that without recursion (trees of degenerate input can be deep).
+fn subtree_weights(bvh2: &Bvh2, weight: &(impl Fn(u32) -> u32 + Sync)) -> Vec<u32> {
+    let counts: Vec<AtomicU32> = (0..bvh2.nodes.len()).map(|_| AtomicU32::new(0)).collect();
+    weigh(bvh2, weight, &counts, 0, 0);
+    counts.into_iter().map(AtomicU32::into_inner).collect()
+}
+
+/// Stores the weight under BVH2 node `index` and below into `counts`, and returns it.
+fn weigh(
+    bvh2: &Bvh2,
+    weight: &(impl Fn(u32) -> u32 + Sync),
+    counts: &[AtomicU32],
+    index: u32,
+    depth: u32,
+) -> u32 {
+    let node = &bvh2.nodes[index as usize];
+    // Each BVH2 node's subtree has fewer nodes than the tree by about a half a level.
+    if !node.is_leaf() && depth < 6 && bvh2.nodes.len() >> depth >= PARALLEL_WEIGHTS {
+        let (a, b) = rayon::join(
+            || weigh(bvh2, weight, counts, node.first_index, depth + 1),
+            || weigh(bvh2, weight, counts, node.first_index + 1, depth + 1),
+        );
+        counts[index as usize].store(a + b, Ordering::Relaxed);
+        return a + b;
+    }
+    // Nodes in pre-order, then summed in reverse.
+    let mut order = vec![index];
+    let mut next = 0;
+    while let Some(&i) = order.get(next) {
+        next += 1;
         let node = &bvh2.nodes[i as usize];
         if !node.is_leaf() {
-            stack.extend([node.first_index, node.first_index + 1]);
+            order.extend([node.first_index, node.first_index + 1]);
         }
     }
-    let mut counts = vec![0u32; bvh2.nodes.len()];
     for &i in order.iter().rev() {
         let node = &bvh2.nodes[i as usize];
-        counts[i as usize] = if node.is_leaf() {
+        let sum = if node.is_leaf() {
             let first = node.first_index as usize;
             (bvh2.primitive_indices[first..first + node.prim_count as usize].iter())
                 .map(|&p| weight(p))
                 .sum()
         } else {
-            counts[node.first_index as usize] + counts[node.first_index as usize + 1]
+            let child = |k: u32| counts[k as usize].load(Ordering::Relaxed);
+            child(node.first_index) + child(node.first_index + 1)
         };
+        counts[i as usize].store(sum, Ordering::Relaxed);
     }
-    counts
+    counts[index as usize].load(Ordering::Relaxed)
 }
 
 /// The BVH2's primitives under node `index`, in tree order, into `out` (`stack` is scratch).
@@ -50,70 +115,279 @@ fn subtree_primitives(bvh2: &Bvh2, index: u32, out: &mut Vec<u32>, stack: &mut V
     }
 }
 
-/// Collapses a BVH2 (built down to single primitives) into Node4s: every subtree whose
-/// primitives weigh at most [`LEAF_WEIGHT`] together becomes one leaf, whose payload `leaf` makes
-/// from the subtree's primitives (it packs them into a block and names it in 31 bits), and each
-/// wide node takes the four largest subtrees below a BVH2 node (Embree's BVH4 collapse). A
-/// primitive that weighs the whole block is a leaf of its own. Iterative, for deep trees.
-pub(in crate::accel) fn collapse(
-    bvh2: &Bvh2,
-    weight: impl Fn(u32) -> u32,
-    mut leaf: impl FnMut(&[u32]) -> u32,
-) -> Vec<Node4> {
-    let counts = subtree_weights(bvh2, &weight);
-    let is_leaf = |i: u32| counts[i as usize] <= LEAF_WEIGHT || bvh2.nodes[i as usize].is_leaf();
-    // The BVH2 nodes a wide node over BVH2 node `index` takes as children: open the largest
-    // internal one until there are four.
-    let children_of = |index: u32| {
-        let node = &bvh2.nodes[index as usize];
+/// A BVH2 node to collapse: (its index, the wide node it becomes a child of, the lane there).
+type Work = (u32, usize, usize);
+
+/// The BVH2 and its subtrees' weights, and the rules of the collapse.
+struct Collapse<'a> {
+    bvh2: &'a Bvh2,
+    counts: Vec<u32>,
+}
+
+impl Collapse<'_> {
+    /// Whether BVH2 node `i`'s subtree becomes one leaf.
+    fn is_leaf(&self, i: u32) -> bool {
+        self.counts[i as usize] <= LEAF_WEIGHT || self.bvh2.nodes[i as usize].is_leaf()
+    }
+
+    /// The BVH2 nodes a wide node over BVH2 node `index` takes as children: open the largest
+    /// internal one until there are four (Embree's BVH4 collapse).
+    fn children_of(&self, index: u32) -> ([u32; 4], usize) {
+        let nodes = &self.bvh2.nodes;
+        let node = &nodes[index as usize];
         let mut kids = [node.first_index, node.first_index + 1, 0, 0];
         let mut n = 2;
         while n < 4 {
-            let area = |k: u32| bvh2.nodes[k as usize].aabb().half_area();
+            let area = |k: u32| nodes[k as usize].aabb().half_area();
             let open = (0..n)
-                .filter(|&i| !is_leaf(kids[i]))
+                .filter(|&i| !self.is_leaf(kids[i]))
                 .max_by(|&a, &b| area(kids[a]).total_cmp(&area(kids[b])));
             let Some(i) = open else { break };
-            let first = bvh2.nodes[kids[i] as usize].first_index;
+            let first = nodes[kids[i] as usize].first_index;
             kids[i] = kids[n - 1];
             kids[n - 1] = first;
             kids[n] = first + 1;
             n += 1;
         }
         (kids, n)
+    }
+
+    /// The work of a wide node at `slot` over BVH2 node `index`.
+    fn children_work(&self, index: u32, slot: usize) -> impl Iterator<Item = Work> {
+        let (kids, n) = self.children_of(index);
+        (0..n).map(move |lane| (kids[lane], slot, lane))
+    }
+
+    /// Collapses `work` into `nodes` and `blocks`; subtrees weighing at most `split` (more than a
+    /// leaf) are set aside into `tasks` instead.
+    fn run<B>(
+        &self,
+        (nodes, blocks): (&mut Vec<Node4>, &mut Vec<B>),
+        mut work: Vec<Work>,
+        pack: &impl Fn(&[u32], &mut Vec<B>),
+        split: Option<(u32, &mut Vec<Work>)>,
+    ) {
+        let (split, tasks) = match split {
+            Some((weight, tasks)) => (weight, Some(tasks)),
+            None => (0, None),
+        };
+        let mut tasks = tasks;
+        let (mut prims, mut scratch) = (Vec::new(), Vec::new());
+        while let Some((index, parent, lane)) = work.pop() {
+            let reference = if self.is_leaf(index) {
+                subtree_primitives(self.bvh2, index, &mut prims, &mut scratch);
+                let first = blocks.len();
+                pack(&prims, blocks);
+                leaf_reference(first, blocks.len() - first)
+            } else if let Some(tasks) = tasks
+                .as_mut()
+                .filter(|_| self.counts[index as usize] <= split)
+            {
+                tasks.push((index, parent, lane));
+                continue;
+            } else {
+                let slot = nodes.len();
+                nodes.push(EMPTY_NODE);
+                work.extend(self.children_work(index, slot));
+                slot as u32
+            };
+            self.set_child(&mut nodes[parent], lane, index, reference);
+        }
+    }
+
+    /// Lane `lane` of `node` becomes BVH2 node `index`'s box with `reference`.
+    fn set_child(&self, node: &mut Node4, lane: usize, index: u32, reference: u32) {
+        let b = self.bvh2.nodes[index as usize].aabb();
+        for axis in 0..3 {
+            node.bounds[2 * axis][lane] = b.min[axis];
+            node.bounds[2 * axis + 1][lane] = b.max[axis];
+        }
+        node.children[lane] = reference;
+    }
+}
+
+/// Collapses a BVH2 (built down to single primitives) into Node4s and leaf blocks: every subtree
+/// whose primitives weigh at most [`LEAF_WEIGHT`] together becomes one leaf, whose blocks `pack`
+/// appends from the subtree's primitives (at most 7; [`leaf_blocks`] gives them back from the
+/// reference), and each wide node takes the four largest subtrees below a BVH2 node (Embree's
+/// BVH4 collapse). A primitive that weighs the whole block is a leaf of its own.
+pub(in crate::accel) fn collapse<B: Send>(
+    bvh2: &Bvh2,
+    weight: impl Fn(u32) -> u32 + Sync,
+    pack: impl Fn(&[u32], &mut Vec<B>) + Sync,
+) -> (Vec<Node4>, Vec<B>) {
+    let c = Collapse {
+        bvh2,
+        counts: subtree_weights(bvh2, &weight),
     };
-    let mut nodes = vec![EMPTY_NODE];
-    // (BVH2 node, wide node it becomes a child of, lane there). The root wide node takes the
-    // BVH2 root's children (or the root itself when it is a single leaf).
-    let mut work: Vec<(u32, usize, usize)> = if is_leaf(0) {
+    let (mut nodes, mut blocks) = (vec![EMPTY_NODE], Vec::new());
+    // The root wide node takes the BVH2 root's children (or the root itself when it is a leaf).
+    let work = if c.is_leaf(0) {
         vec![(0, 0, 0)]
     } else {
-        let (kids, n) = children_of(0);
-        (kids[..n].iter().enumerate())
-            .map(|(l, &k)| (k, 0, l))
-            .collect()
+        c.children_work(0, 0).collect()
     };
-    let (mut prims, mut scratch) = (Vec::new(), Vec::new());
-    while let Some((index, parent, lane)) = work.pop() {
-        let reference = if is_leaf(index) {
-            subtree_primitives(bvh2, index, &mut prims, &mut scratch);
-            let payload = leaf(&prims);
-            debug_assert!(payload & LEAF == 0, "a leaf payload has 31 bits");
-            LEAF | payload
-        } else {
-            let slot = nodes.len();
-            nodes.push(EMPTY_NODE);
-            let (kids, n) = children_of(index);
-            work.extend(kids[..n].iter().enumerate().map(|(l, &k)| (k, slot, l)));
-            slot as u32
-        };
-        let b = *bvh2.nodes[index as usize].aabb();
-        let n = &mut nodes[parent];
-        for axis in 0..3 {
-            n.bounds[2 * axis][lane] = b.min[axis];
-            n.bounds[2 * axis + 1][lane] = b.max[axis];
-        }
-        n.children[lane] = reference;
+    let split = (c.counts[0] / TASKS).max(MIN_TASK_WEIGHT);
+    let mut tasks = Vec::new();
+    c.run(
+        (&mut nodes, &mut blocks),
+        work,
+        &pack,
+        Some((split, &mut tasks)),
+    );
+    let collapsed: Vec<(Vec<Node4>, Vec<B>)> = tasks
+        .par_iter()
+        .map(|&(index, _, _)| {
+            let (mut nodes, mut blocks) = (vec![EMPTY_NODE], Vec::new());
+            let work = c.children_work(index, 0).collect();
+            c.run((&mut nodes, &mut blocks), work, &pack, None);
+            (nodes, blocks)
+        })
+        .collect();
+    // Each task's nodes and blocks follow the ones before, its references moved with them.
+    nodes.reserve(collapsed.iter().map(|(n, _)| n.len()).sum());
+    blocks.reserve(collapsed.iter().map(|(_, b)| b.len()).sum());
+    for ((index, parent, lane), (task_nodes, task_blocks)) in tasks.into_iter().zip(collapsed) {
+        let (node_offset, block_offset) = (nodes.len(), blocks.len());
+        nodes.extend(task_nodes.into_iter().map(|mut node| {
+            for child in &mut node.children {
+                *child = match *child {
+                    EMPTY => EMPTY,
+                    leaf if leaf & LEAF != 0 => {
+                        let range = leaf_blocks(leaf);
+                        leaf_reference(range.start + block_offset, range.len())
+                    }
+                    inner => inner + node_offset as u32,
+                };
+            }
+            node
+        }));
+        blocks.extend(task_blocks);
+        c.set_child(&mut nodes[parent], lane, index, node_offset as u32);
     }
-    nodes
+    (nodes, blocks)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::build::build_single_leaves;
+    use glam::Vec3A;
+    use obvhs::aabb::Aabb;
+
+    /// `n` small boxes scattered by a hash over the unit cube.
+    fn boxes(n: u32) -> Vec<Aabb> {
+        let hash = |i: u32, k: u32| {
+            let h = (i.wrapping_mul(0x9E37_79B9) ^ k.wrapping_mul(0x85EB_CA6B))
+                .wrapping_mul(0xC2B2_AE35);
+            (h >> 8) as f32 / (1 << 24) as f32
+        };
+        (0..n)
+            .map(|i| {
+                let c = Vec3A::new(hash(i, 1), hash(i, 2), hash(i, 3));
+                Aabb::new(c - 0.001, c + 0.001)
+            })
+            .collect()
+    }
+
+    /// The collapse of `boxes`' BVH2 into leaves listing their primitives, in a pool of `threads`.
+    fn collapsed(boxes: &[Aabb], threads: usize) -> (Vec<Node4>, Vec<Vec<u32>>) {
+        let bvh2 = build_single_leaves(boxes);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            collapse(
+                &bvh2,
+                |_| 1,
+                |prims, blocks: &mut Vec<Vec<u32>>| blocks.push(prims.to_vec()),
+            )
+        })
+    }
+
+    /// Every primitive once in a leaf, inside every box on its way from the root; returns how
+    /// many primitives the subtree at `reference` holds.
+    fn check(
+        nodes: &[Node4],
+        blocks: &[Vec<u32>],
+        boxes: &[Aabb],
+        reference: u32,
+        within: &[(Vec3A, Vec3A)],
+        seen: &mut [bool],
+    ) -> usize {
+        if reference & LEAF != 0 {
+            let mut count = 0;
+            for block in &blocks[leaf_blocks(reference)] {
+                assert!(!block.is_empty() && block.len() <= LEAF_WEIGHT as usize);
+                for &p in block {
+                    assert!(!seen[p as usize], "primitive {p} in two leaves");
+                    seen[p as usize] = true;
+                    let b = boxes[p as usize];
+                    for &(lo, hi) in within {
+                        assert!(
+                            lo.cmple(b.min).all() && b.max.cmple(hi).all(),
+                            "primitive {p} outside its node"
+                        );
+                    }
+                    count += 1;
+                }
+            }
+            return count;
+        }
+        let node = &nodes[reference as usize];
+        let mut count = 0;
+        for lane in 0..4 {
+            if node.children[lane] == EMPTY {
+                continue;
+            }
+            let b = &node.bounds;
+            let lo = Vec3A::new(b[0][lane], b[2][lane], b[4][lane]);
+            let hi = Vec3A::new(b[1][lane], b[3][lane], b[5][lane]);
+            let mut path = within.to_vec();
+            path.push((lo, hi));
+            count += check(nodes, blocks, boxes, node.children[lane], &path, seen);
+        }
+        count
+    }
+
+    #[test]
+    fn parallel_collapse_holds_every_primitive_once_inside_its_boxes() {
+        // 50 000 boxes: the top is split into tasks of at most 4 096 (MIN_TASK_WEIGHT).
+        for n in [1, 3, 5, 1000, 50_000] {
+            let boxes = boxes(n);
+            let (nodes, blocks) = collapsed(&boxes, 2);
+            let mut seen = vec![false; n as usize];
+            assert_eq!(
+                check(&nodes, &blocks, &boxes, 0, &[], &mut seen),
+                n as usize,
+                "{n} boxes"
+            );
+            assert!(seen.iter().all(|&s| s));
+            // Leaves are full where the tree allows: on average well over two of four lanes.
+            if n >= 1000 {
+                assert!(
+                    blocks.len() * 2 < n as usize,
+                    "{} blocks for {n}",
+                    blocks.len()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_collapse_is_the_same_on_any_number_of_threads() {
+        let boxes = boxes(50_000);
+        let (one, one_blocks) = collapsed(&boxes, 1);
+        let (two, two_blocks) = collapsed(&boxes, 2);
+        assert_eq!(one_blocks, two_blocks);
+        assert_eq!(one.len(), two.len());
+        for (a, b) in one.iter().zip(&two) {
+            assert_eq!(a.children, b.children);
+            assert_eq!(
+                a.bounds.map(|l| l.map(f32::to_bits)),
+                b.bounds.map(|l| l.map(f32::to_bits))
+            );
+        }
+    }
 }

@@ -14,7 +14,7 @@
 
 mod collapse;
 
-pub(super) use collapse::{LEAF_WEIGHT, collapse};
+pub(super) use collapse::{LEAF_WEIGHT, collapse, leaf_blocks};
 use glam::{Vec3A, Vec4};
 
 /// A child reference with this bit set is a leaf; the other bits are the owner's payload.
