@@ -104,6 +104,9 @@ for r in $(seq "$ROUNDS"); do
     "$QR" bench rays "$T/meshes/$m.obj" "$T/rays/$m.coherent.rays" "$T/rays/$m.incoherent.rays" \
       --runs 3 -t 1 > "$OUT/$m.quadray.$r.txt"
     "$QR" render "$T/$m.frame.toml" -o "$T/$m.frame.png" -t 1 --stats 2> "$OUT/$m.frame.$r.txt"
+    # The build on two threads (Embree's builds use both cores whatever the device's threads).
+    "$QR" bench rays "$T/meshes/$m.obj" "$T/rays/$m.coherent.rays" --runs 1 --builds 3 -t 2 \
+      | grep '^BUILD' > "$OUT/$m.quadray-build2.$r.txt"
   done
 done
 
@@ -133,16 +136,20 @@ for m in meshes:
             qh = q[qk][0]["hits"] if qk in q else "?"
             print(f"| {m} | {rays} | {label} | {ev:.2f} | {qv:.2f} | {qv / ev:.2f} | {eh} / {qh} |")
 print()
-print("| mesh | Embree MEDIUM build ms (1 thread) | quadray build ms (1 thread) | quadray bytes/triangle (mesh + BVH) | SIMD path |")
-print("|---|---|---|---|---|")
+print("| mesh | Embree MEDIUM build, wall / CPU ms (its 1-thread device) | quadray build, 1 thread, ms | quadray build, 2 threads, wall / CPU ms | quadray bytes/triangle (mesh + BVH) | SIMD path |")
+print("|---|---|---|---|---|---|")
 for m in meshes:
     e, q = results(f"{m}.embree.*.txt"), results(f"{m}.quadray.*.txt")
-    eb = med(e, ("BUILD", None, None, "medium", "1"), "ms_median")
+    q2 = results(f"{m}.quadray-build2.*.txt")
+    ek = ("BUILD", None, None, "medium", "1")
+    eb, ec = med(e, ek, "ms_median"), med(e, ek, "cpu_ms")
     qk = ("BUILD", None, None, None, "1")
     qb = med(q, qk, "ms_median")
+    q2k = ("BUILD", None, None, None, "2")
+    q2b, q2c = med(q2, q2k, "ms_median"), med(q2, q2k, "cpu_ms")
     bpt = q[qk][0]["bytes_per_tri"] if qk in q else "?"
     simd = q[qk][0].get("simd", "?") if qk in q else "?"
-    print(f"| {m} | {eb:.1f} | {qb:.1f} | {bpt} | {simd} |")
+    print(f"| {m} | {eb:.1f} / {ec:.1f} | {qb:.1f} | {q2b:.1f} / {q2c:.1f} | {bpt} | {simd} |")
 print()
 print("| mesh | camera-rays-only frame, Mrays/s (render CPU) | the same rays, `bench rays` closest hit | frame / bench |")
 print("|---|---|---|---|")
