@@ -127,9 +127,16 @@ impl AnalyticBvh {
             None if is_sphere(p) => 1,
             _ => LEAF_WEIGHT,
         };
-        let (nodes, blocks) = collapse(&bvh2, weight, |prims, blocks: &mut Vec<Block>| {
-            pack_leaf(blocks, level, prims, sphere_items, &spheres_of)
-        });
+        // Leaves of one block: two (up to 8 spheres) took 16% less BVH memory but 10 000
+        // reflective spheres 4% longer (1280x720, 1 thread, medians of 5 alternating runs).
+        let (nodes, blocks) = collapse(
+            &bvh2,
+            LEAF_WEIGHT,
+            weight,
+            |prims, blocks: &mut Vec<Block>| {
+                pack_leaf(blocks, level, prims, sphere_items, &spheres_of)
+            },
+        );
         Some(AnalyticBvh {
             nodes: nodes.into_boxed_slice().into_vec(),
             blocks: blocks.into_boxed_slice().into_vec(),

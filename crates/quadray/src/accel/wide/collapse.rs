@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU32, Ordering};
 
-/// Most weight one leaf holds: a leaf is a block of four lanes.
+/// The weight of one block: four lanes.
 pub(in crate::accel) const LEAF_WEIGHT: u32 = 4;
 
 /// A leaf reference's payload: its first block, shifted past the low bits that hold its count.
@@ -122,12 +122,14 @@ type Work = (u32, usize, usize);
 struct Collapse<'a> {
     bvh2: &'a Bvh2,
     counts: Vec<u32>,
+    /// The most weight a leaf holds.
+    leaf_weight: u32,
 }
 
 impl Collapse<'_> {
     /// Whether BVH2 node `i`'s subtree becomes one leaf.
     fn is_leaf(&self, i: u32) -> bool {
-        self.counts[i as usize] <= LEAF_WEIGHT || self.bvh2.nodes[i as usize].is_leaf()
+        self.counts[i as usize] <= self.leaf_weight || self.bvh2.nodes[i as usize].is_leaf()
     }
 
     /// The BVH2 nodes a wide node over BVH2 node `index` takes as children: open the largest
@@ -207,18 +209,20 @@ impl Collapse<'_> {
 }
 
 /// Collapses a BVH2 (built down to single primitives) into Node4s and leaf blocks: every subtree
-/// whose primitives weigh at most [`LEAF_WEIGHT`] together becomes one leaf, whose blocks `pack`
+/// whose primitives weigh at most `leaf_weight` together becomes one leaf, whose blocks `pack`
 /// appends from the subtree's primitives (at most 7; [`leaf_blocks`] gives them back from the
 /// reference), and each wide node takes the four largest subtrees below a BVH2 node (Embree's
-/// BVH4 collapse). A primitive that weighs the whole block is a leaf of its own.
+/// BVH4 collapse). A primitive that weighs `leaf_weight` is a leaf of its own.
 pub(in crate::accel) fn collapse<B: Send>(
     bvh2: &Bvh2,
+    leaf_weight: u32,
     weight: impl Fn(u32) -> u32 + Sync,
     pack: impl Fn(&[u32], &mut Vec<B>) + Sync,
 ) -> (Vec<Node4>, Vec<B>) {
     let c = Collapse {
         bvh2,
         counts: subtree_weights(bvh2, &weight),
+        leaf_weight,
     };
     let (mut nodes, mut blocks) = (vec![EMPTY_NODE], Vec::new());
     // The root wide node takes the BVH2 root's children (or the root itself when it is a leaf).
@@ -290,7 +294,8 @@ mod tests {
             .collect()
     }
 
-    /// The collapse of `boxes`' BVH2 into leaves listing their primitives, in a pool of `threads`.
+    /// The collapse of `boxes`' BVH2 into leaves of blocks listing their primitives, in a pool of
+    /// `threads`.
     fn collapsed(boxes: &[Aabb], threads: usize) -> (Vec<Node4>, Vec<Vec<u32>>) {
         let bvh2 = build_single_leaves(boxes);
         let pool = rayon::ThreadPoolBuilder::new()
@@ -298,10 +303,15 @@ mod tests {
             .build()
             .unwrap();
         pool.install(|| {
+            // Leaves of up to two blocks, as the meshes' (so references of several blocks are
+            // moved too).
             collapse(
                 &bvh2,
+                2 * LEAF_WEIGHT,
                 |_| 1,
-                |prims, blocks: &mut Vec<Vec<u32>>| blocks.push(prims.to_vec()),
+                |prims, blocks: &mut Vec<Vec<u32>>| {
+                    blocks.extend(prims.chunks(4).map(<[u32]>::to_vec))
+                },
             )
         })
     }
@@ -318,6 +328,7 @@ mod tests {
     ) -> usize {
         if reference & LEAF != 0 {
             let mut count = 0;
+            assert!(leaf_blocks(reference).len() <= 2);
             for block in &blocks[leaf_blocks(reference)] {
                 assert!(!block.is_empty() && block.len() <= LEAF_WEIGHT as usize);
                 for &p in block {
