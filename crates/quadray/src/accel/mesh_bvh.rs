@@ -11,7 +11,7 @@ use super::tri4::Tri4;
 use super::wide::{BoxRay, LEAF, Node4, collapse, covering_boxes, leaf_blocks, pop_nearer};
 use crate::mesh::Mesh;
 use crate::triangle::{ShearedRay, TriangleHit};
-use glam::{Vec3, Vec3A};
+use glam::{DVec3, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use rayon::prelude::*;
 
@@ -23,6 +23,18 @@ pub(crate) type TriId = (u32, u32);
 /// fast or faster (3 interleaved rounds, 1 thread: kitchen coherent closest hit -3%, the rest
 /// -2% to +19%, most on the dragon's incoherent rays); three blocks were 1-11% slower.
 const MESH_LEAF_TRIANGLES: u32 = 8;
+
+/// The nearest triangle a ray meets in a [`MeshBvh`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MeshHit {
+    /// Which triangle.
+    pub(crate) id: TriId,
+    /// Where the f32 test met it.
+    pub(crate) hit: TriangleHit,
+    /// The leaf block and lane holding its vertices ([`MeshBvh::vertices`]).
+    block: u32,
+    lane: u32,
+}
 
 /// A wide BVH over the triangles of one or more meshes.
 #[derive(Clone, Debug)]
@@ -222,12 +234,14 @@ impl MeshBvh {
         ray: &MeshRay,
         t_max: f32,
         skip: Option<TriId>,
-    ) -> Option<(TriId, TriangleHit)> {
+    ) -> Option<MeshHit> {
         if self.nodes.is_empty() {
             return None;
         }
         let mut limit = t_max;
         let mut best: Option<(u32, TriangleHit)> = None;
+        // The best hit's block and lane, as block · 4 + lane.
+        let mut best_lane = 0u32;
         super::stack::with_stack(&STACK, |stack| {
             let mut current = 0u32;
             loop {
@@ -247,7 +261,9 @@ impl MeshBvh {
                         }
                     }
                 } else {
-                    for block in &self.blocks[leaf_blocks(current)] {
+                    let blocks = leaf_blocks(current);
+                    let first = blocks.start;
+                    for (k, block) in self.blocks[blocks].iter().enumerate() {
                         let (hits, mask) = self.block_hits(meshes, block, ray, limit, skip);
                         if let Some(h) = hits.nearest(mask) {
                             limit = h.t;
@@ -256,6 +272,7 @@ impl MeshBvh {
                                 barycentrics: h.barycentrics,
                             };
                             best = Some((block.tri[h.lane], hit));
+                            best_lane = ((first + k) * 4 + h.lane) as u32;
                         }
                     }
                 }
@@ -266,7 +283,20 @@ impl MeshBvh {
                 }
             }
         });
-        best.map(|(number, hit)| (self.id(number), hit))
+        best.map(|(number, hit)| MeshHit {
+            id: self.id(number),
+            hit,
+            block: best_lane / 4,
+            lane: best_lane % 4,
+        })
+    }
+
+    /// The vertices of `hit`'s triangle, from the leaf block's copies: the mesh's own values, so
+    /// the f64 refinement of a hit needs no lookup in the mesh (on the dragon's rays that lookup
+    /// was a quarter of a closest-hit query).
+    #[inline(always)]
+    pub(crate) fn vertices(&self, hit: &MeshHit) -> [DVec3; 3] {
+        self.blocks[hit.block as usize].vertices(hit.lane as usize)
     }
 
     /// Whether any triangle other than `skip` meets the ray in (0, `t_max`).
@@ -354,7 +384,7 @@ mod tests {
             let dir = Vec3::new(0.1 * (k as f32).sin(), 0.1 * (k as f32).cos(), -1.0);
             let ray = MeshRay::new(Vec3::new(x, y, 0.0) - dir * 5.0, dir);
             let hit = bvh.closest(&meshes, &ray, f32::INFINITY, None);
-            let (id, h) = hit.unwrap_or_else(|| panic!("hole at ({x}, {y})"));
+            let MeshHit { id, hit: h, .. } = hit.unwrap_or_else(|| panic!("hole at ({x}, {y})"));
             assert!((h.t - 5.0).abs() < 1e-5, "t {}", h.t);
             let brute = (0..mesh.triangle_count() as u32)
                 .filter_map(|t| {
@@ -366,7 +396,9 @@ mod tests {
             assert!(bvh.occluded(&meshes, &ray, 6.0, None));
             assert!(!bvh.occluded(&meshes, &ray, 4.9, None));
             // Skipping the triangle hit leaves at most its neighbour across an edge or vertex.
-            if let Some((other, _)) = bvh.closest(&meshes, &ray, f32::INFINITY, Some(id)) {
+            if let Some(MeshHit { id: other, .. }) =
+                bvh.closest(&meshes, &ray, f32::INFINITY, Some(id))
+            {
                 assert_ne!(other, id);
             }
         }
@@ -381,7 +413,7 @@ mod tests {
             let meshes = [Mesh::new(p, g.indices().to_vec(), None, 0).unwrap()];
             let bvh = MeshBvh::build(&meshes);
             let ray = MeshRay::new(Vec3::new(1.5, 2.5, 1e-3) * scale, Vec3::new(0.0, 0.0, -1.0));
-            let (_, h) = bvh
+            let MeshHit { hit: h, .. } = bvh
                 .closest(&meshes, &ray, f32::INFINITY, None)
                 .expect("hit");
             assert!(
@@ -437,9 +469,24 @@ mod tests {
         let meshes = [lower, upper];
         let bvh = MeshBvh::build(&meshes);
         let ray = MeshRay::new(Vec3::new(1.3, 2.6, 5.0), Vec3::new(0.0, 0.0, -1.0));
-        let ((m, tri), h) = bvh.closest(&meshes, &ray, f32::INFINITY, None).unwrap();
+        let hit = bvh.closest(&meshes, &ray, f32::INFINITY, None).unwrap();
+        let MeshHit {
+            id: (m, tri),
+            hit: h,
+            ..
+        } = hit;
         assert_eq!((m, h.t), (1, 4.0));
-        let ((m2, _), h2) = bvh
+        let vertices = bvh.vertices(&hit);
+        // The hit's vertices are the mesh's own (the f64 refinement reads them from the block).
+        let mesh_vertices = meshes[1]
+            .triangle_positions(tri)
+            .map(|p| Vec3::from(*p).as_dvec3());
+        assert_eq!(vertices, mesh_vertices);
+        let MeshHit {
+            id: (m2, _),
+            hit: h2,
+            ..
+        } = bvh
             .closest(&meshes, &ray, f32::INFINITY, Some((1, tri)))
             .unwrap();
         assert_eq!((m2, h2.t), (0, 5.0));

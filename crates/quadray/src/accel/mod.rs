@@ -43,6 +43,7 @@ use crate::geometry::Geometry;
 use crate::geometry::instance::Placements;
 use crate::math::Ray;
 use crate::shape::{LocalPrim, PrimRef};
+use crate::triangle::plane_t;
 use analytic::AnalyticBvh;
 use build::Bounds;
 pub use build::Layout;
@@ -385,10 +386,10 @@ impl Accel {
                 let Some(bvh) = &l.meshes else { return };
                 let meshes = q.g.level(q.level).meshes;
                 let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
-                if let Some(((mesh, tri), hit)) =
-                    bvh.closest(meshes, &mray, round_up(*best_t), q.triangle_skip())
-                {
-                    let t = meshes[mesh as usize].refine_t(tri, q.ray, hit.t as f64);
+                if let Some(h) = bvh.closest(meshes, &mray, round_up(*best_t), q.triangle_skip()) {
+                    // Mesh::refine_t, on the block's copy of the vertices.
+                    let t = plane_t(q.ray.origin, q.ray.dir, bvh.vertices(&h), h.hit.t as f64);
+                    let (mesh, tri) = h.id;
                     if t < *best_t {
                         *best_t = t;
                         *best = Some(PrimRef {

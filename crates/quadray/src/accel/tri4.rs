@@ -6,7 +6,7 @@
 //! lanes hold NaN vertices, which no comparison accepts.
 
 use crate::triangle::ShearedRay;
-use glam::{BVec4A, Vec4};
+use glam::{BVec4A, DVec3, Vec4};
 
 /// Marks an unused lane of a block.
 pub(crate) const NO_TRIANGLE: u32 = u32::MAX;
@@ -78,6 +78,16 @@ impl Tri4 {
             block.tri[lane] = *tri;
         }
         block
+    }
+
+    /// The vertices of lane `lane`'s triangle, in f64.
+    #[inline(always)]
+    pub(crate) fn vertices(&self, lane: usize) -> [DVec3; 3] {
+        let v = |vertex: usize| {
+            let row = |axis: usize| self.v[3 * vertex + axis][lane] as f64;
+            DVec3::new(row(0), row(1), row(2))
+        };
+        [v(0), v(1), v(2)]
     }
 
     /// Vertex `vertex`'s permuted, sheared coordinates for all lanes: (x', y', z before sz).
