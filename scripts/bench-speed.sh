@@ -103,7 +103,9 @@ for r in $(seq "$ROUNDS"); do
     "$T/embree_bench" "$T/meshes/$m.obj" "$T/rays/$m" 3 > "$OUT/$m.embree.$r.txt"
     "$QR" bench rays "$T/meshes/$m.obj" "$T/rays/$m.coherent.rays" "$T/rays/$m.incoherent.rays" \
       --runs 3 -t 1 > "$OUT/$m.quadray.$r.txt"
-    "$QR" render "$T/$m.frame.toml" -o "$T/$m.frame.png" -t 1 --stats 2> "$OUT/$m.frame.$r.txt"
+    for k in 1 2 3; do
+      "$QR" render "$T/$m.frame.toml" -o "$T/$m.frame.png" -t 1 --stats 2>> "$OUT/$m.frame.$r.txt"
+    done
     # The build on two threads (Embree's builds use both cores whatever the device's threads).
     "$QR" bench rays "$T/meshes/$m.obj" "$T/rays/$m.coherent.rays" --runs 1 --builds 3 -t 2 \
       | grep '^BUILD' > "$OUT/$m.quadray-build2.$r.txt"
