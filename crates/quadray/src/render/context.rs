@@ -6,6 +6,7 @@ use crate::aov::{AovSample, AovSelection, Aovs};
 use crate::camera::CameraFrame;
 use crate::footprint::{HitFootprint, RayCone, footprint_scale};
 use crate::integrator::RayCounts;
+use crate::math::Ray;
 use crate::render::{PixelWindow, RenderError, RenderSettings};
 use crate::sampler::SampleKey;
 use crate::scene::Scene;
@@ -66,19 +67,36 @@ impl<'a> SampleContext<'a> {
     /// ray's first hit (its albedo averaged over the whole pixel, as one sample gives the pass).
     pub fn trace(
         &self,
-        (x, y): (u32, u32),
-        (dx, dy): (f64, f64),
+        pixel: (u32, u32),
+        offset: (f64, f64),
         cone: RayCone,
         key: SampleKey,
         aov: Option<&mut AovSample>,
         counts: &mut RayCounts,
     ) -> Vec3 {
+        self.trace_ray(&self.camera_ray(pixel, offset), cone, key, aov, counts)
+    }
+
+    /// The camera ray through `(dx, dy)` inside pixel `(x, y)` of the full image.
+    #[inline(always)]
+    pub fn camera_ray(&self, (x, y): (u32, u32), (dx, dy): (f64, f64)) -> Ray {
         let (w, h) = (self.settings.width as f64, self.settings.height as f64);
-        let ray = self.camera.ray((x as f64 + dx) / w, (y as f64 + dy) / h);
+        self.camera.ray((x as f64 + dx) / w, (y as f64 + dy) / h)
+    }
+
+    /// [`SampleContext::trace`] of a camera ray made by [`SampleContext::camera_ray`].
+    pub fn trace_ray(
+        &self,
+        ray: &Ray,
+        cone: RayCone,
+        key: SampleKey,
+        aov: Option<&mut AovSample>,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
         let whitted = &self.settings.whitted;
         match aov {
             Some(aov) => {
-                let (radiance, hit) = whitted.camera_ray_hit(self.scene, &ray, cone, key, counts);
+                let (radiance, hit) = whitted.camera_ray_hit(self.scene, ray, cone, key, counts);
                 let footprint = match &hit {
                     Some(hit) if !cone.is_point() => HitFootprint::new(
                         &self.sample_cone(1),
@@ -97,7 +115,7 @@ impl<'a> SampleContext<'a> {
                 );
                 radiance
             }
-            None => whitted.camera_ray(self.scene, &ray, cone, key, counts),
+            None => whitted.camera_ray(self.scene, ray, cone, key, counts),
         }
     }
 

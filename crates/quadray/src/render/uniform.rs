@@ -12,6 +12,9 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Mutex;
 
+/// Camera rays made at once before they are traced (at least one pixel's worth).
+const BATCH_SAMPLES: usize = 16;
+
 /// `settings.spp` samples in every pixel, by correlated multi-jittered sampling.
 pub(super) fn render_uniform(
     context: &SampleContext<'_>,
@@ -46,31 +49,44 @@ pub(super) fn render_uniform(
             let y = window.y0 + row_index as u32;
             let mut counts = RayCounts::default();
             let mut sampler = PixelSampler::new(spp);
-            for (column, pixel) in row.iter_mut().enumerate() {
-                let x = window.x0 + column as u32;
-                let pattern = pixel_pattern(x, y, settings.seed);
-                sampler.start_pixel(pattern);
-                let mut aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
-                // The variance pass needs the running estimate; the image keeps its f32 sum.
-                let mut estimate = selection.variance.then(PixelEstimate::default);
-                let mut sum = Vec3::ZERO;
-                for s in 0..spp {
-                    let offset = sampler.sample(s);
-                    let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
-                    let key = SampleKey {
-                        pattern,
-                        index: s,
-                        count: Some(spp),
-                    };
-                    let radiance = context.trace((x, y), offset, cone, key, first_hit, &mut counts);
-                    if let Some(e) = &mut estimate {
-                        e.add(radiance);
-                    }
-                    sum += radiance;
+            let mut rays = Vec::with_capacity(BATCH_SAMPLES.max(spp as usize));
+            let batch_pixels = (BATCH_SAMPLES / spp as usize).max(1);
+            for (batch, pixels) in row.chunks_mut(batch_pixels).enumerate() {
+                let first_column = batch * batch_pixels;
+                // The batch's camera rays first: their divisions and square roots do not wait on
+                // each other, where made one before each trace they wait in line.
+                rays.clear();
+                for column in first_column..first_column + pixels.len() {
+                    let x = window.x0 + column as u32;
+                    sampler.start_pixel(pixel_pattern(x, y, settings.seed));
+                    rays.extend((0..spp).map(|s| context.camera_ray((x, y), sampler.sample(s))));
                 }
-                *pixel = sum * inv_spp;
-                if let Some(aov) = aov {
-                    aov.fill_sampling(selection, spp, estimate.map(|e| e.variance()));
+                let mut rays = rays.iter();
+                for (i, pixel) in pixels.iter_mut().enumerate() {
+                    let column = first_column + i;
+                    let x = window.x0 + column as u32;
+                    let pattern = pixel_pattern(x, y, settings.seed);
+                    let mut aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
+                    // The variance pass needs the running estimate; the image keeps its f32 sum.
+                    let mut estimate = selection.variance.then(PixelEstimate::default);
+                    let mut sum = Vec3::ZERO;
+                    for (s, ray) in (0..spp).zip(&mut rays) {
+                        let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
+                        let key = SampleKey {
+                            pattern,
+                            index: s,
+                            count: Some(spp),
+                        };
+                        let radiance = context.trace_ray(ray, cone, key, first_hit, &mut counts);
+                        if let Some(e) = &mut estimate {
+                            e.add(radiance);
+                        }
+                        sum += radiance;
+                    }
+                    *pixel = sum * inv_spp;
+                    if let Some(aov) = aov {
+                        aov.fill_sampling(selection, spp, estimate.map(|e| e.variance()));
+                    }
                 }
             }
             *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
