@@ -104,8 +104,8 @@ for r in $(seq "$ROUNDS"); do
     "$QR" bench rays "$T/meshes/$m.obj" "$T/rays/$m.coherent.rays" "$T/rays/$m.incoherent.rays" \
       --runs 3 -t 1 > "$OUT/$m.quadray.$r.txt"
     for k in 1 2 3; do
-      "$QR" render "$T/$m.frame.toml" -o "$T/$m.frame.png" -t 1 --stats 2>> "$OUT/$m.frame.$r.txt"
-    done
+      "$QR" render "$T/$m.frame.toml" -o "$T/$m.frame.png" -t 1 --stats
+    done 2> "$OUT/$m.frame.$r.txt"
     # The build on two threads (Embree's builds use both cores whatever the device's threads).
     "$QR" bench rays "$T/meshes/$m.obj" "$T/rays/$m.coherent.rays" --runs 1 --builds 3 -t 2 \
       | grep '^BUILD' > "$OUT/$m.quadray-build2.$r.txt"
@@ -157,8 +157,13 @@ print("| mesh | camera-rays-only frame, Mrays/s (render CPU) | the same rays, `b
 print("|---|---|---|---|")
 for m in meshes:
     q = results(f"{m}.quadray.*.txt")
-    frames = [float(x) for path in glob.glob(os.path.join(out, f"{m}.frame.*.txt"))
-              for x in re.findall(r"\(([0-9.]+) Mrays/s\)", open(path).read())]
+    # Camera rays per CPU-second of the render (the stats line's Mrays/s is per wall second).
+    frames = []
+    for path in glob.glob(os.path.join(out, f"{m}.frame.*.txt")):
+        text = open(path).read()
+        cpu = [float(x) for x in re.findall(r"render CPU ([0-9.]+) s", text)]
+        rays = [int(x) for x in re.findall(r": ([0-9]+) camera", text)]
+        frames += [n / c / 1e6 for n, c in zip(rays, cpu) if c > 0]
     fv = statistics.median(frames) if frames else float("nan")
     qv = med(q, ("RESULT", "coherent", "intersect1", None, "1"), "cpu_mrays")
     print(f"| {m} | {fv:.2f} | {qv:.2f} | {fv / qv:.2f} |")
