@@ -169,11 +169,10 @@ impl Collapse<'_> {
         pack: &impl Fn(&[u32], &mut Vec<B>),
         split: Option<(u32, &mut Vec<Work>)>,
     ) {
-        let (split, tasks) = match split {
+        let (split, mut tasks) = match split {
             Some((weight, tasks)) => (weight, Some(tasks)),
             None => (0, None),
         };
-        let mut tasks = tasks;
         let (mut prims, mut scratch) = (Vec::new(), Vec::new());
         while let Some((index, parent, lane)) = work.pop() {
             let reference = if self.is_leaf(index) {
