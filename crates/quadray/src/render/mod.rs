@@ -110,6 +110,12 @@ impl PixelWindow {
         self.y1.saturating_sub(self.y0)
     }
 
+    /// The image position of the window's pixel `i`, its pixels counted row by row.
+    pub fn pixel(&self, i: usize) -> (u32, u32) {
+        let width = self.width() as usize;
+        (self.x0 + (i % width) as u32, self.y0 + (i / width) as u32)
+    }
+
     /// Whether the window is non-empty and lies inside a `width` × `height` image.
     pub fn fits(&self, width: u32, height: u32) -> bool {
         self.x0 < self.x1 && self.y0 < self.y1 && self.x1 <= width && self.y1 <= height

@@ -101,15 +101,8 @@ impl ProgressiveFilm {
     /// The twins of the pixels, chosen by their samples so far.
     fn choose_twins(&self) -> Vec<((u32, u32), Twin)> {
         let window = self.settings.window();
-        let width = window.width() as usize;
         let candidates: Vec<_> = (self.estimates.iter().enumerate())
-            .map(|(i, e)| {
-                let at = (
-                    window.x0 + (i % width) as u32,
-                    window.y0 + (i / width) as u32,
-                );
-                (at, e)
-            })
+            .map(|(i, e)| (window.pixel(i), e))
             .collect();
         let twins = crate::adaptive::choose_twins(self.settings.seed, &candidates);
         (candidates.iter().zip(twins))

@@ -65,7 +65,6 @@ pub(super) fn audit(
         return (0.0, RayCounts::default());
     }
     let window = context.window;
-    let width = window.width() as usize;
     let weights: Vec<f64> = (estimates.par_iter().zip(rays))
         .map(|(e, &r)| calibration.squared_error(e).max(0.0) / (r.max(1) as f64).sqrt())
         .map(|w| if w.is_finite() { w } else { 0.0 })
@@ -85,10 +84,7 @@ pub(super) fn audit(
     let seed = settings.seed ^ AUDIT_SEED;
     let drawn: Vec<(usize, (u32, u32), f64)> = (weights.iter().enumerate())
         .filter_map(|(i, &s)| {
-            let at = (
-                window.x0 + (i % width) as u32,
-                window.y0 + (i / width) as u32,
-            );
+            let at = window.pixel(i);
             let p = chance(s);
             (uniform_draw(seed, at) < p).then_some((i, at, p))
         })

@@ -150,7 +150,7 @@ pub(super) fn next_step(states: &[PixelState], aim: &Aim) -> Option<Step> {
     let Some(budget) = aim.budget else {
         return Some(step(lambda));
     };
-    // The smallest λ at or above the target's whose round the budget pays for.
+    // What the round of a λ costs in the budget's unit.
     let work = |lambda: f64| {
         let step = step(lambda);
         states
@@ -168,7 +168,7 @@ pub(super) fn next_step(states: &[PixelState], aim: &Aim) -> Option<Step> {
     // 0.51 s where the first round alone takes 0.43 s).
     let open_pixels: Vec<(f64, f64, f64, f64)> = states
         .iter()
-        .filter(|s| s.count < aim.max_spp && s.value() > 0.0)
+        .filter(open)
         .map(|s| {
             let n = s.count as f64;
             let scale = n * s.value().powf(1.0 / aim.alpha);

@@ -213,13 +213,7 @@ impl WindowState {
             .zip(&self.pilot_rounds)
             .enumerate()
             .filter(|(_, (_, pilot))| pilot.is_none())
-            .map(|(i, (e, _))| {
-                let at = (
-                    window.x0 + (i % self.width) as u32,
-                    window.y0 + (i / self.width) as u32,
-                );
-                (i, (at, e))
-            })
+            .map(|(i, (e, _))| (i, (window.pixel(i), e)))
             .unzip();
         let twins = calibration::choose_twins(context.settings.seed, &candidates);
         for (i, twin) in indices.into_iter().zip(twins) {
