@@ -1,14 +1,20 @@
-//! The bottom level for triangle meshes: a 4-wide BVH of quadray's own layout ([`super::wide`]),
+//! The bottom level for triangle meshes: an 8-wide BVH of quadray's own layout ([`super::wide`]),
 //! collapsed from obvhs' BVH2 build (PLOC, reinsertion), with leaves of one or two blocks of four
 //! triangles ([`Tri4`]), each block tested at once; the children a ray enters are visited nearest
 //! first.
+//!
+//! Eight children a node rather than four (Embree's BVH8 on AVX2): the AVX2 path tests a node in
+//! one pass of 8-lane registers, and a ray passes about two thirds as many levels. Measured
+//! against the 4-wide layout (`bench rays`, 3 interleaved rounds, 1 thread, AVX2): +8% to +21%
+//! on every mesh and ray set. The baseline path tests the same nodes in two 4-lane halves, so
+//! both paths visit the same nodes in the same order and give the same hits.
 //!
 //! Leaves hold copies of their triangles' vertices (no index lookups while tracing). A block lane
 //! names its triangle by number: over a single mesh the mesh's triangle index, over several meshes
 //! an index into a table of (mesh, triangle).
 
 use super::tri4::Tri4;
-use super::wide::{BoxRay, LEAF, Node4, collapse, covering_boxes, leaf_blocks, pop_nearer};
+use super::wide::{BoxRay, LEAF, Node8, collapse, covering_boxes, leaf_blocks, pop_nearer};
 use crate::mesh::Mesh;
 use crate::triangle::{ShearedRay, TriangleHit};
 use glam::{DVec3, Vec3, Vec3A};
@@ -39,7 +45,7 @@ pub(crate) struct MeshHit {
 /// A wide BVH over the triangles of one or more meshes.
 #[derive(Clone, Debug)]
 pub(crate) struct MeshBvh {
-    nodes: Vec<Node4>,
+    nodes: Vec<Node8>,
     blocks: Vec<Tri4>,
     /// (mesh, triangle) of each triangle number (the meshes' triangles numbered in turn); empty
     /// over a single mesh, whose triangle numbers are its triangle indices.
@@ -158,7 +164,7 @@ impl MeshBvh {
 
     /// Bytes of the wide nodes, the triangle blocks and the id table.
     pub(crate) fn memory_bytes(&self) -> usize {
-        self.nodes.capacity() * std::mem::size_of::<Node4>()
+        self.nodes.capacity() * std::mem::size_of::<Node8>()
             + self.blocks.capacity() * std::mem::size_of::<Tri4>()
             + self.ids.capacity() * std::mem::size_of::<TriId>()
     }
@@ -226,9 +232,10 @@ impl MeshBvh {
     }
 
     /// The nearest triangle of `meshes` (those the BVH was built over) the ray meets in
-    /// (0, `t_max`), skipping triangle `skip`.
+    /// (0, `t_max`), skipping triangle `skip`; `AVX2` is set only in code compiled for AVX2 and
+    /// run where the CPU has it ([`super::simd_path`]).
     #[inline(always)]
-    pub(crate) fn closest(
+    pub(crate) fn closest<const AVX2: bool>(
         &self,
         meshes: &[Mesh],
         ray: &MeshRay,
@@ -242,47 +249,50 @@ impl MeshBvh {
         let mut best: Option<(u32, TriangleHit)> = None;
         // The best hit's block and lane, as block · 4 + lane.
         let mut best_lane = 0u32;
-        super::stack::with_stack(&STACK, |stack| {
-            let mut current = 0u32;
-            loop {
-                if current & LEAF == 0 {
-                    let node = &self.nodes[current as usize];
-                    let (enter, mask) = node.intersect(&ray.boxes, limit);
-                    match mask.count_ones() {
-                        0 => {}
-                        1 => {
-                            current = node.children[mask.trailing_zeros() as usize];
-                            continue;
-                        }
-                        _ => {
-                            // Push the children hit far to near; visit the nearest next.
-                            current = node.push_ordered(enter, mask, stack, |c| self.prefetch(c));
-                            continue;
-                        }
-                    }
-                } else {
-                    let blocks = leaf_blocks(current);
-                    let first = blocks.start;
-                    for (k, block) in self.blocks[blocks].iter().enumerate() {
-                        let (hits, mask) = self.block_hits(meshes, block, ray, limit, skip);
-                        if let Some(h) = hits.nearest(mask) {
-                            limit = h.t;
-                            let hit = TriangleHit {
-                                t: h.t,
-                                barycentrics: h.barycentrics,
+        super::stack::with_stack(
+            &STACK,
+            #[inline(always)]
+            |stack| {
+                let mut current = 0u32;
+                loop {
+                    if current & LEAF == 0 {
+                        let node = &self.nodes[current as usize];
+                        let (enter, mask) = node.intersect::<AVX2>(&ray.boxes, limit);
+                        // One child entered is taken without the stack (tested as `mask & (mask - 1)`:
+                        // `count_ones` has no instruction on baseline x86-64); several are pushed far
+                        // to near and the nearest visited next.
+                        if mask != 0 {
+                            current = if mask & (mask - 1) == 0 {
+                                node.children[mask.trailing_zeros() as usize]
+                            } else {
+                                node.push_ordered(enter, mask, stack, |c| self.prefetch(c))
                             };
-                            best = Some((block.tri[h.lane], hit));
-                            best_lane = ((first + k) * 4 + h.lane) as u32;
+                            continue;
+                        }
+                    } else {
+                        let blocks = leaf_blocks(current);
+                        let first = blocks.start;
+                        for (k, block) in self.blocks[blocks].iter().enumerate() {
+                            let (hits, mask) = self.block_hits(meshes, block, ray, limit, skip);
+                            if let Some(h) = hits.nearest(mask) {
+                                limit = h.t;
+                                let hit = TriangleHit {
+                                    t: h.t,
+                                    barycentrics: h.barycentrics,
+                                };
+                                best = Some((block.tri[h.lane], hit));
+                                best_lane = ((first + k) * 4 + h.lane) as u32;
+                            }
                         }
                     }
+                    // Pop the next child that may still hold a nearer hit.
+                    match pop_nearer(stack, limit) {
+                        Some(child) => current = child,
+                        None => return,
+                    }
                 }
-                // Pop the next child that may still hold a nearer hit.
-                match pop_nearer(stack, limit) {
-                    Some(child) => current = child,
-                    None => return,
-                }
-            }
-        });
+            },
+        );
         best.map(|(number, hit)| MeshHit {
             id: self.id(number),
             hit,
@@ -299,9 +309,10 @@ impl MeshBvh {
         self.blocks[hit.block as usize].vertices(hit.lane as usize)
     }
 
-    /// Whether any triangle other than `skip` meets the ray in (0, `t_max`).
+    /// Whether any triangle other than `skip` meets the ray in (0, `t_max`) (`AVX2` as for
+    /// [`MeshBvh::closest`]).
     #[inline(always)]
-    pub(crate) fn occluded(
+    pub(crate) fn occluded<const AVX2: bool>(
         &self,
         meshes: &[Mesh],
         ray: &MeshRay,
@@ -311,31 +322,35 @@ impl MeshBvh {
         if self.nodes.is_empty() {
             return false;
         }
-        super::stack::with_stack(&STACK, |stack| {
-            let mut current = 0u32;
-            loop {
-                if current & LEAF == 0 {
-                    let node = &self.nodes[current as usize];
-                    let (_, mask) = node.intersect(&ray.boxes, t_max);
-                    let mut m = mask;
-                    while m != 0 {
-                        let lane = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        stack.push((node.children[lane], 0.0));
-                    }
-                } else {
-                    for block in &self.blocks[leaf_blocks(current)] {
-                        if self.block_hits(meshes, block, ray, t_max, skip).1 != 0 {
-                            return true;
+        super::stack::with_stack(
+            &STACK,
+            #[inline(always)]
+            |stack| {
+                let mut current = 0u32;
+                loop {
+                    if current & LEAF == 0 {
+                        let node = &self.nodes[current as usize];
+                        let (_, mask) = node.intersect::<AVX2>(&ray.boxes, t_max);
+                        let mut m = mask;
+                        while m != 0 {
+                            let lane = m.trailing_zeros() as usize;
+                            m &= m - 1;
+                            stack.push((node.children[lane], 0.0));
+                        }
+                    } else {
+                        for block in &self.blocks[leaf_blocks(current)] {
+                            if self.block_hits(meshes, block, ray, t_max, skip).1 != 0 {
+                                return true;
+                            }
                         }
                     }
+                    match stack.pop() {
+                        None => return false,
+                        Some((child, _)) => current = child,
+                    }
                 }
-                match stack.pop() {
-                    None => return false,
-                    Some((child, _)) => current = child,
-                }
-            }
-        })
+            },
+        )
     }
 }
 
@@ -383,7 +398,7 @@ mod tests {
             };
             let dir = Vec3::new(0.1 * (k as f32).sin(), 0.1 * (k as f32).cos(), -1.0);
             let ray = MeshRay::new(Vec3::new(x, y, 0.0) - dir * 5.0, dir);
-            let hit = bvh.closest(&meshes, &ray, f32::INFINITY, None);
+            let hit = bvh.closest::<false>(&meshes, &ray, f32::INFINITY, None);
             let MeshHit { id, hit: h, .. } = hit.unwrap_or_else(|| panic!("hole at ({x}, {y})"));
             assert!((h.t - 5.0).abs() < 1e-5, "t {}", h.t);
             let brute = (0..mesh.triangle_count() as u32)
@@ -393,11 +408,11 @@ mod tests {
                 })
                 .fold(f32::INFINITY, f32::min);
             assert_eq!(brute, h.t);
-            assert!(bvh.occluded(&meshes, &ray, 6.0, None));
-            assert!(!bvh.occluded(&meshes, &ray, 4.9, None));
+            assert!(bvh.occluded::<false>(&meshes, &ray, 6.0, None));
+            assert!(!bvh.occluded::<false>(&meshes, &ray, 4.9, None));
             // Skipping the triangle hit leaves at most its neighbour across an edge or vertex.
             if let Some(MeshHit { id: other, .. }) =
-                bvh.closest(&meshes, &ray, f32::INFINITY, Some(id))
+                bvh.closest::<false>(&meshes, &ray, f32::INFINITY, Some(id))
             {
                 assert_ne!(other, id);
             }
@@ -414,7 +429,7 @@ mod tests {
             let bvh = MeshBvh::build(&meshes);
             let ray = MeshRay::new(Vec3::new(1.5, 2.5, 1e-3) * scale, Vec3::new(0.0, 0.0, -1.0));
             let MeshHit { hit: h, .. } = bvh
-                .closest(&meshes, &ray, f32::INFINITY, None)
+                .closest::<false>(&meshes, &ray, f32::INFINITY, None)
                 .expect("hit");
             assert!(
                 (h.t / (1e-3 * scale) - 1.0).abs() < 1e-4,
@@ -445,7 +460,9 @@ mod tests {
                 let tilt = Vec3::new(0.3 * (k as f32).sin(), 0.3 * (k as f32).cos(), 1.0);
                 let origin = target + tilt.normalize() * distance;
                 let ray = MeshRay::new(origin, target - origin);
-                holes += bvh.closest(&meshes, &ray, f32::INFINITY, None).is_none() as usize;
+                holes += bvh
+                    .closest::<false>(&meshes, &ray, f32::INFINITY, None)
+                    .is_none() as usize;
                 rays += 1;
             }
         }
@@ -457,7 +474,10 @@ mod tests {
         let meshes = [grid(8, 0)];
         let bvh = MeshBvh::build(&meshes);
         let ray = MeshRay::new(Vec3::new(3.3, 4.4, 2.0), Vec3::new(-0.0, -0.0, -1.0));
-        assert!(bvh.closest(&meshes, &ray, f32::INFINITY, None).is_some());
+        assert!(
+            bvh.closest::<false>(&meshes, &ray, f32::INFINITY, None)
+                .is_some()
+        );
     }
 
     /// Over several meshes, hits name the right mesh and triangle, and skipping works per mesh.
@@ -469,7 +489,9 @@ mod tests {
         let meshes = [lower, upper];
         let bvh = MeshBvh::build(&meshes);
         let ray = MeshRay::new(Vec3::new(1.3, 2.6, 5.0), Vec3::new(0.0, 0.0, -1.0));
-        let hit = bvh.closest(&meshes, &ray, f32::INFINITY, None).unwrap();
+        let hit = bvh
+            .closest::<false>(&meshes, &ray, f32::INFINITY, None)
+            .unwrap();
         let MeshHit {
             id: (m, tri),
             hit: h,
@@ -487,10 +509,10 @@ mod tests {
             hit: h2,
             ..
         } = bvh
-            .closest(&meshes, &ray, f32::INFINITY, Some((1, tri)))
+            .closest::<false>(&meshes, &ray, f32::INFINITY, Some((1, tri)))
             .unwrap();
         assert_eq!((m2, h2.t), (0, 5.0));
-        assert!(bvh.occluded(&meshes, &ray, 4.5, None));
-        assert!(!bvh.occluded(&meshes, &ray, 4.5, Some((1, tri))));
+        assert!(bvh.occluded::<false>(&meshes, &ray, 4.5, None));
+        assert!(!bvh.occluded::<false>(&meshes, &ray, 4.5, Some((1, tri))));
     }
 }

@@ -178,7 +178,7 @@ impl Accel {
             // SAFETY: the CPU supports AVX2 and FMA (checked by `simd_path`).
             return unsafe { self.closest_avx2(g, ray, t_max, from) };
         }
-        self.closest_impl(g, ray, t_max, from)
+        self.closest_impl::<false>(g, ray, t_max, from)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -190,13 +190,13 @@ impl Accel {
         t_max: f64,
         from: Option<PrimRef>,
     ) -> Option<(f64, PrimRef)> {
-        self.closest_impl(g, ray, t_max, from)
+        self.closest_impl::<true>(g, ray, t_max, from)
     }
 
     /// The world level inlined (nested levels are entered through [`Accel::closest_level`]),
     /// then the planes.
     #[inline(always)]
-    fn closest_impl(
+    fn closest_impl<const AVX2: bool>(
         &self,
         g: &Geometry,
         ray: &Ray,
@@ -205,7 +205,7 @@ impl Accel {
     ) -> Option<(f64, PrimRef)> {
         let mut best_t = t_max;
         let mut best = None;
-        self.closest_level_impl(g, 0, 0, ray, from, &mut best_t, &mut best);
+        self.closest_level_impl::<AVX2>(g, 0, 0, ray, from, &mut best_t, &mut best);
         for i in 0..self.planes {
             let prim = PrimRef::world(LocalPrim::Plane(i));
             if let Some(t) = g.intersect_plane(i, ray, best_t, from == Some(prim)) {
@@ -232,7 +232,7 @@ impl Accel {
             // SAFETY: the CPU supports AVX2 and FMA (checked by `simd_path`).
             return unsafe { self.occluded_level_avx2(g, 0, 0, ray, t_max, from) };
         }
-        self.occluded_level_impl(g, 0, 0, ray, t_max, from)
+        self.occluded_level_impl::<false>(g, 0, 0, ray, t_max, from)
     }
 
     /// [`Accel::closest`] within `level` reached at `placement`, with the ray in its space: the
@@ -255,7 +255,7 @@ impl Accel {
                 self.closest_level_avx2(g, level, placement, ray, from, best_t, best)
             };
         }
-        self.closest_level_impl(g, level, placement, ray, from, best_t, best)
+        self.closest_level_impl::<false>(g, level, placement, ray, from, best_t, best)
     }
 
     /// [`Accel::occluded`] within `level` reached at `placement`.
@@ -273,7 +273,7 @@ impl Accel {
             // SAFETY: the CPU supports AVX2 and FMA (checked by `simd_path`).
             return unsafe { self.occluded_level_avx2(g, level, placement, ray, t_max, from) };
         }
-        self.occluded_level_impl(g, level, placement, ray, t_max, from)
+        self.occluded_level_impl::<false>(g, level, placement, ray, t_max, from)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -289,7 +289,7 @@ impl Accel {
         best_t: &mut f64,
         best: &mut Option<PrimRef>,
     ) {
-        self.closest_level_impl(g, level, placement, ray, from, best_t, best)
+        self.closest_level_impl::<true>(g, level, placement, ray, from, best_t, best)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -303,12 +303,12 @@ impl Accel {
         t_max: f64,
         from: Option<PrimRef>,
     ) -> bool {
-        self.occluded_level_impl(g, level, placement, ray, t_max, from)
+        self.occluded_level_impl::<true>(g, level, placement, ray, t_max, from)
     }
 
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn closest_level_impl(
+    fn closest_level_impl<const AVX2: bool>(
         &self,
         g: &Geometry,
         level: usize,
@@ -323,7 +323,7 @@ impl Accel {
         match &l.top {
             None if l.items.len() == 1 => {
                 // One item tests its own root box.
-                self.closest_in(l, l.items[0], &q, best_t, best);
+                self.closest_in::<AVX2>(l, l.items[0], &q, best_t, best);
             }
             None => {
                 // A few items: their boxes in order of entry, no BVH and no stack.
@@ -344,26 +344,30 @@ impl Accel {
                 }
                 for &(i, enter) in &order[..n] {
                     if (enter as f64) <= *best_t {
-                        self.closest_in(l, l.items[i], &q, best_t, best);
+                        self.closest_in::<AVX2>(l, l.items[i], &q, best_t, best);
                     }
                 }
             }
-            Some(top) => with_stack(&TOP_STACKS, |stack| {
-                let fray = to_obvhs(ray, *best_t);
-                let mut leaves = TopLeaves::new(top, &fray, stack);
-                while let Some(range) = leaves.next(round_up(*best_t)) {
-                    for id in range {
-                        self.closest_in(l, l.items[id], &q, best_t, best);
+            Some(top) => with_stack(
+                &TOP_STACKS,
+                #[inline(always)]
+                |stack| {
+                    let fray = to_obvhs(ray, *best_t);
+                    let mut leaves = TopLeaves::new(top, &fray, stack);
+                    while let Some(range) = leaves.next(round_up(*best_t)) {
+                        for id in range {
+                            self.closest_in::<AVX2>(l, l.items[id], &q, best_t, best);
+                        }
                     }
-                }
-            }),
+                },
+            ),
         }
     }
 
     /// Lowers `best_t` to the nearest hit of the query's ray with `item` of level `l`, recording
     /// its primitive.
     #[inline(always)]
-    fn closest_in(
+    fn closest_in<const AVX2: bool>(
         &self,
         l: &LevelAccel,
         item: TopItem,
@@ -386,7 +390,9 @@ impl Accel {
                 let Some(bvh) = &l.meshes else { return };
                 let meshes = q.g.level(q.level).meshes;
                 let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
-                if let Some(h) = bvh.closest(meshes, &mray, round_up(*best_t), q.triangle_skip()) {
+                if let Some(h) =
+                    bvh.closest::<AVX2>(meshes, &mray, round_up(*best_t), q.triangle_skip())
+                {
                     // Mesh::refine_t, on the block's copy of the vertices.
                     let t = plane_t(q.ray.origin, q.ray.dir, bvh.vertices(&h), h.hit.t as f64);
                     let (mesh, tri) = h.id;
@@ -416,7 +422,7 @@ impl Accel {
     }
 
     #[inline(always)]
-    fn occluded_level_impl(
+    fn occluded_level_impl<const AVX2: bool>(
         &self,
         g: &Geometry,
         level: usize,
@@ -428,27 +434,32 @@ impl Accel {
         let l = &self.levels[level];
         let q = Query::new(g, level, placement, ray, from);
         match &l.top {
-            None if l.items.len() == 1 => self.occluded_in(l, l.items[0], &q, t_max),
+            None if l.items.len() == 1 => self.occluded_in::<AVX2>(l, l.items[0], &q, t_max),
             None => {
                 let fray = to_obvhs(ray, t_max);
                 l.items.iter().zip(&l.item_boxes).any(|(&item, b)| {
-                    b.intersect_ray(&fray) < fray.tmax && self.occluded_in(l, item, &q, t_max)
+                    b.intersect_ray(&fray) < fray.tmax
+                        && self.occluded_in::<AVX2>(l, item, &q, t_max)
                 })
             }
             Some(top) => {
                 let mut blocked = false;
-                with_stack(&TOP_STACKS, |stack| {
-                    let fray = to_obvhs(ray, t_max);
-                    let mut leaves = TopLeaves::new(top, &fray, stack);
-                    'search: while let Some(range) = leaves.next(fray.tmax) {
-                        for id in range {
-                            if self.occluded_in(l, l.items[id], &q, t_max) {
-                                blocked = true;
-                                break 'search;
+                with_stack(
+                    &TOP_STACKS,
+                    #[inline(always)]
+                    |stack| {
+                        let fray = to_obvhs(ray, t_max);
+                        let mut leaves = TopLeaves::new(top, &fray, stack);
+                        'search: while let Some(range) = leaves.next(fray.tmax) {
+                            for id in range {
+                                if self.occluded_in::<AVX2>(l, l.items[id], &q, t_max) {
+                                    blocked = true;
+                                    break 'search;
+                                }
                             }
                         }
-                    }
-                });
+                    },
+                );
                 blocked
             }
         }
@@ -456,17 +467,28 @@ impl Accel {
 
     /// Whether `item` of level `l` blocks the query's ray in (0, `t_max`).
     #[inline(always)]
-    fn occluded_in(&self, l: &LevelAccel, item: TopItem, q: &Query<'_>, t_max: f64) -> bool {
+    fn occluded_in<const AVX2: bool>(
+        &self,
+        l: &LevelAccel,
+        item: TopItem,
+        q: &Query<'_>,
+        t_max: f64,
+    ) -> bool {
         match item {
-            TopItem::Analytic => l
-                .analytic
-                .as_ref()
-                .is_some_and(|a| a.occluded(q.g.level(q.level), q.ray, t_max, q.skip())),
-            TopItem::Meshes => l.meshes.as_ref().is_some_and(|bvh| {
-                let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
-                let meshes = q.g.level(q.level).meshes;
-                bvh.occluded(meshes, &mray, round_up(t_max), q.triangle_skip())
-            }),
+            // `if let` rather than `is_some_and`: a closure holding the traversal was not
+            // inlined, and so ran without the AVX2 path's target features.
+            TopItem::Analytic => match &l.analytic {
+                Some(a) => a.occluded(q.g.level(q.level), q.ray, t_max, q.skip()),
+                None => false,
+            },
+            TopItem::Meshes => match &l.meshes {
+                Some(bvh) => {
+                    let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+                    let meshes = q.g.level(q.level).meshes;
+                    bvh.occluded::<AVX2>(meshes, &mray, round_up(t_max), q.triangle_skip())
+                }
+                None => false,
+            },
             TopItem::Instance { index, level } => {
                 let inst = &q.g.level(q.level).instances[index as usize];
                 let local = inst.ray_to_object(q.ray);

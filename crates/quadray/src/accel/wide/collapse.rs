@@ -1,4 +1,4 @@
-//! Collapsing obvhs' BVH2 (built down to single primitives) into 4-wide nodes over leaves of
+//! Collapsing obvhs' BVH2 (built down to single primitives) into wide nodes over leaves of
 //! blocks the caller packs, without recursion below the top (trees of degenerate input can be
 //! deep), in parallel over subtrees.
 //!
@@ -8,7 +8,7 @@
 //! were set aside. Which subtrees become tasks depends on the tree alone, so the nodes and blocks
 //! are the same for any number of threads.
 
-use super::{EMPTY, EMPTY_NODE, LEAF, Node4};
+use super::{EMPTY, LEAF, Node};
 use obvhs::bvh2::Bvh2;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -133,13 +133,14 @@ impl Collapse<'_> {
     }
 
     /// The BVH2 nodes a wide node over BVH2 node `index` takes as children: open the largest
-    /// internal one until there are four (Embree's BVH4 collapse).
-    fn children_of(&self, index: u32) -> ([u32; 4], usize) {
+    /// internal one until there are `N` (Embree's BVH4 and BVH8 collapse).
+    fn children_of<const N: usize>(&self, index: u32) -> ([u32; N], usize) {
         let nodes = &self.bvh2.nodes;
         let node = &nodes[index as usize];
-        let mut kids = [node.first_index, node.first_index + 1, 0, 0];
+        let mut kids = [0; N];
+        kids[..2].copy_from_slice(&[node.first_index, node.first_index + 1]);
         let mut n = 2;
-        while n < 4 {
+        while n < N {
             let area = |k: u32| nodes[k as usize].aabb().half_area();
             let open = (0..n)
                 .filter(|&i| !self.is_leaf(kids[i]))
@@ -155,16 +156,16 @@ impl Collapse<'_> {
     }
 
     /// The work of a wide node at `slot` over BVH2 node `index`.
-    fn children_work(&self, index: u32, slot: usize) -> impl Iterator<Item = Work> {
-        let (kids, n) = self.children_of(index);
+    fn children_work<const N: usize>(&self, index: u32, slot: usize) -> impl Iterator<Item = Work> {
+        let (kids, n) = self.children_of::<N>(index);
         (0..n).map(move |lane| (kids[lane], slot, lane))
     }
 
     /// Collapses `work` into `nodes` and `blocks`; subtrees weighing at most `split` (more than a
     /// leaf) are set aside into `tasks` instead.
-    fn run<B>(
+    fn run<const N: usize, B>(
         &self,
-        (nodes, blocks): (&mut Vec<Node4>, &mut Vec<B>),
+        (nodes, blocks): (&mut Vec<Node<N>>, &mut Vec<B>),
         mut work: Vec<Work>,
         pack: &impl Fn(&[u32], &mut Vec<B>),
         split: Option<(u32, &mut Vec<Work>)>,
@@ -188,8 +189,8 @@ impl Collapse<'_> {
                 continue;
             } else {
                 let slot = nodes.len();
-                nodes.push(EMPTY_NODE);
-                work.extend(self.children_work(index, slot));
+                nodes.push(Node::EMPTY);
+                work.extend(self.children_work::<N>(index, slot));
                 slot as u32
             };
             self.set_child(&mut nodes[parent], lane, index, reference);
@@ -197,7 +198,13 @@ impl Collapse<'_> {
     }
 
     /// Lane `lane` of `node` becomes BVH2 node `index`'s box with `reference`.
-    fn set_child(&self, node: &mut Node4, lane: usize, index: u32, reference: u32) {
+    fn set_child<const N: usize>(
+        &self,
+        node: &mut Node<N>,
+        lane: usize,
+        index: u32,
+        reference: u32,
+    ) {
         let b = self.bvh2.nodes[index as usize].aabb();
         for axis in 0..3 {
             node.bounds[2 * axis][lane] = b.min[axis];
@@ -207,28 +214,28 @@ impl Collapse<'_> {
     }
 }
 
-/// Collapses a BVH2 (built down to single primitives) into Node4s and leaf blocks: every subtree
+/// Collapses a BVH2 (built down to single primitives) into `N`-wide nodes and leaf blocks: every subtree
 /// whose primitives weigh at most `leaf_weight` together becomes one leaf, whose blocks `pack`
 /// appends from the subtree's primitives (at most 7; [`leaf_blocks`] gives them back from the
-/// reference), and each wide node takes the four largest subtrees below a BVH2 node (Embree's
-/// BVH4 collapse). A primitive that weighs `leaf_weight` is a leaf of its own.
-pub(in crate::accel) fn collapse<B: Send>(
+/// reference), and each wide node takes the `N` largest subtrees below a BVH2 node (Embree's
+/// BVH4 and BVH8 collapse). A primitive that weighs `leaf_weight` is a leaf of its own.
+pub(in crate::accel) fn collapse<const N: usize, B: Send>(
     bvh2: &Bvh2,
     leaf_weight: u32,
     weight: impl Fn(u32) -> u32 + Sync,
     pack: impl Fn(&[u32], &mut Vec<B>) + Sync,
-) -> (Vec<Node4>, Vec<B>) {
+) -> (Vec<Node<N>>, Vec<B>) {
     let c = Collapse {
         bvh2,
         counts: subtree_weights(bvh2, &weight),
         leaf_weight,
     };
-    let (mut nodes, mut blocks) = (vec![EMPTY_NODE], Vec::new());
+    let (mut nodes, mut blocks) = (vec![Node::EMPTY], Vec::new());
     // The root wide node takes the BVH2 root's children (or the root itself when it is a leaf).
     let work = if c.is_leaf(0) {
         vec![(0, 0, 0)]
     } else {
-        c.children_work(0, 0).collect()
+        c.children_work::<N>(0, 0).collect()
     };
     let split = (c.counts[0] / TASKS).max(MIN_TASK_WEIGHT);
     let mut tasks = Vec::new();
@@ -238,11 +245,11 @@ pub(in crate::accel) fn collapse<B: Send>(
         &pack,
         Some((split, &mut tasks)),
     );
-    let collapsed: Vec<(Vec<Node4>, Vec<B>)> = tasks
+    let collapsed: Vec<(Vec<Node<N>>, Vec<B>)> = tasks
         .par_iter()
         .map(|&(index, _, _)| {
-            let (mut nodes, mut blocks) = (vec![EMPTY_NODE], Vec::new());
-            let work = c.children_work(index, 0).collect();
+            let (mut nodes, mut blocks) = (vec![Node::EMPTY], Vec::new());
+            let work = c.children_work::<N>(index, 0).collect();
             c.run((&mut nodes, &mut blocks), work, &pack, None);
             (nodes, blocks)
         })
@@ -295,7 +302,7 @@ mod tests {
 
     /// The collapse of `boxes`' BVH2 into leaves of blocks listing their primitives, in a pool of
     /// `threads`.
-    fn collapsed(boxes: &[Aabb], threads: usize) -> (Vec<Node4>, Vec<Vec<u32>>) {
+    fn collapsed<const N: usize>(boxes: &[Aabb], threads: usize) -> (Vec<Node<N>>, Vec<Vec<u32>>) {
         let bvh2 = build_single_leaves(boxes);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -317,8 +324,8 @@ mod tests {
 
     /// Every primitive once in a leaf, inside every box on its way from the root; returns how
     /// many primitives the subtree at `reference` holds.
-    fn check(
-        nodes: &[Node4],
+    fn check<const N: usize>(
+        nodes: &[Node<N>],
         blocks: &[Vec<u32>],
         boxes: &[Aabb],
         reference: u32,
@@ -347,7 +354,7 @@ mod tests {
         }
         let node = &nodes[reference as usize];
         let mut count = 0;
-        for lane in 0..4 {
+        for lane in 0..N {
             if node.children[lane] == EMPTY {
                 continue;
             }
@@ -363,10 +370,15 @@ mod tests {
 
     #[test]
     fn parallel_collapse_holds_every_primitive_once_inside_its_boxes() {
+        parallel_collapse_holds_every_primitive::<4>();
+        parallel_collapse_holds_every_primitive::<8>();
+    }
+
+    fn parallel_collapse_holds_every_primitive<const N: usize>() {
         // 50 000 boxes: the top is split into tasks of at most 4 096 (MIN_TASK_WEIGHT).
         for n in [1, 3, 5, 1000, 50_000] {
             let boxes = boxes(n);
-            let (nodes, blocks) = collapsed(&boxes, 2);
+            let (nodes, blocks) = collapsed::<N>(&boxes, 2);
             let mut seen = vec![false; n as usize];
             assert_eq!(
                 check(&nodes, &blocks, &boxes, 0, &[], &mut seen),
@@ -387,9 +399,14 @@ mod tests {
 
     #[test]
     fn the_collapse_is_the_same_on_any_number_of_threads() {
+        the_collapse_is_the_same_on_one_and_two_threads::<4>();
+        the_collapse_is_the_same_on_one_and_two_threads::<8>();
+    }
+
+    fn the_collapse_is_the_same_on_one_and_two_threads<const N: usize>() {
         let boxes = boxes(50_000);
-        let (one, one_blocks) = collapsed(&boxes, 1);
-        let (two, two_blocks) = collapsed(&boxes, 2);
+        let (one, one_blocks) = collapsed::<N>(&boxes, 1);
+        let (two, two_blocks) = collapsed::<N>(&boxes, 2);
         assert_eq!(one_blocks, two_blocks);
         assert_eq!(one.len(), two.len());
         for (a, b) in one.iter().zip(&two) {
