@@ -179,49 +179,46 @@ impl AnalyticBvh {
         let mut best = None;
         let (boxes, filter) = f32_rays(ray)?;
         let mut limit = round_up(*best_t);
-        with_stack(
-            &STACK,
-            #[inline(always)]
-            |stack| {
-                let mut current = 0u32;
-                loop {
-                    if current & LEAF == 0 {
-                        let node = &self.nodes[current as usize];
-                        let (enter, mask) = node.intersect(&boxes, limit);
-                        // One child entered is taken without the stack (tested as `mask & (mask - 1)`:
-                        // `count_ones` has no instruction on baseline x86-64); several are pushed far
-                        // to near and the nearest visited next.
-                        if mask != 0 {
-                            current = if mask & (mask - 1) == 0 {
-                                node.children[mask.trailing_zeros() as usize]
-                            } else {
-                                node.push_ordered(enter, mask, stack, |_| {})
-                            };
+        with_stack(&STACK, |stack| {
+            let mut current = 0u32;
+            loop {
+                if current & LEAF == 0 {
+                    let node = &self.nodes[current as usize];
+                    let (enter, mask) = node.intersect(&boxes, limit);
+                    match mask.count_ones() {
+                        0 => {}
+                        1 => {
+                            current = node.children[mask.trailing_zeros() as usize];
                             continue;
                         }
-                    } else {
-                        for block in self.leaf_blocks(current) {
-                            if let Some(hit) = block_closest(block, g, ray, &filter, *best_t, from)
-                            {
-                                *best_t = hit.0;
-                                best = Some(hit.1);
-                                limit = round_up(hit.0);
-                            }
+                        _ => {
+                            current = node.push_ordered(enter.to_array(), mask, stack, |_| {});
+                            continue;
                         }
                     }
-                    // Pop the next child that may still hold a nearer hit.
-                    match pop_nearer(stack, limit) {
-                        Some(child) => current = child,
-                        None => return,
+                } else {
+                    for block in self.leaf_blocks(current) {
+                        if let Some(hit) = block_closest(block, g, ray, &filter, *best_t, from) {
+                            *best_t = hit.0;
+                            best = Some(hit.1);
+                            limit = round_up(hit.0);
+                        }
                     }
                 }
-            },
-        );
+                // Pop the next child that may still hold a nearer hit.
+                match pop_nearer(stack, limit) {
+                    Some(child) => current = child,
+                    None => return,
+                }
+            }
+        });
         best
     }
 
     /// Whether any primitive blocks the ray in (0, `t_max`).
-    #[inline]
+    // Always inlined into the closure of `Accel::occluded_in` that calls it, as `#[inline]` did
+    // before the mesh traversal beside it grew: the analytic shadow rays keep their code.
+    #[inline(always)]
     pub(crate) fn occluded(
         &self,
         g: Level<'_>,
@@ -233,34 +230,30 @@ impl AnalyticBvh {
             return false;
         };
         let limit = round_up(t_max);
-        with_stack(
-            &STACK,
-            #[inline(always)]
-            |stack| {
-                let mut current = 0u32;
-                loop {
-                    if current & LEAF == 0 {
-                        let node = &self.nodes[current as usize];
-                        let (_, mut mask) = node.intersect(&boxes, limit);
-                        while mask != 0 {
-                            let lane = mask.trailing_zeros() as usize;
-                            mask &= mask - 1;
-                            stack.push((node.children[lane], 0.0));
-                        }
-                    } else {
-                        for block in self.leaf_blocks(current) {
-                            if block_closest(block, g, ray, &filter, t_max, from).is_some() {
-                                return true;
-                            }
-                        }
+        with_stack(&STACK, |stack| {
+            let mut current = 0u32;
+            loop {
+                if current & LEAF == 0 {
+                    let node = &self.nodes[current as usize];
+                    let (_, mut mask) = node.intersect(&boxes, limit);
+                    while mask != 0 {
+                        let lane = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        stack.push((node.children[lane], 0.0));
                     }
-                    match stack.pop() {
-                        None => return false,
-                        Some((child, _)) => current = child,
+                } else {
+                    for block in self.leaf_blocks(current) {
+                        if block_closest(block, g, ray, &filter, t_max, from).is_some() {
+                            return true;
+                        }
                     }
                 }
-            },
-        )
+                match stack.pop() {
+                    None => return false,
+                    Some((child, _)) => current = child,
+                }
+            }
+        })
     }
 }
 

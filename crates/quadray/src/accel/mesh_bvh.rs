@@ -20,6 +20,7 @@ use crate::triangle::{ShearedRay, TriangleHit};
 use glam::{DVec3, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use rayon::prelude::*;
+use std::cell::Cell;
 
 /// A triangle of a [`MeshBvh`]: index of the mesh among those it was built over, and the triangle.
 pub(crate) type TriId = (u32, u32);
@@ -80,8 +81,22 @@ impl MeshRay {
 }
 
 thread_local! {
-    /// Traversal stacks of (child reference, entry distance), reused across rays.
-    static STACK: super::stack::Stacks<(u32, f32)> = const { super::stack::Stacks::new() };
+    /// The traversal stack of (child reference, entry distance), reused across rays.
+    static STACK: Cell<Vec<(u32, f32)>> = const { Cell::new(Vec::new()) };
+}
+
+/// This thread's traversal stack, empty, taken out of [`STACK`] (give it back with `STACK.set`).
+///
+/// Taken rather than lent to a closure (as [`super::stack::with_stack`] does): a closure is
+/// compiled with the target features of the function it is written in, so the traversal in it
+/// ran without AVX2 on the AVX2 path unless inlined, and inlining it through `LocalKey::with`
+/// was not reliable. A mesh traversal never runs inside another, so one stack a thread is enough
+/// (a nested one would start from an empty vector).
+#[inline(always)]
+fn take_stack() -> Vec<(u32, f32)> {
+    let mut stack = STACK.take();
+    stack.clear();
+    stack
 }
 
 impl MeshBvh {
@@ -232,10 +247,42 @@ impl MeshBvh {
     }
 
     /// The nearest triangle of `meshes` (those the BVH was built over) the ray meets in
-    /// (0, `t_max`), skipping triangle `skip`; `AVX2` is set only in code compiled for AVX2 and
-    /// run where the CPU has it ([`super::simd_path`]).
+    /// (0, `t_max`), skipping triangle `skip`, on the AVX2 path where `AVX2` is set (by callers
+    /// on that path only, chosen where the CPU has AVX2: [`super::simd_path`]).
+    ///
+    /// The AVX2 path's traversal is inlined into its caller (compiled for AVX2); the baseline's
+    /// is a function of its own, called once a query: inlined, it made the analytic scenes'
+    /// callers (which take the baseline path) too large to inline in turn.
     #[inline(always)]
     pub(crate) fn closest<const AVX2: bool>(
+        &self,
+        meshes: &[Mesh],
+        ray: &MeshRay,
+        t_max: f32,
+        skip: Option<TriId>,
+    ) -> Option<MeshHit> {
+        if AVX2 {
+            self.traverse_closest::<true>(meshes, ray, t_max, skip)
+        } else {
+            self.closest_baseline(meshes, ray, t_max, skip)
+        }
+    }
+
+    /// [`MeshBvh::closest`] compiled for the baseline.
+    #[inline(never)]
+    fn closest_baseline(
+        &self,
+        meshes: &[Mesh],
+        ray: &MeshRay,
+        t_max: f32,
+        skip: Option<TriId>,
+    ) -> Option<MeshHit> {
+        self.traverse_closest::<false>(meshes, ray, t_max, skip)
+    }
+
+    /// The closest-hit traversal (`AVX2` as for [`MeshBvh::closest`]).
+    #[inline(always)]
+    fn traverse_closest<const AVX2: bool>(
         &self,
         meshes: &[Mesh],
         ray: &MeshRay,
@@ -249,50 +296,46 @@ impl MeshBvh {
         let mut best: Option<(u32, TriangleHit)> = None;
         // The best hit's block and lane, as block · 4 + lane.
         let mut best_lane = 0u32;
-        super::stack::with_stack(
-            &STACK,
-            #[inline(always)]
-            |stack| {
-                let mut current = 0u32;
-                loop {
-                    if current & LEAF == 0 {
-                        let node = &self.nodes[current as usize];
-                        let (enter, mask) = node.intersect::<AVX2>(&ray.boxes, limit);
-                        // One child entered is taken without the stack (tested as `mask & (mask - 1)`:
-                        // `count_ones` has no instruction on baseline x86-64); several are pushed far
-                        // to near and the nearest visited next.
-                        if mask != 0 {
-                            current = if mask & (mask - 1) == 0 {
-                                node.children[mask.trailing_zeros() as usize]
-                            } else {
-                                node.push_ordered(enter, mask, stack, |c| self.prefetch(c))
-                            };
-                            continue;
-                        }
+        let mut stack = take_stack();
+        let mut current = 0u32;
+        loop {
+            if current & LEAF == 0 {
+                let node = &self.nodes[current as usize];
+                let (enter, mask) = node.intersect::<AVX2>(&ray.boxes, limit);
+                // One child entered is taken without the stack (tested as `mask & (mask - 1)`:
+                // `count_ones` has no instruction on baseline x86-64); several are pushed far
+                // to near and the nearest visited next.
+                if mask != 0 {
+                    current = if mask & (mask - 1) == 0 {
+                        node.children[mask.trailing_zeros() as usize]
                     } else {
-                        let blocks = leaf_blocks(current);
-                        let first = blocks.start;
-                        for (k, block) in self.blocks[blocks].iter().enumerate() {
-                            let (hits, mask) = self.block_hits(meshes, block, ray, limit, skip);
-                            if let Some(h) = hits.nearest(mask) {
-                                limit = h.t;
-                                let hit = TriangleHit {
-                                    t: h.t,
-                                    barycentrics: h.barycentrics,
-                                };
-                                best = Some((block.tri[h.lane], hit));
-                                best_lane = ((first + k) * 4 + h.lane) as u32;
-                            }
-                        }
-                    }
-                    // Pop the next child that may still hold a nearer hit.
-                    match pop_nearer(stack, limit) {
-                        Some(child) => current = child,
-                        None => return,
+                        node.push_ordered(enter, mask, &mut stack, |c| self.prefetch(c))
+                    };
+                    continue;
+                }
+            } else {
+                let blocks = leaf_blocks(current);
+                let first = blocks.start;
+                for (k, block) in self.blocks[blocks].iter().enumerate() {
+                    let (hits, mask) = self.block_hits(meshes, block, ray, limit, skip);
+                    if let Some(h) = hits.nearest(mask) {
+                        limit = h.t;
+                        let hit = TriangleHit {
+                            t: h.t,
+                            barycentrics: h.barycentrics,
+                        };
+                        best = Some((block.tri[h.lane], hit));
+                        best_lane = ((first + k) * 4 + h.lane) as u32;
                     }
                 }
-            },
-        );
+            }
+            // Pop the next child that may still hold a nearer hit.
+            match pop_nearer(&mut stack, limit) {
+                Some(child) => current = child,
+                None => break,
+            }
+        }
+        STACK.set(stack);
         best.map(|(number, hit)| MeshHit {
             id: self.id(number),
             hit,
@@ -309,10 +352,38 @@ impl MeshBvh {
         self.blocks[hit.block as usize].vertices(hit.lane as usize)
     }
 
-    /// Whether any triangle other than `skip` meets the ray in (0, `t_max`) (`AVX2` as for
-    /// [`MeshBvh::closest`]).
+    /// Whether any triangle other than `skip` meets the ray in (0, `t_max`) (`AVX2` and the
+    /// two compiled paths as for [`MeshBvh::closest`]).
     #[inline(always)]
     pub(crate) fn occluded<const AVX2: bool>(
+        &self,
+        meshes: &[Mesh],
+        ray: &MeshRay,
+        t_max: f32,
+        skip: Option<TriId>,
+    ) -> bool {
+        if AVX2 {
+            self.traverse_occluded::<true>(meshes, ray, t_max, skip)
+        } else {
+            self.occluded_baseline(meshes, ray, t_max, skip)
+        }
+    }
+
+    /// [`MeshBvh::occluded`] compiled for the baseline.
+    #[inline(never)]
+    fn occluded_baseline(
+        &self,
+        meshes: &[Mesh],
+        ray: &MeshRay,
+        t_max: f32,
+        skip: Option<TriId>,
+    ) -> bool {
+        self.traverse_occluded::<false>(meshes, ray, t_max, skip)
+    }
+
+    /// The any-hit traversal (`AVX2` as for [`MeshBvh::closest`]).
+    #[inline(always)]
+    fn traverse_occluded<const AVX2: bool>(
         &self,
         meshes: &[Mesh],
         ray: &MeshRay,
@@ -322,35 +393,32 @@ impl MeshBvh {
         if self.nodes.is_empty() {
             return false;
         }
-        super::stack::with_stack(
-            &STACK,
-            #[inline(always)]
-            |stack| {
-                let mut current = 0u32;
-                loop {
-                    if current & LEAF == 0 {
-                        let node = &self.nodes[current as usize];
-                        let (_, mask) = node.intersect::<AVX2>(&ray.boxes, t_max);
-                        let mut m = mask;
-                        while m != 0 {
-                            let lane = m.trailing_zeros() as usize;
-                            m &= m - 1;
-                            stack.push((node.children[lane], 0.0));
-                        }
-                    } else {
-                        for block in &self.blocks[leaf_blocks(current)] {
-                            if self.block_hits(meshes, block, ray, t_max, skip).1 != 0 {
-                                return true;
-                            }
-                        }
-                    }
-                    match stack.pop() {
-                        None => return false,
-                        Some((child, _)) => current = child,
+        let mut stack = take_stack();
+        let mut current = 0u32;
+        let blocked = 'search: loop {
+            if current & LEAF == 0 {
+                let node = &self.nodes[current as usize];
+                let (_, mask) = node.intersect::<AVX2>(&ray.boxes, t_max);
+                let mut m = mask;
+                while m != 0 {
+                    let lane = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    stack.push((node.children[lane], 0.0));
+                }
+            } else {
+                for block in &self.blocks[leaf_blocks(current)] {
+                    if self.block_hits(meshes, block, ray, t_max, skip).1 != 0 {
+                        break 'search true;
                     }
                 }
-            },
-        )
+            }
+            match stack.pop() {
+                None => break false,
+                Some((child, _)) => current = child,
+            }
+        };
+        STACK.set(stack);
+        blocked
     }
 }
 

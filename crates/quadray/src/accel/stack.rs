@@ -23,20 +23,12 @@ impl<T> Stacks<T> {
 /// Runs `f` with an empty stack of this thread's `key`: the first one, or for a nested traversal
 /// a spare taken and returned, so no traversal allocates once the stacks have grown (measured:
 /// taking every stack from a pool instead cost 15% of a frame of scenes/reflective.toml).
-///
-/// `f` runs here, not inside `LocalKey::with`: a traversal inlined into `with`'s closure made
-/// `with` too large to inline, and the traversal then ran as a function of its own compiled for
-/// the baseline instruction set even when called from the AVX2 path (closures and functions
-/// take their target features from where they are defined, not from their caller).
-#[inline(always)]
+#[inline]
 pub(crate) fn with_stack<T, R>(
     key: &'static std::thread::LocalKey<Stacks<T>>,
     f: impl FnOnce(&mut Vec<T>) -> R,
 ) -> R {
-    // SAFETY: a thread's local values are dropped only when the thread exits, which it cannot
-    // while it runs this function; the reference is used only within this call, on this thread.
-    let stacks: &Stacks<T> = key.with(|stacks| unsafe { &*std::ptr::from_ref(stacks) });
-    match stacks.first.try_borrow_mut() {
+    key.with(|stacks| match stacks.first.try_borrow_mut() {
         Ok(mut stack) => {
             stack.clear();
             f(&mut stack)
@@ -48,5 +40,5 @@ pub(crate) fn with_stack<T, R>(
             stacks.nested.borrow_mut().push(stack);
             result
         }
-    }
+    })
 }

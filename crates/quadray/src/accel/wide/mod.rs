@@ -110,7 +110,7 @@ impl BoxRay {
 impl Node4 {
     /// Entry distances of the four children and the mask of those the ray enters in [0, `t_max`].
     #[inline(always)]
-    pub(super) fn intersect(&self, ray: &BoxRay, t_max: f32) -> ([f32; 4], u32) {
+    pub(super) fn intersect(&self, ray: &BoxRay, t_max: f32) -> (Vec4, u32) {
         let slab = |axis: usize| {
             let (lo, hi) = (self.bounds[2 * axis], self.bounds[2 * axis + 1]);
             let (near, far) = if ray.negative[axis] {
@@ -133,7 +133,7 @@ impl Node4 {
         let (z0, z1) = slab(2);
         let enter = x0.max(y0).max(z0).max(Vec4::ZERO);
         let exit = x1.min(y1).min(z1).min(Vec4::splat(t_max));
-        (enter.to_array(), enter.cmple(exit).bitmask())
+        (enter, enter.cmple(exit).bitmask())
     }
 }
 
@@ -346,6 +346,7 @@ mod tests {
                     four.bounds[row].copy_from_slice(&node.bounds[row][4 * half..4 * half + 4]);
                 }
                 let (enter4, mask4) = four.intersect(&ray, t_max);
+                let enter4 = enter4.to_array();
                 assert_eq!((mask >> (4 * half)) & 0xF, mask4, "ray {k} half {half}");
                 for lane in (0..4).filter(|l| mask4 & (1 << l) != 0) {
                     assert_eq!(enter[4 * half + lane].to_bits(), enter4[lane].to_bits());
