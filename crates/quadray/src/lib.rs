@@ -5,7 +5,7 @@
 //! - [`Scene`] is built from a [`SceneDescription`]: a [`Camera`], [`Material`]s, [`Light`]s and the
 //!   [`Geometry`] ([`Sphere`], [`Plane`], [`Mesh`], [`Quadric`], and [`Prototype`]s: shapes stored
 //!   once and placed by [`Instance`]s, which nest). Building validates every value and builds the
-//!   multi-level acceleration structure ([`accel`]): per level, 4-wide BVHs over meshes and a BVH
+//!   multi-level acceleration structure ([`accel`]): per level, 8-wide BVHs over meshes and a BVH
 //!   over the analytic shapes, under a top over them and the level's instances.
 //! - [`Scene::intersect`] and [`Scene::occluded`] (and their slice forms) cast rays without the
 //!   renderer.

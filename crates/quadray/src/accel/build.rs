@@ -378,7 +378,7 @@ fn build_level(geometry: &Geometry, level: usize, cx: LevelContext<'_>) -> Level
         items.push(TopItem::Meshes);
         let b = mesh_bounds.expect("meshes have triangles");
         item_boxes.push(padded_aabb(b, extent));
-        covering.extend(bvh.covering_boxes());
+        covering.extend(bvh.covering_boxes(MAX_COVERING.saturating_sub(covering.len())));
     }
     let mut placed = Vec::new();
     for (k, inst) in l.instances.iter().enumerate() {

@@ -171,10 +171,10 @@ impl MeshBvh {
         bvh
     }
 
-    /// The boxes of the root's children's children (at most 16): their union holds every
-    /// triangle, and they hug the mesh far closer than one box once rotated.
-    pub(crate) fn covering_boxes(&self) -> Vec<(glam::DVec3, glam::DVec3)> {
-        covering_boxes(&self.nodes)
+    /// At most `max` boxes whose union holds every triangle, hugging the mesh far closer than one
+    /// box once rotated (the root's children, opened one level where `max` allows).
+    pub(crate) fn covering_boxes(&self, max: usize) -> Vec<(glam::DVec3, glam::DVec3)> {
+        covering_boxes(&self.nodes, max)
     }
 
     /// Bytes of the wide nodes, the triangle blocks and the id table.
@@ -546,6 +546,33 @@ mod tests {
             bvh.closest::<false>(&meshes, &ray, f32::INFINITY, None)
                 .is_some()
         );
+    }
+
+    /// The covering boxes of a mesh's BVH are several (an instance of it is boxed tightly), at
+    /// most the number asked for, and hold every vertex.
+    #[test]
+    fn covering_boxes_are_few_and_hold_the_mesh() {
+        let meshes = [grid(64, 0)];
+        let bvh = MeshBvh::build(&meshes);
+        for max in [8, 16, 64] {
+            let boxes = bvh.covering_boxes(max);
+            assert!(
+                boxes.len() > 1 && boxes.len() <= max,
+                "{} boxes",
+                boxes.len()
+            );
+            for p in meshes[0].positions() {
+                let p = p.as_dvec3();
+                assert!(
+                    boxes
+                        .iter()
+                        .any(|(lo, hi)| lo.cmple(p).all() && p.cmple(*hi).all()),
+                    "{p} outside"
+                );
+            }
+        }
+        // 16 boxes allow opening the 8-wide root's children: more boxes than the root alone.
+        assert!(bvh.covering_boxes(16).len() > bvh.covering_boxes(8).len());
     }
 
     /// Over several meshes, hits name the right mesh and triangle, and skipping works per mesh.

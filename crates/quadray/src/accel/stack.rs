@@ -2,6 +2,7 @@
 //! showed up as 5% of all instructions in profiles.
 
 use std::cell::RefCell;
+use std::thread::LocalKey;
 
 /// One thread's stacks of one kind: the first for a traversal, and spares for traversals that
 /// run inside it (a level's top reaching an instance whose level has a top of its own).
@@ -41,4 +42,23 @@ pub(crate) fn with_stack<T, R>(
             result
         }
     })
+}
+
+/// An empty stack of this thread's `key`, taken out of its spares (a new one when there are none),
+/// for a traversal that must not run in a closure: a closure is compiled with the target features
+/// of the function it is written in, so the AVX2 path's traversal in [`with_stack`]'s closure ran
+/// without AVX2. Give it back with [`put_stack`].
+#[inline(always)]
+pub(crate) fn take_stack<T>(key: &'static LocalKey<Stacks<T>>) -> Vec<T> {
+    let mut stack = key
+        .with(|stacks| stacks.nested.borrow_mut().pop())
+        .unwrap_or_default();
+    stack.clear();
+    stack
+}
+
+/// Returns a stack from [`take_stack`] to this thread's spares of `key`.
+#[inline(always)]
+pub(crate) fn put_stack<T>(key: &'static LocalKey<Stacks<T>>, stack: Vec<T>) {
+    key.with(|stacks| stacks.nested.borrow_mut().push(stack));
 }

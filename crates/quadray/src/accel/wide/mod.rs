@@ -3,10 +3,10 @@
 //! obvhs' BVH2 into such nodes ([`collapse`]). A node has `N` children: 4 ([`Node4`], the
 //! analytic level's) or 8 ([`Node8`], the meshes').
 //!
-//! A 4-wide node holds its children's boxes as six `Vec4`s, so one ray meets all four in a dozen
-//! SIMD operations (glam's `Vec4`: SSE2 on x86-64, NEON on aarch64); an 8-wide node's lanes are
-//! arrays of eight the compiler vectorises (one AVX register on the AVX2 path, two SSE2 registers
-//! on the baseline; the same operations in the same order, so both paths give the same distances
+//! A node holds its children's boxes as six rows of `N` f32 (structure of arrays): a 4-wide node
+//! meets one ray in a dozen `Vec4` operations (glam: SSE2 on x86-64, NEON on aarch64), an 8-wide
+//! node in the same operations on one AVX register on the AVX2 path or on two `Vec4` halves on
+//! the baseline (the same operations in the same order, so both paths give the same distances
 //! and masks). There is no entry clamp:
 //! hits at any distance count (obvhs' CWBVH node test clamps entry distances to 1e-4 world units,
 //! which breaks scale invariance). Reciprocal directions are clamped only where they would be
@@ -146,7 +146,9 @@ impl Node8 {
     pub(super) fn intersect<const AVX2: bool>(&self, ray: &BoxRay, t_max: f32) -> ([f32; 8], u32) {
         #[cfg(target_arch = "x86_64")]
         if AVX2 {
-            // SAFETY: `AVX2` is set only on the path chosen where the CPU has AVX2 (`simd_path`).
+            debug_assert_eq!(super::simd_path(), super::SimdPath::Avx2);
+            // SAFETY: `AVX2` is set only on the path chosen where the CPU has AVX2 (`simd_path`):
+            // by `Accel`'s `#[target_feature]` functions, which run only where `Accel::avx2`.
             return unsafe { self.intersect_avx2(ray, t_max) };
         }
         self.intersect_halves(ray, t_max)
@@ -215,7 +217,7 @@ impl Node8 {
             let enter = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(x0, y0), z0), zero);
             let limit = _mm256_set1_ps(t_max);
             let exit = _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(x1, y1), z1), limit);
-            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32;
+            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(enter, exit)) as u32;
             let mut distances = [0f32; 8];
             _mm256_storeu_ps(distances.as_mut_ptr(), enter);
             (distances, mask)
@@ -278,21 +280,33 @@ pub(super) fn pop_nearer(stack: &mut Vec<(u32, f32)>, limit: f32) -> Option<u32>
     }
 }
 
-/// The boxes of the root's children's children (at most `N`²): their union holds every
-/// primitive, and they hug the content far closer than one box once rotated.
-pub(super) fn covering_boxes<const N: usize>(nodes: &[Node<N>]) -> Vec<(glam::DVec3, glam::DVec3)> {
+/// At most `max` boxes whose union holds every primitive, hugging the content far closer than
+/// one box once rotated: the root's children's boxes, each opened into its own children's while
+/// the count stays within `max` (all of them for a 4-wide tree and `max` 16).
+pub(super) fn covering_boxes<const N: usize>(
+    nodes: &[Node<N>],
+    max: usize,
+) -> Vec<(glam::DVec3, glam::DVec3)> {
     let Some(root) = nodes.first() else {
         return Vec::new();
     };
+    let lanes: Vec<usize> = (0..N).filter(|&l| root.child_box(l).is_some()).collect();
+    let mut count = lanes.len();
     let mut boxes = Vec::new();
-    for lane in 0..N {
+    for lane in lanes {
         let child = root.children[lane];
-        if child & LEAF != 0 {
+        let opened: Vec<_> = if child & LEAF == 0 {
+            let node = &nodes[child as usize];
+            (0..N).filter_map(|l| node.child_box(l)).collect()
+        } else {
+            Vec::new()
+        };
+        if !opened.is_empty() && count - 1 + opened.len() <= max {
+            count += opened.len() - 1;
+            boxes.extend(opened);
+        } else {
             boxes.extend(root.child_box(lane));
-            continue;
         }
-        let node = &nodes[child as usize];
-        boxes.extend((0..N).filter_map(|l| node.child_box(l)));
     }
     boxes
 }
@@ -332,10 +346,23 @@ mod tests {
                 }
                 node.children[lane] = lane as u32;
             }
-            let origin = Vec3A::new(2.0 * hash(k, 200) - 1.0, 2.0 * hash(k, 201) - 1.0, 5.0);
-            let mut dir = Vec3A::new(hash(k, 202) - 0.5, hash(k, 203) - 0.5, -1.0);
+            // From above and from below, some along a slab, a few not finite (every path must
+            // still agree bit for bit).
+            let side = if k % 2 == 0 { 1.0 } else { -1.0 };
+            let mut origin = Vec3A::new(
+                2.0 * hash(k, 200) - 1.0,
+                2.0 * hash(k, 201) - 1.0,
+                5.0 * side,
+            );
+            let mut dir = Vec3A::new(hash(k, 202) - 0.5, hash(k, 203) - 0.5, -side);
             if k % 5 == 0 {
                 dir.x = -0.0; // along a slab
+            }
+            match k % 97 {
+                1 => origin.y = f32::NAN,
+                2 => origin.z = f32::INFINITY,
+                3 => dir.y = f32::NAN,
+                _ => {}
             }
             let ray = BoxRay::new(origin, dir);
             let t_max = if k % 3 == 0 { f32::INFINITY } else { 5.0 };
