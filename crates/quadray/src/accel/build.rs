@@ -331,11 +331,15 @@ impl Accel {
             .flat_map(|l| geometry.level(l).meshes)
             .map(|m| m.triangle_count())
             .sum();
+        let analytic_count: usize = levels
+            .iter()
+            .map(|l| l.analytic.as_ref().map_or(0, AnalyticBvh::len))
+            .sum();
         Accel {
             levels,
             placements: placements.unwrap_or_default(),
             planes: geometry.planes.len() as u32,
-            avx2: simd_path() == SimdPath::Avx2 && triangles > 0,
+            avx2: simd_path() == SimdPath::Avx2 && triangles > 4 * analytic_count,
             triangles,
         }
     }

@@ -22,7 +22,7 @@
 //! different items are ordered by their f64 distances except within f32 rounding of each other.
 //!
 //! The traversal code is compiled twice on x86-64: for the baseline (SSE2) and with AVX2 and FMA,
-//! chosen at run time ([`simd_path`]) for scenes with triangles
+//! chosen at run time ([`simd_path`]) for scenes that are mostly triangles
 //! ([`Accel::traversal_path`]); set
 //! `QUADRAY_SIMD=baseline` to force the baseline path. Both give bit-identical results (no fused
 //! operations are introduced: Rust never contracts a·b+c). The AVX2 copy is the functions marked
@@ -113,10 +113,10 @@ pub struct Accel {
     planes: u32,
     /// Triangles stored (each level's counted once).
     triangles: usize,
-    /// Whether queries take the AVX2+FMA path: where the CPU has it and the scene has triangles,
-    /// whose 8-wide nodes it tests in one AVX pass (measured, 1280×720, medians of 7: the kitchen
-    /// frame and rays 8-20% faster, scenes/defense.toml with its 20 triangles among quadrics 6%
-    /// faster; the quadric grid, without triangles, 6% slower, reflective +1%).
+    /// Whether queries take the AVX2+FMA path: where the CPU has it and the scene is mostly
+    /// triangles, whose 8-wide nodes it tests in one AVX pass (measured, 1280×720: the kitchen's
+    /// frame and rays 8-20% faster; the quadric grid 6% slower, and scenes/defense.toml, 20
+    /// triangles among six quadrics and spheres, 6-7% slower in the latest runs, medians of 5-7).
     avx2: bool,
 }
 
