@@ -1,0 +1,333 @@
+//! One level's traversal: its few items box by box, or its top BVH, and for each item the
+//! level's analytic or mesh BVH, or the level an instance places (entered through
+//! [`Accel::closest_level`] and [`Accel::occluded_level`], which choose the compiled path).
+//!
+//! Every function here is generic over `AVX2`, the compiled copy it is inlined into (see the
+//! module docs of [`super`]); a closure or a function that is not inlined would be compiled for
+//! the baseline, so the AVX2 copy's traversals keep out of them.
+
+use super::mesh_bvh::MeshRay;
+use super::stack::{Stacks, put_stack, take_stack, with_stack};
+use super::top::TopLeaves;
+use super::{Accel, FLAT_TOP, LevelAccel, TopItem, round_up, to_obvhs};
+use crate::geometry::Geometry;
+use crate::math::Ray;
+use crate::shape::{LocalPrim, PrimRef};
+use crate::triangle::plane_t;
+use obvhs::bvh2::Bvh2;
+
+impl Accel {
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn closest_level_impl<const AVX2: bool>(
+        &self,
+        g: &Geometry,
+        level: usize,
+        placement: u64,
+        ray: &Ray,
+        from: Option<PrimRef>,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) {
+        let l = &self.levels[level];
+        let q = Query::new(g, level, placement, ray, from);
+        match &l.top {
+            None if l.items.len() == 1 => {
+                // One item tests its own root box.
+                self.closest_in::<AVX2>(l, l.items[0], &q, best_t, best);
+            }
+            None => {
+                // A few items: their boxes in order of entry, no BVH and no stack.
+                let fray = to_obvhs(ray, *best_t);
+                let mut order = [(0usize, 0f32); FLAT_TOP];
+                let mut n = 0;
+                for (i, b) in l.item_boxes.iter().enumerate() {
+                    let enter = b.intersect_ray(&fray);
+                    if enter < fray.tmax {
+                        let mut j = n;
+                        while j > 0 && order[j - 1].1 > enter {
+                            order[j] = order[j - 1];
+                            j -= 1;
+                        }
+                        order[j] = (i, enter);
+                        n += 1;
+                    }
+                }
+                for &(i, enter) in &order[..n] {
+                    if (enter as f64) <= *best_t {
+                        self.closest_in::<AVX2>(l, l.items[i], &q, best_t, best);
+                    }
+                }
+            }
+            // Inlined in the AVX2 copy; out of line in the baseline's, where inlined it cost the
+            // analytic scenes' `Scene::intersect_from` 10% more instructions.
+            Some(top) if AVX2 => {
+                let mut stack = take_stack(&TOP_STACKS);
+                self.closest_top::<AVX2>(l, top, &q, &mut stack, best_t, best);
+                put_stack(&TOP_STACKS, stack);
+            }
+            Some(top) => self.closest_top_baseline(l, top, &q, best_t, best),
+        }
+    }
+
+    /// [`Accel::closest_top`] compiled for the baseline, on a stack lent to a closure (cheaper
+    /// than taking one: 5% of the instructions of scenes/columns.toml's frame).
+    #[inline(never)]
+    fn closest_top_baseline(
+        &self,
+        l: &LevelAccel,
+        top: &Bvh2,
+        q: &Query<'_>,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) {
+        with_stack(&TOP_STACKS, |stack| {
+            self.closest_top::<false>(l, top, q, stack, best_t, best)
+        })
+    }
+
+    /// Lowers `best_t` to the nearest hit of the query's ray with the items of level `l` that
+    /// its top BVH `top` reaches. On the AVX2 path the stack is taken, not lent to a closure, so
+    /// the items' traversals inlined here keep the AVX2 copy's target features.
+    #[inline(always)]
+    fn closest_top<const AVX2: bool>(
+        &self,
+        l: &LevelAccel,
+        top: &Bvh2,
+        q: &Query<'_>,
+        stack: &mut Vec<u32>,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) {
+        let fray = to_obvhs(q.ray, *best_t);
+        let mut leaves = TopLeaves::new(top, &fray, stack);
+        while let Some(range) = leaves.next(round_up(*best_t)) {
+            for id in range {
+                self.closest_in::<AVX2>(l, l.items[id], q, best_t, best);
+            }
+        }
+    }
+
+    /// Lowers `best_t` to the nearest hit of the query's ray with `item` of level `l`, recording
+    /// its primitive.
+    #[inline(always)]
+    fn closest_in<const AVX2: bool>(
+        &self,
+        l: &LevelAccel,
+        item: TopItem,
+        q: &Query<'_>,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) {
+        match item {
+            TopItem::Analytic => {
+                if let Some(a) = &l.analytic
+                    && let Some(local) = a.closest(q.g.level(q.level), q.ray, best_t, q.skip())
+                {
+                    *best = Some(PrimRef {
+                        placement: q.placement,
+                        local,
+                    });
+                }
+            }
+            TopItem::Meshes => {
+                let Some(bvh) = &l.meshes else { return };
+                let meshes = q.g.level(q.level).meshes;
+                let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+                if let Some(h) =
+                    bvh.closest::<AVX2>(meshes, &mray, round_up(*best_t), q.triangle_skip())
+                {
+                    // Mesh::refine_t, on the block's copy of the vertices.
+                    let t = plane_t(q.ray.origin, q.ray.dir, bvh.vertices(&h), h.hit.t as f64);
+                    let (mesh, tri) = h.id;
+                    if t < *best_t {
+                        *best_t = t;
+                        *best = Some(PrimRef {
+                            placement: q.placement,
+                            local: LocalPrim::Triangle { mesh, tri },
+                        });
+                    }
+                }
+            }
+            TopItem::Instance { index, level } => {
+                let inst = &q.g.level(q.level).instances[index as usize];
+                let local = inst.ray_to_object(q.ray);
+                let placement = self.placements.child(q.level, index as usize, q.placement);
+                self.closest_level(q.g, level as usize, placement, &local, q.from, best_t, best);
+            }
+            TopItem::Placed(i) => {
+                let p = &l.placed[i as usize];
+                let local = p.ray(q.ray);
+                let placement = q.placement + p.offset;
+                let level = p.level as usize;
+                self.closest_level(q.g, level, placement, &local, q.from, best_t, best);
+            }
+        }
+    }
+
+    #[inline(always)]
+    pub(super) fn occluded_level_impl<const AVX2: bool>(
+        &self,
+        g: &Geometry,
+        level: usize,
+        placement: u64,
+        ray: &Ray,
+        t_max: f64,
+        from: Option<PrimRef>,
+    ) -> bool {
+        let l = &self.levels[level];
+        let q = Query::new(g, level, placement, ray, from);
+        match &l.top {
+            None if l.items.len() == 1 => self.occluded_in::<AVX2>(l, l.items[0], &q, t_max),
+            None => {
+                // A loop, not `any` with a closure: as for the top's stack below.
+                let fray = to_obvhs(ray, t_max);
+                for (&item, b) in l.items.iter().zip(&l.item_boxes) {
+                    if b.intersect_ray(&fray) < fray.tmax
+                        && self.occluded_in::<AVX2>(l, item, &q, t_max)
+                    {
+                        return true;
+                    }
+                }
+                false
+            }
+            // As in `closest_level_impl`.
+            Some(top) if AVX2 => {
+                let mut stack = take_stack(&TOP_STACKS);
+                let blocked = self.occluded_top::<AVX2>(l, top, &q, &mut stack, t_max);
+                put_stack(&TOP_STACKS, stack);
+                blocked
+            }
+            Some(top) => self.occluded_top_baseline(l, top, &q, t_max),
+        }
+    }
+
+    /// [`Accel::occluded_top`] compiled for the baseline (the stack lent, as in
+    /// [`Accel::closest_top_baseline`]).
+    #[inline(never)]
+    fn occluded_top_baseline(&self, l: &LevelAccel, top: &Bvh2, q: &Query<'_>, t_max: f64) -> bool {
+        with_stack(&TOP_STACKS, |stack| {
+            self.occluded_top::<false>(l, top, q, stack, t_max)
+        })
+    }
+
+    /// Whether an item of level `l` that its top BVH `top` reaches blocks the query's ray in
+    /// (0, `t_max`) (the stack as in [`Accel::closest_top`]).
+    #[inline(always)]
+    fn occluded_top<const AVX2: bool>(
+        &self,
+        l: &LevelAccel,
+        top: &Bvh2,
+        q: &Query<'_>,
+        stack: &mut Vec<u32>,
+        t_max: f64,
+    ) -> bool {
+        let fray = to_obvhs(q.ray, t_max);
+        let mut leaves = TopLeaves::new(top, &fray, stack);
+        while let Some(range) = leaves.next(fray.tmax) {
+            for id in range {
+                if self.occluded_in::<AVX2>(l, l.items[id], q, t_max) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// Whether `item` of level `l` blocks the query's ray in (0, `t_max`).
+    #[inline(always)]
+    fn occluded_in<const AVX2: bool>(
+        &self,
+        l: &LevelAccel,
+        item: TopItem,
+        q: &Query<'_>,
+        t_max: f64,
+    ) -> bool {
+        match item {
+            // The analytic traversal in a closure of its own (inlined, it made the callers of
+            // `Accel::occluded` larger and analytic frames 3% slower); the mesh traversal not
+            // (a closure is compiled with the target features of the function it is written in,
+            // so on the AVX2 path the traversal in it ran without them).
+            TopItem::Analytic => l
+                .analytic
+                .as_ref()
+                .is_some_and(|a| a.occluded(q.g.level(q.level), q.ray, t_max, q.skip())),
+            TopItem::Meshes => match &l.meshes {
+                Some(bvh) => {
+                    let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+                    let meshes = q.g.level(q.level).meshes;
+                    bvh.occluded::<AVX2>(meshes, &mray, round_up(t_max), q.triangle_skip())
+                }
+                None => false,
+            },
+            TopItem::Instance { index, level } => {
+                let inst = &q.g.level(q.level).instances[index as usize];
+                let local = inst.ray_to_object(q.ray);
+                let placement = self.placements.child(q.level, index as usize, q.placement);
+                self.occluded_level(q.g, level as usize, placement, &local, t_max, q.from)
+            }
+            TopItem::Placed(i) => {
+                let p = &l.placed[i as usize];
+                let local = p.ray(q.ray);
+                let placement = q.placement + p.offset;
+                self.occluded_level(q.g, p.level as usize, placement, &local, t_max, q.from)
+            }
+        }
+    }
+}
+
+/// A ray in one level's space, with what that level's items need.
+struct Query<'a> {
+    g: &'a Geometry,
+    level: usize,
+    /// The placement the level was reached at.
+    placement: u64,
+    ray: &'a Ray,
+    /// The primitive the ray was spawned on, for nested levels.
+    from: Option<PrimRef>,
+}
+
+impl<'a> Query<'a> {
+    /// The primitive the ray was spawned on, if it is in this placement (asked only where a
+    /// level's own shapes are tested: measured, computing it for every level entry cost 1.4% of
+    /// a frame).
+    #[inline(always)]
+    fn skip(&self) -> Option<LocalPrim> {
+        match self.from {
+            Some(f) if f.placement == self.placement => Some(f.local),
+            _ => None,
+        }
+    }
+
+    /// The query of `ray` in `level`, reached at `placement`.
+    #[inline(always)]
+    fn new(
+        g: &'a Geometry,
+        level: usize,
+        placement: u64,
+        ray: &'a Ray,
+        from: Option<PrimRef>,
+    ) -> Query<'a> {
+        Query {
+            g,
+            level,
+            placement,
+            ray,
+            from,
+        }
+    }
+
+    /// The (mesh, triangle) the ray was spawned on, if in this placement.
+    #[inline(always)]
+    fn triangle_skip(&self) -> Option<(u32, u32)> {
+        match self.skip() {
+            Some(LocalPrim::Triangle { mesh, tri }) => Some((mesh, tri)),
+            _ => None,
+        }
+    }
+}
+
+thread_local! {
+    /// The tops' traversal stacks.
+    static TOP_STACKS: Stacks<u32> = const { Stacks::new() };
+}
