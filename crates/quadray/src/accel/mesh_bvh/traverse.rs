@@ -1,84 +1,13 @@
-//! The bottom level for triangle meshes: an 8-wide BVH of quadray's own layout ([`super::wide`]),
-//! collapsed from obvhs' BVH2 build (PLOC, reinsertion), with leaves of one or two blocks of four
-//! triangles ([`Tri4`]), each block tested at once; the children a ray enters are visited nearest
-//! first.
-//!
-//! Eight children a node rather than four (Embree's BVH8 on AVX2): the AVX2 path tests a node in
-//! one pass of 8-lane registers, and a ray passes about two thirds as many levels. Measured
-//! against the 4-wide layout (`bench rays`, 3 interleaved rounds, 1 thread, AVX2): +8% to +21%
-//! on every mesh and ray set. The baseline path tests the same nodes in two 4-lane halves, so
-//! both paths visit the same nodes in the same order and give the same hits.
-//!
-//! Leaves hold copies of their triangles' vertices (no index lookups while tracing). A block lane
-//! names its triangle by number: over a single mesh the mesh's triangle index, over several meshes
-//! an index into a table of (mesh, triangle).
+//! The mesh BVH's traversals: the closest hit and any hit, nearest children first for the
+//! former, each compiled twice (the AVX2 path's copy inlined into its caller, the baseline's a
+//! function of its own: see [`MeshBvh::closest`]).
 
-use super::tri4::Tri4;
-use super::wide::{BoxRay, LEAF, Node8, collapse, covering_boxes, leaf_blocks, pop_nearer};
+use super::{MeshBvh, MeshHit, MeshRay, TriId};
+use crate::accel::tri4::{BlockHits, Tri4};
+use crate::accel::wide::{LEAF, leaf_blocks, pop_nearer};
 use crate::mesh::Mesh;
-use crate::triangle::{ShearedRay, TriangleHit};
-use glam::{DVec3, Vec3, Vec3A};
-use obvhs::aabb::Aabb;
-use rayon::prelude::*;
+use crate::triangle::TriangleHit;
 use std::cell::Cell;
-
-/// A triangle of a [`MeshBvh`]: index of the mesh among those it was built over, and the triangle.
-pub(crate) type TriId = (u32, u32);
-
-/// The most triangles a leaf holds: two blocks. Against leaves of one block (4 triangles), the
-/// leaves are fuller (BVH bytes per triangle: dragon 73 -> 60, kitchen 78 -> 67) and rays as
-/// fast or faster (3 interleaved rounds, 1 thread: kitchen coherent closest hit -3%, the rest
-/// -2% to +19%, most on the dragon's incoherent rays); three blocks were 1-11% slower.
-const MESH_LEAF_TRIANGLES: u32 = 8;
-
-/// The nearest triangle a ray meets in a [`MeshBvh`].
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct MeshHit {
-    /// Which triangle.
-    pub(crate) id: TriId,
-    /// Where the f32 test met it.
-    pub(crate) hit: TriangleHit,
-    /// The leaf block and lane holding its vertices ([`MeshBvh::vertices`]).
-    block: u32,
-    lane: u32,
-}
-
-/// A wide BVH over the triangles of one or more meshes.
-#[derive(Clone, Debug)]
-pub(crate) struct MeshBvh {
-    nodes: Vec<Node8>,
-    blocks: Vec<Tri4>,
-    /// (mesh, triangle) of each triangle number (the meshes' triangles numbered in turn); empty
-    /// over a single mesh, whose triangle numbers are its triangle indices.
-    ids: Vec<TriId>,
-    /// Whether any of the meshes has an alpha cut-out.
-    masked: bool,
-}
-
-/// An f32 ray in a mesh's space, prepared for the node and triangle tests.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct MeshRay {
-    boxes: BoxRay,
-    sheared: ShearedRay,
-}
-
-impl MeshRay {
-    /// Prepares `origin + t·dir` for traversal (a ray that is not finite in f32 meets nothing).
-    #[inline]
-    pub(crate) fn new(origin: Vec3, dir: Vec3) -> MeshRay {
-        MeshRay {
-            boxes: BoxRay::new(origin.into(), dir.into()),
-            sheared: ShearedRay::new(origin, dir),
-        }
-    }
-
-    /// The ray's [`coverage_key`](crate::mesh::coverage_key), from its origin and reciprocal
-    /// direction (which identify the ray as well as its direction does, and are at hand).
-    #[inline]
-    fn coverage_key(&self) -> u32 {
-        crate::mesh::coverage_key(self.boxes.origin.into(), self.boxes.inv_dir.into())
-    }
-}
 
 thread_local! {
     /// The traversal stack of (child reference, entry distance), reused across rays.
@@ -100,90 +29,6 @@ fn take_stack() -> Vec<(u32, f32)> {
 }
 
 impl MeshBvh {
-    /// Builds the BVH over `meshes`.
-    pub(crate) fn build(meshes: &[Mesh]) -> MeshBvh {
-        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-        for p in meshes.iter().flat_map(|m| m.positions()) {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-        // Pad every box by a few ulps of its coordinates and a tiny share of the meshes' size, so
-        // a triangle lying in an axis plane gets a slab of non-zero width.
-        let pad = Vec3A::splat((hi - lo).max_element().max(0.0) * 1e-6);
-        let mut all_ids = Vec::new();
-        let mut triangles: Vec<[[f32; 3]; 3]> = Vec::new();
-        for (m, mesh) in meshes.iter().enumerate() {
-            let count = mesh.triangle_count() as u32;
-            triangles.par_extend(
-                (0..count)
-                    .into_par_iter()
-                    .map(|tri| mesh.triangle_positions(tri).map(|p| *p)),
-            );
-            all_ids.extend((0..count).map(|tri| (m as u32, tri)));
-        }
-        let aabbs: Vec<Aabb> = triangles
-            .par_iter()
-            .map(|vertices| {
-                let [a, b, c] = vertices.map(Vec3A::from);
-                let (l, h) = (a.min(b).min(c), a.max(b).max(c));
-                Aabb::new(
-                    l - l.abs() * (4.0 * f32::EPSILON) - pad,
-                    h + h.abs() * (4.0 * f32::EPSILON) + pad,
-                )
-            })
-            .collect();
-        let masked = meshes.iter().any(|m| m.alpha_mask().is_some());
-        let mut bvh = MeshBvh {
-            nodes: Vec::new(),
-            blocks: Vec::new(),
-            ids: Vec::new(),
-            masked,
-        };
-        if aabbs.is_empty() {
-            return bvh;
-        }
-        // Single-triangle leaves: the collapse makes its own leaves of 4-triangle blocks (a full
-        // block costs one SIMD test, so obvhs' SAH leaf collapse, which counts every triangle,
-        // would leave the blocks 60% full). Measured on the kitchen: obvhs' slow build (wider PLOC search, more
-        // reinsertion) and spatial pre-splits change throughput by under 2% at 1.2-2x the time.
-        let bvh2 = super::build::build_single_leaves(&aabbs);
-        let (nodes, blocks) = collapse(
-            &bvh2,
-            MESH_LEAF_TRIANGLES,
-            |_| 1,
-            |prims, blocks: &mut Vec<Tri4>| {
-                for lanes in prims.chunks(4) {
-                    let mut block = [([[0.0; 3]; 3], 0); 4];
-                    for (slot, &p) in block.iter_mut().zip(lanes) {
-                        *slot = (triangles[p as usize], p);
-                    }
-                    blocks.push(Tri4::new(&block[..lanes.len()]));
-                }
-            },
-        );
-        let nodes = nodes.into_boxed_slice().into_vec();
-        let blocks = blocks.into_boxed_slice().into_vec();
-        if meshes.len() > 1 {
-            bvh.ids = all_ids;
-        }
-        bvh.nodes = nodes;
-        bvh.blocks = blocks;
-        bvh
-    }
-
-    /// At most `max` boxes whose union holds every triangle, hugging the mesh far closer than one
-    /// box once rotated (the root's children, opened one level where `max` allows).
-    pub(crate) fn covering_boxes(&self, max: usize) -> Vec<(glam::DVec3, glam::DVec3)> {
-        covering_boxes(&self.nodes, max)
-    }
-
-    /// Bytes of the wide nodes, the triangle blocks and the id table.
-    pub(crate) fn memory_bytes(&self) -> usize {
-        self.nodes.capacity() * std::mem::size_of::<Node8>()
-            + self.blocks.capacity() * std::mem::size_of::<Tri4>()
-            + self.ids.capacity() * std::mem::size_of::<TriId>()
-    }
-
     /// Asks the CPU to start loading child `reference` (a node or a leaf's first block), so the
     /// load overlaps the work on its nearer siblings.
     #[inline(always)]
@@ -205,15 +50,6 @@ impl MeshBvh {
         }
     }
 
-    /// (mesh, triangle) of triangle number `number`.
-    #[inline(always)]
-    fn id(&self, number: u32) -> TriId {
-        match self.ids.get(number as usize) {
-            Some(&id) => id,
-            None => (0, number),
-        }
-    }
-
     /// The lanes of `block` the ray hits in (0, `t_max`) that count: not `skip`, and kept by the
     /// meshes' alpha cut-outs.
     #[inline(always)]
@@ -224,7 +60,7 @@ impl MeshBvh {
         ray: &MeshRay,
         t_max: f32,
         skip: Option<TriId>,
-    ) -> (super::tri4::BlockHits, u32) {
+    ) -> (BlockHits, u32) {
         let hits = block.intersect(&ray.sheared, t_max);
         let mut mask = hits.valid;
         if mask != 0 && (skip.is_some() || self.masked) {
@@ -344,14 +180,6 @@ impl MeshBvh {
         })
     }
 
-    /// The vertices of `hit`'s triangle, from the leaf block's copies: the mesh's own values, so
-    /// the f64 refinement of a hit needs no lookup in the mesh (on the dragon's rays that lookup
-    /// was a quarter of a closest-hit query).
-    #[inline(always)]
-    pub(crate) fn vertices(&self, hit: &MeshHit) -> [DVec3; 3] {
-        self.blocks[hit.block as usize].vertices(hit.lane as usize)
-    }
-
     /// Whether any triangle other than `skip` meets the ray in (0, `t_max`) (`AVX2` and the
     /// two compiled paths as for [`MeshBvh::closest`]).
     #[inline(always)]
@@ -424,27 +252,10 @@ impl MeshBvh {
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::grid;
     use super::*;
-    use crate::material::MaterialId;
-
-    /// A grid of n×n unit quads in the plane z = 0 (2n² triangles).
-    fn grid(n: u32, material: MaterialId) -> Mesh {
-        let mut p = Vec::new();
-        for y in 0..=n {
-            for x in 0..=n {
-                p.push(Vec3::new(x as f32, y as f32, 0.0));
-            }
-        }
-        let mut idx = Vec::new();
-        let v = |x: u32, y: u32| y * (n + 1) + x;
-        for y in 0..n {
-            for x in 0..n {
-                idx.push([v(x, y), v(x + 1, y), v(x + 1, y + 1)]);
-                idx.push([v(x, y), v(x + 1, y + 1), v(x, y + 1)]);
-            }
-        }
-        Mesh::new(p, idx, None, material).unwrap()
-    }
+    use crate::accel::{SimdPath, simd_path};
+    use glam::Vec3;
 
     /// Every ray through the grid's interior (including along the shared edges and through
     /// vertices) hits, at the plane's t; a brute-force scan over the mesh's triangles
@@ -548,39 +359,12 @@ mod tests {
         );
     }
 
-    /// The covering boxes of a mesh's BVH are several (an instance of it is boxed tightly), at
-    /// most the number asked for, and hold every vertex.
-    #[test]
-    fn covering_boxes_are_few_and_hold_the_mesh() {
-        let meshes = [grid(64, 0)];
-        let bvh = MeshBvh::build(&meshes);
-        for max in [8, 16, 64] {
-            let boxes = bvh.covering_boxes(max);
-            assert!(
-                boxes.len() > 1 && boxes.len() <= max,
-                "{} boxes",
-                boxes.len()
-            );
-            for p in meshes[0].positions() {
-                let p = p.as_dvec3();
-                assert!(
-                    boxes
-                        .iter()
-                        .any(|(lo, hi)| lo.cmple(p).all() && p.cmple(*hi).all()),
-                    "{p} outside"
-                );
-            }
-        }
-        // 16 boxes allow opening the 8-wide root's children: more boxes than the root alone.
-        assert!(bvh.covering_boxes(16).len() > bvh.covering_boxes(8).len());
-    }
-
     /// The AVX2 path's traversal (its 8-wide nodes tested in AVX registers) finds the same hits
     /// as the baseline's, bit for bit, on a bumpy mesh hit from every side; skipped (and said)
     /// where this process does not take the AVX2 path.
     #[test]
     fn avx2_and_baseline_traversals_agree() {
-        if super::super::simd_path() != super::super::SimdPath::Avx2 {
+        if simd_path() != SimdPath::Avx2 {
             eprintln!("skipped: this machine or QUADRAY_SIMD does not take the AVX2 path");
             return;
         }
