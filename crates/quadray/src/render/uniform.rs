@@ -94,6 +94,8 @@ fn render_row(
         for (i, pixel) in pixels.iter_mut().enumerate() {
             let column = first_column + i;
             let x = window.x0 + column as u32;
+            // The pixel's key hashed again rather than kept from the batch above: keeping the
+            // batch's keys made this loop 13-16% slower (grid, bunny frame), through codegen.
             let pattern = pixel_pattern(x, y, settings.seed);
             let mut aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
             // The variance pass needs the running estimate; the image keeps its f32 sum.
