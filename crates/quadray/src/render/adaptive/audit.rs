@@ -8,24 +8,37 @@
 //! samples held 2.3× those pixels' mean true error, and the estimate was 1.47× the truth.
 //!
 //! The audit draws its pixels when the rounds are over, pixel i with chance
-//! pᵢ = min(1, M wᵢ / Σw + F / N), wᵢ = sᵢ / √rᵢ: M ([`AUDIT_PIXELS`]) by the calibrated squared
-//! error sᵢ over the root of the rays rᵢ the pixel traced, and F ([`UNIFORM_PIXELS`]) spread
-//! evenly, so that pixels whose samples all agreed are drawn too. Auditing a pixel costs its rays
-//! twice, and for a fixed cost the estimate's variance, Σ eᵢ² / pᵢ, is least with pᵢ ∝ eᵢ / √rᵢ
-//! (Lagrange, as in Neyman allocation). Drawn by sᵢ alone, 512 pixels cost 8–15% of the render on
-//! the bundled scenes: the pixels with most error hold the most samples.
+//! pᵢ = min(1, M wᵢ / Σw + C vᵢ / Σv + F / N), three draws over the N pixels:
+//! - M ([`AUDIT_PIXELS`]) by wᵢ = sᵢ / √rᵢ, the calibrated squared error sᵢ over the root of the
+//!   rays rᵢ the pixel traced. Auditing a pixel costs about its rays, and for a fixed cost the
+//!   estimate's variance, Σ eᵢ² / pᵢ, is least with pᵢ ∝ eᵢ / √rᵢ (Lagrange, as in Neyman
+//!   allocation). Drawn by sᵢ alone, 512 pixels cost 8–15% of the render on the bundled scenes:
+//!   the pixels with most error hold the most samples.
+//! - C ([`CONTRAST_PIXELS`]) by vᵢ = cᵢ / √rᵢ for flat pixels (whose samples all agreed; 0 for
+//!   the others), cᵢ the largest squared difference of the pixel's display value from its four
+//!   neighbours'. An edge that runs along a pixel's border can cross into it by a sliver that
+//!   every sample misses; the pixel then looks flat, has no estimated error to be drawn by, and
+//!   differs from its neighbour across the edge. On defense at 480x270 the sliver of the horizon
+//!   in one row of 37 pixels held 37% of the image's squared error, and one of them drawn evenly
+//!   (chance 1/127) made the estimate 1.6× the truth.
+//! - F ([`UNIFORM_PIXELS`]) evenly, for what neither foresees.
 //!
-//! Each drawn pixel is sampled twice more, as many samples as it holds, with independent seeds;
-//! with a its value and b, c the two new ones, (a − b)(a − c) has expectation (a − μ)² given a,
-//! its actual squared error ([`super::Twin`]). The image's MSE is estimated by
+//! Each drawn pixel is sampled twice more, with independent seeds, as many samples as it holds
+//! and at least [`AUDIT_MIN_SAMPLES`]; with a its value and b, c the two new ones, (a − b)(a − c)
+//! has expectation (a − μ)² given a, its actual squared error ([`super::Twin`]), whatever the
+//! sets' counts (each is an unbiased estimate of μ). The image's MSE is estimated by
 //! Σ (a − b)(a − c) / pᵢ over the drawn pixels, divided by N (Horvitz–Thompson): unbiased whatever
-//! the calibration says, and precise where the sᵢ follow the actual errors. Over 60 renders of
-//! four scenes (docs/image-error/estimate.md) it was within ±25% of the truth in 46, where the
-//! calibrated estimates summed were in 29. The draw depends only on the pixels and the seed, so
-//! it is the same for any thread count.
+//! the calibration says, and precise where the draws follow the actual errors. The product is
+//! not zero only where both sets meet what the pixel missed: for a feature that a sample meets
+//! with chance q, about (nq)² of the time with n samples a set. With sets of the pixel's own 8
+//! or 16 samples the kitchen's missed thin lines were measured at about half their error; at
+//! least 32 samples a set cost 1–2% more rays. The draw depends only on the pixels and the seed,
+//! so it is the same for any thread count. docs/sampling.md has the estimate against the truth
+//! over 60 renders of four scenes.
 
 use super::Twin;
-use super::calibration::{Calibration, sample_sets, uniform_draw};
+use super::calibration::{Calibration, is_flat, sample_sets, uniform_draw};
+use crate::colour::display_value;
 use crate::film::PixelEstimate;
 use crate::integrator::RayCounts;
 use crate::render::SampleContext;
@@ -38,6 +51,14 @@ pub const AUDIT_PIXELS: f64 = 1024.0;
 /// Pixels the audit draws evenly over the image, about: pixels whose samples all agreed have
 /// no estimated error to be drawn by, and may still have missed a feature.
 pub const UNIFORM_PIXELS: f64 = 1024.0;
+
+/// Pixels the audit draws in proportion to the contrast of flat pixels with their neighbours,
+/// about: where an edge runs along a pixel's border, a sliver of it can cross into the pixel
+/// and be missed by every sample.
+pub const CONTRAST_PIXELS: f64 = 1024.0;
+
+/// The fewest samples in each of an audited pixel's two new sample sets.
+const AUDIT_MIN_SAMPLES: u32 = 32;
 
 /// The fewest pixels a crop's or a tile's audit draws in each way.
 const MIN_AUDIT_PIXELS: f64 = 32.0;
@@ -65,11 +86,9 @@ pub(super) fn audit(
         return (0.0, RayCounts::default());
     }
     let window = context.window;
-    let weights: Vec<f64> = (estimates.par_iter().zip(rays))
-        .map(|(e, &r)| calibration.squared_error(e).max(0.0) / (r.max(1) as f64).sqrt())
-        .map(|w| if w.is_finite() { w } else { 0.0 })
-        .collect();
-    let total: f64 = weights.iter().sum();
+    let width = (window.x1 - window.x0) as usize;
+    let weights = draw_weights((estimates, rays), calibration, width);
+    let totals = (weights.iter()).fold((0.0, 0.0), |t, w| (t.0 + w.0, t.1 + w.1));
     // A crop or a tile draws its share of the image's audit (at least a few pixels): auditing
     // every pixel of a 32x32 tile would triple its rays.
     let settings = context.settings;
@@ -77,15 +96,19 @@ pub(super) fn audit(
     let drawn_pixels = |wanted: f64| (wanted * share).max(MIN_AUDIT_PIXELS);
     let uniform = (drawn_pixels(UNIFORM_PIXELS) / pixels as f64).min(1.0);
     let by_error = drawn_pixels(AUDIT_PIXELS);
-    let chance = |s: f64| match total > 0.0 {
-        true => (by_error * s / total + uniform).min(1.0),
-        false => uniform,
+    let by_contrast = drawn_pixels(CONTRAST_PIXELS);
+    let part = |drawn: f64, weight: f64, total: f64| match total > 0.0 {
+        true => drawn * weight / total,
+        false => 0.0,
+    };
+    let chance = |(s, c): (f64, f64)| {
+        (part(by_error, s, totals.0) + part(by_contrast, c, totals.1) + uniform).min(1.0)
     };
     let seed = settings.seed ^ AUDIT_SEED;
     let drawn: Vec<(usize, (u32, u32), f64)> = (weights.iter().enumerate())
-        .filter_map(|(i, &s)| {
+        .filter_map(|(i, &w)| {
             let at = window.pixel(i);
-            let p = chance(s);
+            let p = chance(w);
             (uniform_draw(seed, at) < p).then_some((i, at, p))
         })
         .collect();
@@ -96,7 +119,7 @@ pub(super) fn audit(
             let pixel = &estimates[i];
             let mut twin = Twin::default();
             let mut counts = RayCounts::default();
-            let footprint = (pixel.count(), footprint_spp);
+            let footprint = (pixel.count().max(AUDIT_MIN_SAMPLES), footprint_spp);
             sample_sets(context, at, &mut twin, footprint, &mut counts, AUDIT_SETS);
             let m = twin.squared_error_of(pixel);
             (m / p, counts)
@@ -109,4 +132,64 @@ pub(super) fn audit(
         counts += rays;
     }
     ((sum / pixels as f64).max(0.0), counts)
+}
+
+/// Each pixel's weight in the draw by error and in the draw by contrast, each over the root of
+/// the pixel's rays, for the pixels `estimates` (row-major, `width` wide) having traced `rays`.
+fn draw_weights(
+    (estimates, rays): (&[PixelEstimate], &[u64]),
+    calibration: &Calibration,
+    width: usize,
+) -> Vec<(f64, f64)> {
+    let displayed: Vec<f32> = (estimates.par_iter())
+        .map(|e| display_value(e.mean()))
+        .collect();
+    (estimates.par_iter().zip(rays).enumerate())
+        .map(|(i, (e, &r))| {
+            let root = (r.max(1) as f64).sqrt();
+            let by_error = calibration.squared_error(e).max(0.0) / root;
+            let by_contrast = match is_flat(e) {
+                true => contrast(&displayed, width, i) / root,
+                false => 0.0,
+            };
+            let by_error = if by_error.is_finite() { by_error } else { 0.0 };
+            (by_error, by_contrast)
+        })
+        .collect()
+}
+
+/// The largest squared difference between the display value of pixel `i` and those of its four
+/// neighbours in a row-major window `width` pixels wide.
+fn contrast(displayed: &[f32], width: usize, i: usize) -> f64 {
+    let (x, value) = (i % width, displayed[i]);
+    let left = (x > 0).then(|| i - 1);
+    let right = (x + 1 < width).then_some(i + 1);
+    let up = i.checked_sub(width);
+    let down = Some(i + width).filter(|&j| j < displayed.len());
+    [left, right, up, down]
+        .into_iter()
+        .flatten()
+        .map(|j| ((displayed[j] - value) as f64).powi(2))
+        .fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::contrast;
+
+    /// The contrast of a pixel is with its four neighbours inside the window, not the diagonal
+    /// ones, and not across the window's sides.
+    #[test]
+    fn contrast_is_with_the_four_neighbours_inside_the_window() {
+        // 3 wide, 3 tall: 0.8 at the start of the middle row, 0 elsewhere.
+        let values = [0.0, 0.0, 0.0, 0.8, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let square = 0.8f32 as f64 * 0.8f32 as f64;
+        assert_eq!(contrast(&values, 3, 3), square);
+        assert_eq!(contrast(&values, 3, 4), square);
+        assert_eq!(contrast(&values, 3, 0), square);
+        // Not the diagonal neighbour, and not the next row's first pixel as a right neighbour.
+        assert_eq!(contrast(&values, 3, 7), 0.0);
+        assert_eq!(contrast(&values, 3, 2), 0.0);
+        assert_eq!(contrast(&[0.3], 1, 0), 0.0);
+    }
 }

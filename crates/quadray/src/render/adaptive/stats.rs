@@ -28,7 +28,9 @@ pub struct RoundSummary {
 /// Why an adaptive render stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stop {
-    /// The target was reached: the image's estimated error, or every pixel's.
+    /// The target was reached: every pixel's (pixel rule), or the error the plan predicts for
+    /// the image (image rule; the image's own estimate, [`ErrorStats::estimated_rmse`], can be
+    /// above it).
     Converged,
     /// Pixels that could lower the error further reached the maximum sample count.
     MaxSpp,
@@ -146,6 +148,12 @@ impl SamplingStats {
                     String::new()
                 };
                 let stop = match e.stop {
+                    // The plan (the pilot) met the target; the audit, which reports the image's
+                    // own error, may still say otherwise, and the line says so.
+                    Stop::Converged if e.estimated_rmse > e.target => format!(
+                        "the rounds planned for the target done, the estimate {:.2}x the target",
+                        e.estimated_rmse / e.target
+                    ),
                     Stop::Converged => "the target reached".to_string(),
                     Stop::MaxSpp => format!("stopped at max spp {}", self.max_spp),
                     Stop::TimeLimit => "the time limit reached".to_string(),
@@ -233,4 +241,46 @@ fn relative_errors(estimates: &[PixelEstimate]) -> Vec<f64> {
 /// The largest of the pixels' relative errors (0 for none).
 pub(super) fn worst_error(errors: &[f64]) -> f64 {
     errors.iter().copied().fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An image-rule render whose plan met `target` and whose audit estimated `estimated`.
+    fn converged(target: f64, estimated: f64) -> SamplingStats {
+        SamplingStats {
+            min_spp: 8,
+            max_spp: 64,
+            mean_spp: 12.5,
+            error: Some(ErrorStats {
+                rule: ErrorRule::Image,
+                target,
+                estimated_rmse: estimated,
+                worst: f64::NAN,
+                mean: f64::NAN,
+                met: 1.0,
+                above: 0,
+                rounds: 4,
+                stop: Stop::Converged,
+            }),
+        }
+    }
+
+    /// The final line says the target was reached only when the image's own estimate is at or
+    /// below it.
+    #[test]
+    fn the_line_says_when_the_estimate_is_above_the_target() {
+        let below = converged(0.001, 0.0009).summary();
+        assert!(
+            below.ends_with("(target 0.001): the target reached"),
+            "{below}"
+        );
+        let above = converged(0.001, 0.0012).summary();
+        assert!(
+            above
+                .ends_with("the rounds planned for the target done, the estimate 1.20x the target"),
+            "{above}"
+        );
+    }
 }

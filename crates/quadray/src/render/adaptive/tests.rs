@@ -22,6 +22,14 @@ pub(super) fn disc() -> Scene {
 /// White `spheres` (flat, ambient only) on a black background, seen from above by an
 /// orthographic camera 4 units tall centred on the origin (48 pixels: 12 to a unit).
 pub(super) fn white_on_black(spheres: Vec<Sphere>) -> Scene {
+    white_shapes_on_black(Geometry {
+        spheres,
+        ..Geometry::default()
+    })
+}
+
+/// The shapes of `geometry`, white, as [`white_on_black`] shows spheres.
+pub(super) fn white_shapes_on_black(geometry: Geometry) -> Scene {
     Scene::new(SceneDescription {
         camera: Camera {
             from: DVec3::new(0.0, 0.0, 10.0),
@@ -37,10 +45,7 @@ pub(super) fn white_on_black(spheres: Vec<Sphere>) -> Scene {
             ..Material::default()
         }],
         lights: vec![],
-        geometry: Geometry {
-            spheres,
-            ..Geometry::default()
-        },
+        geometry,
     })
     .unwrap()
 }
