@@ -158,6 +158,14 @@ impl PixelEstimate {
         self.rgb_mean.as_vec3()
     }
 
+    /// The mean over the samples of their display values ([`crate::colour::display_value`]),
+    /// from the runs' sums (0 before any sample): for a pixel whose samples all agree, the display
+    /// value of its mean, without encoding it again.
+    pub fn mean_display_value(&self) -> f32 {
+        let sum: f32 = self.batch_sums.iter().flatten().sum();
+        sum / (3 * self.count.max(1)) as f32
+    }
+
     /// The unbiased sample variance of each linear RGB channel (zero below two samples).
     pub fn variance(&self) -> Vec3 {
         if self.count < 2 {

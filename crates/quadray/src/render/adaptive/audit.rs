@@ -14,31 +14,31 @@
 //!   estimate's variance, Σ eᵢ² / pᵢ, is least with pᵢ ∝ eᵢ / √rᵢ (Lagrange, as in Neyman
 //!   allocation). Drawn by sᵢ alone, 512 pixels cost 8–15% of the render on the bundled scenes:
 //!   the pixels with most error hold the most samples.
-//! - C ([`CONTRAST_PIXELS`]) by vᵢ = cᵢ / √rᵢ for flat pixels (whose samples all agreed; 0 for
-//!   the others), cᵢ the largest squared difference of the pixel's display value from its four
-//!   neighbours'. An edge that runs along a pixel's border can cross into it by a sliver that
-//!   every sample misses; the pixel then looks flat, has no estimated error to be drawn by, and
-//!   differs from its neighbour across the edge. On defense at 480x270 the sliver of the horizon
-//!   in one row of 37 pixels held 37% of the image's squared error, and one of them drawn evenly
-//!   (chance 1/127) made the estimate 1.6× the truth.
+//! - C ([`CONTRAST_PIXELS`]) by vᵢ = cᵢ / √rᵢ, cᵢ the pixel's flat contrast: for a flat pixel
+//!   (whose samples all agreed), the largest squared difference of its display value from its
+//!   flat 4-neighbours' ([`super::slivers`]). An edge that runs along the border of two flat
+//!   pixels can cross into either by a sliver that every sample misses; the pixel then has no
+//!   estimated error to be drawn by. On defense at 480x270 the sliver of the horizon in one row
+//!   of 37 pixels held 37% of the image's squared error, and one of them drawn evenly (chance
+//!   1/127) made the estimate 1.6× the truth.
 //! - F ([`UNIFORM_PIXELS`]) evenly, for what neither foresees.
 //!
 //! Each drawn pixel is sampled twice more, with independent seeds, as many samples as it holds
-//! and at least [`AUDIT_MIN_SAMPLES`]; with a its value and b, c the two new ones, (a − b)(a − c)
-//! has expectation (a − μ)² given a, its actual squared error ([`super::Twin`]), whatever the
-//! sets' counts (each is an unbiased estimate of μ). The image's MSE is estimated by
-//! Σ (a − b)(a − c) / pᵢ over the drawn pixels, divided by N (Horvitz–Thompson): unbiased whatever
-//! the calibration says, and precise where the draws follow the actual errors. The product is
-//! not zero only where both sets meet what the pixel missed: for a feature that a sample meets
-//! with chance q, about (nq)² of the time with n samples a set. With sets of the pixel's own 8
-//! or 16 samples the kitchen's missed thin lines were measured at about half their error; at
-//! least 32 samples a set cost 1–2% more rays. The draw depends only on the pixels and the seed,
-//! so it is the same for any thread count. docs/sampling.md has the estimate against the truth
-//! over 60 renders of four scenes.
+//! and, unless it is flat with a flat contrast of 0, at least [`AUDIT_MIN_SAMPLES`]. With a its
+//! value and b, c the two new ones, (a − b)(a − c) has expectation (a − μ)² given a, its actual
+//! squared error ([`super::Twin`]), whatever the sets' counts (each is an unbiased estimate of
+//! μ). The image's MSE is estimated by Σ (a − b)(a − c) / pᵢ over the drawn pixels, divided by N
+//! (Horvitz–Thompson): unbiased whatever the calibration says, and precise where the draws follow
+//! the actual errors. The product is not zero only where both sets meet what the pixel missed:
+//! for a feature that a sample meets with chance q, about (nq)² of the time with n samples a
+//! set; with sets of the pixel's own 8 or 16 samples the kitchen's missed thin lines were
+//! measured at about half their error. The draw depends only on the pixels and the seed, so it
+//! is the same for any thread count. docs/sampling.md has the estimate against the truth over 60
+//! renders of four scenes.
 
 use super::Twin;
 use super::calibration::{Calibration, is_flat, sample_sets, uniform_draw};
-use crate::colour::display_value;
+use super::slivers::flat_contrasts;
 use crate::film::PixelEstimate;
 use crate::integrator::RayCounts;
 use crate::render::SampleContext;
@@ -119,7 +119,15 @@ pub(super) fn audit(
             let pixel = &estimates[i];
             let mut twin = Twin::default();
             let mut counts = RayCounts::default();
-            let footprint = (pixel.count().max(AUDIT_MIN_SAMPLES), footprint_spp);
+            // A flat pixel with no flat neighbour of another value (plain background, most of
+            // what the even draw meets) is measured with its own count: at least 32 samples
+            // there cost the quadric grid 5% more rays for the same estimates.
+            let plain = is_flat(pixel) && weights[i].1 == 0.0;
+            let count = match plain {
+                true => pixel.count(),
+                false => pixel.count().max(AUDIT_MIN_SAMPLES),
+            };
+            let footprint = (count, footprint_spp);
             sample_sets(context, at, &mut twin, footprint, &mut counts, AUDIT_SETS);
             let m = twin.squared_error_of(pixel);
             (m / p, counts)
@@ -141,55 +149,17 @@ fn draw_weights(
     calibration: &Calibration,
     width: usize,
 ) -> Vec<(f64, f64)> {
-    let displayed: Vec<f32> = (estimates.par_iter())
-        .map(|e| display_value(e.mean()))
-        .collect();
-    (estimates.par_iter().zip(rays).enumerate())
-        .map(|(i, (e, &r))| {
-            let root = (r.max(1) as f64).sqrt();
-            let by_error = calibration.squared_error(e).max(0.0) / root;
-            let by_contrast = match is_flat(e) {
-                true => contrast(&displayed, width, i) / root,
-                false => 0.0,
-            };
-            let by_error = if by_error.is_finite() { by_error } else { 0.0 };
-            (by_error, by_contrast)
-        })
-        .collect()
-}
-
-/// The largest squared difference between the display value of pixel `i` and those of its four
-/// neighbours in a row-major window `width` pixels wide.
-fn contrast(displayed: &[f32], width: usize, i: usize) -> f64 {
-    let (x, value) = (i % width, displayed[i]);
-    let left = (x > 0).then(|| i - 1);
-    let right = (x + 1 < width).then_some(i + 1);
-    let up = i.checked_sub(width);
-    let down = Some(i + width).filter(|&j| j < displayed.len());
-    [left, right, up, down]
-        .into_iter()
-        .flatten()
-        .map(|j| ((displayed[j] - value) as f64).powi(2))
-        .fold(0.0, f64::max)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::contrast;
-
-    /// The contrast of a pixel is with its four neighbours inside the window, not the diagonal
-    /// ones, and not across the window's sides.
-    #[test]
-    fn contrast_is_with_the_four_neighbours_inside_the_window() {
-        // 3 wide, 3 tall: 0.8 at the start of the middle row, 0 elsewhere.
-        let values = [0.0, 0.0, 0.0, 0.8, 0.0, 0.0, 0.0, 0.0, 0.0];
-        let square = 0.8f32 as f64 * 0.8f32 as f64;
-        assert_eq!(contrast(&values, 3, 3), square);
-        assert_eq!(contrast(&values, 3, 4), square);
-        assert_eq!(contrast(&values, 3, 0), square);
-        // Not the diagonal neighbour, and not the next row's first pixel as a right neighbour.
-        assert_eq!(contrast(&values, 3, 7), 0.0);
-        assert_eq!(contrast(&values, 3, 2), 0.0);
-        assert_eq!(contrast(&[0.3], 1, 0), 0.0);
-    }
+    let squared_errors: Vec<f64> = estimates.par_iter().map(|e| e.squared_error()).collect();
+    let contrasts = flat_contrasts(estimates, &squared_errors, width);
+    (estimates
+        .par_iter()
+        .zip(rays)
+        .zip(squared_errors.par_iter().zip(contrasts)))
+    .map(|((e, &r), (&squared_error, contrast))| {
+        let root = (r.max(1) as f64).sqrt();
+        let by_error = calibration.corrected(e.count(), squared_error).max(0.0) / root;
+        let by_error = if by_error.is_finite() { by_error } else { 0.0 };
+        (by_error, contrast / root)
+    })
+    .collect()
 }

@@ -176,7 +176,12 @@ pub(super) fn uniform_draw(seed: u32, at: (u32, u32)) -> f64 {
 
 /// Whether a pixel's samples all agree (an unknown error is not flat).
 pub(super) fn is_flat(estimate: &PixelEstimate) -> bool {
-    estimate.squared_error() <= FLAT
+    is_flat_error(estimate.squared_error())
+}
+
+/// Whether a pixel whose batch-means squared error is `squared_error` is flat ([`is_flat`]).
+pub(super) fn is_flat_error(squared_error: f64) -> bool {
+    squared_error <= FLAT
 }
 
 /// The correction of the batch-means estimate, measured by twins, for each sample count.

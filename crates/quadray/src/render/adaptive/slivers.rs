@@ -1,0 +1,92 @@
+//! Flat pixels beside a flat neighbour of another value: where an edge runs along the border
+//! between two pixels whose samples all agree, a sliver of it can cross into either and be
+//! missed by every sample, so the pair's difference is the only sign of it. The rounds sample
+//! such pixels ([`super::SLIVER_ROUNDS`]), and the audit draws them ([`super::audit`]).
+
+use super::calibration::is_flat_error;
+use crate::film::PixelEstimate;
+use rayon::prelude::*;
+
+/// The least difference of display values between two flat 4-neighbours that the rounds follow.
+pub const SLIVER_CONTRAST: f32 = 0.02;
+
+/// Each pixel's flat contrast: for a flat pixel of `estimates` (row-major, `width` wide), whose
+/// batch-means squared errors are `squared_errors`, the largest squared difference of display
+/// values with its flat 4-neighbours; 0 for the others.
+pub(super) fn flat_contrasts(
+    estimates: &[PixelEstimate],
+    squared_errors: &[f64],
+    width: usize,
+) -> Vec<f64> {
+    let flat: Vec<Option<f32>> = (estimates.par_iter().zip(squared_errors))
+        .map(|(e, &s)| is_flat_error(s).then(|| e.mean_display_value()))
+        .collect();
+    (0..flat.len())
+        .into_par_iter()
+        .map(|i| {
+            let Some(value) = flat[i] else { return 0.0 };
+            four_neighbours(i, width, flat.len())
+                .filter_map(|j| flat[j])
+                .map(|other| ((other - value) as f64).powi(2))
+                .fold(0.0, f64::max)
+        })
+        .collect()
+}
+
+/// Marks each pixel whose flat contrast ([`flat_contrasts`]) is above [`SLIVER_CONTRAST`]².
+pub(super) fn across_flat_edges(
+    estimates: &[PixelEstimate],
+    squared_errors: &[f64],
+    width: usize,
+) -> Vec<bool> {
+    let least = (SLIVER_CONTRAST as f64).powi(2);
+    (flat_contrasts(estimates, squared_errors, width).into_iter())
+        .map(|c| c > least)
+        .collect()
+}
+
+/// The indices of the four neighbours of pixel `i` in a row-major window `width` pixels wide
+/// and `len` pixels in all (fewer at its sides).
+fn four_neighbours(i: usize, width: usize, len: usize) -> impl Iterator<Item = usize> {
+    let x = i % width;
+    let left = (x > 0).then(|| i - 1);
+    let right = (x + 1 < width).then_some(i + 1);
+    let up = i.checked_sub(width);
+    let down = Some(i + width).filter(|&j| j < len);
+    [left, right, up, down].into_iter().flatten()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    /// A pixel of the samples `values` (grey).
+    fn pixel(values: &[f32]) -> PixelEstimate {
+        let mut e = PixelEstimate::default();
+        for &v in values {
+            e.add(Vec3::splat(v));
+        }
+        e
+    }
+
+    /// Flat pixels beside a flat neighbour of another value are marked; not a flat pixel whose
+    /// different neighbour is not flat, nor one beside a diagonal one, nor across the window's
+    /// side.
+    #[test]
+    fn flat_pixels_beside_other_flat_pixels_are_marked() {
+        let (black, white) = (pixel(&[0.0; 8]), pixel(&[1.0; 8]));
+        let edge = pixel(&[0.0, 1.0].repeat(4));
+        // 3 wide: white at the start of the middle row, an edge pixel at its end.
+        let estimates = [black, black, black, white, black, edge, black, black, black];
+        let errors = estimates.map(|e| e.squared_error());
+        let marked = across_flat_edges(&estimates, &errors, 3);
+        let expected = [true, false, false, true, true, false, true, false, false];
+        assert_eq!(marked, expected);
+        let contrasts = flat_contrasts(&estimates, &errors, 3);
+        assert!((contrasts[3] - 1.0).abs() < 1e-6);
+        assert_eq!(contrasts[5], 0.0);
+        assert_eq!(four_neighbours(2, 3, 9).collect::<Vec<_>>(), [1, 5]);
+        assert_eq!(four_neighbours(4, 3, 9).collect::<Vec<_>>(), [3, 5, 1, 7]);
+    }
+}
