@@ -16,15 +16,17 @@
 //!   the pixels with most error hold the most samples.
 //! - C ([`CONTRAST_PIXELS`]) by vᵢ = cᵢ / √rᵢ, cᵢ the pixel's flat contrast: for a flat pixel
 //!   (whose samples all agreed), the largest squared difference of its display value from its
-//!   flat 4-neighbours' ([`super::slivers`]). An edge that runs along the border of two flat
+//!   flat 4-neighbours' ([`super::missed`]). An edge that runs along the border of two flat
 //!   pixels can cross into either by a sliver that every sample misses; the pixel then has no
 //!   estimated error to be drawn by. On defense at 480x270 the sliver of the horizon in one row
 //!   of 37 pixels held 37% of the image's squared error, and one of them drawn evenly (chance
 //!   1/127) made the estimate 1.6× the truth.
 //! - F ([`UNIFORM_PIXELS`]) evenly, for what neither foresees.
 //!
+//!
 //! Each drawn pixel is sampled twice more, with independent seeds, as many samples as it holds
-//! and, unless it is flat with a flat contrast of 0, at least [`AUDIT_MIN_SAMPLES`]. With a its
+//! and, unless it is flat with a flat contrast of 0, at least [`AUDIT_MIN_SAMPLES`] where that
+//! adds at most [`AUDIT_SHARE`] of the render's samples (fewer where not). With a its
 //! value and b, c the two new ones, (a − b)(a − c) has expectation (a − μ)² given a, its actual
 //! squared error ([`super::Twin`]), whatever the sets' counts (each is an unbiased estimate of
 //! μ). The image's MSE is estimated by Σ (a − b)(a − c) / pᵢ over the drawn pixels, divided by N
@@ -37,8 +39,8 @@
 //! renders of four scenes.
 
 use super::Twin;
-use super::calibration::{Calibration, is_flat, sample_sets, uniform_draw};
-use super::slivers::flat_contrasts;
+use super::calibration::{Calibration, is_flat_error, sample_sets, uniform_draw};
+use super::missed::flat_contrasts;
 use crate::film::PixelEstimate;
 use crate::integrator::RayCounts;
 use crate::render::SampleContext;
@@ -59,6 +61,11 @@ pub const CONTRAST_PIXELS: f64 = 1024.0;
 
 /// The fewest samples in each of an audited pixel's two new sample sets.
 const AUDIT_MIN_SAMPLES: u32 = 32;
+
+/// The share of the render's samples, in expectation, that bringing the audit's sets up to
+/// [`AUDIT_MIN_SAMPLES`] may add: at 8 samples a pixel it would add about 14% (defense at
+/// 480x270), and the floor is halved until it fits.
+const AUDIT_SHARE: f64 = 0.05;
 
 /// The fewest pixels a crop's or a tile's audit draws in each way.
 const MIN_AUDIT_PIXELS: f64 = 32.0;
@@ -88,7 +95,7 @@ pub(super) fn audit(
     let window = context.window;
     let width = (window.x1 - window.x0) as usize;
     let weights = draw_weights((estimates, rays), calibration, width);
-    let totals = (weights.iter()).fold((0.0, 0.0), |t, w| (t.0 + w.0, t.1 + w.1));
+    let totals = (weights.iter()).fold((0.0, 0.0), |t, w| (t.0 + w.by_error, t.1 + w.by_contrast));
     // A crop or a tile draws its share of the image's audit (at least a few pixels): auditing
     // every pixel of a 32x32 tile would triple its rays.
     let settings = context.settings;
@@ -101,14 +108,17 @@ pub(super) fn audit(
         true => drawn * weight / total,
         false => 0.0,
     };
-    let chance = |(s, c): (f64, f64)| {
-        (part(by_error, s, totals.0) + part(by_contrast, c, totals.1) + uniform).min(1.0)
-    };
+    let chances: Vec<f64> = (weights.iter())
+        .map(|w| {
+            let error = part(by_error, w.by_error, totals.0);
+            (error + part(by_contrast, w.by_contrast, totals.1) + uniform).min(1.0)
+        })
+        .collect();
+    let set_counts = set_counts(estimates, &weights, &chances);
     let seed = settings.seed ^ AUDIT_SEED;
-    let drawn: Vec<(usize, (u32, u32), f64)> = (weights.iter().enumerate())
-        .filter_map(|(i, &w)| {
+    let drawn: Vec<(usize, (u32, u32), f64)> = (chances.iter().enumerate())
+        .filter_map(|(i, &p)| {
             let at = window.pixel(i);
-            let p = chance(w);
             (uniform_draw(seed, at) < p).then_some((i, at, p))
         })
         .collect();
@@ -119,15 +129,7 @@ pub(super) fn audit(
             let pixel = &estimates[i];
             let mut twin = Twin::default();
             let mut counts = RayCounts::default();
-            // A flat pixel with no flat neighbour of another value (plain background, most of
-            // what the even draw meets) is measured with its own count: at least 32 samples
-            // there cost the quadric grid 5% more rays for the same estimates.
-            let plain = is_flat(pixel) && weights[i].1 == 0.0;
-            let count = match plain {
-                true => pixel.count(),
-                false => pixel.count().max(AUDIT_MIN_SAMPLES),
-            };
-            let footprint = (count, footprint_spp);
+            let footprint = (set_counts[i], footprint_spp);
             sample_sets(context, at, &mut twin, footprint, &mut counts, AUDIT_SETS);
             let m = twin.squared_error_of(pixel);
             (m / p, counts)
@@ -142,24 +144,68 @@ pub(super) fn audit(
     ((sum / pixels as f64).max(0.0), counts)
 }
 
-/// Each pixel's weight in the draw by error and in the draw by contrast, each over the root of
-/// the pixel's rays, for the pixels `estimates` (row-major, `width` wide) having traced `rays`.
+/// Each pixel's count for its two sets: as many samples as it holds, and at least a floor
+/// unless it is plain (flat, with no flat neighbour of another value: background, most of what
+/// the even draw meets, where 32 samples cost the quadric grid 5% more rays for the same
+/// estimates). The floor is [`AUDIT_MIN_SAMPLES`], halved until the samples it adds to the
+/// pixels drawn with `chances` are at most [`AUDIT_SHARE`] of the render's in expectation, down
+/// to none (each pixel's own count).
+fn set_counts(estimates: &[PixelEstimate], weights: &[Weights], chances: &[f64]) -> Vec<u32> {
+    let rendered: f64 = estimates.iter().map(|e| e.count() as f64).sum();
+    let counts = |floor: u32| -> Vec<u32> {
+        (estimates.iter().zip(weights))
+            .map(|(e, w)| match w.plain {
+                true => e.count(),
+                false => e.count().max(floor),
+            })
+            .collect()
+    };
+    // The samples the floor adds to the pixels' own counts, in expectation.
+    let added = |counts: &[u32]| -> f64 {
+        (chances.iter().zip(counts).zip(estimates))
+            .map(|((p, &n), e)| p * 2.0 * (n - e.count()) as f64)
+            .sum()
+    };
+    let mut floor = AUDIT_MIN_SAMPLES;
+    while floor > 1 {
+        let candidate = counts(floor);
+        if added(&candidate) <= AUDIT_SHARE * rendered {
+            return candidate;
+        }
+        floor /= 2;
+    }
+    counts(0)
+}
+
+/// A pixel's weights in the audit's draws.
+struct Weights {
+    /// Its calibrated squared error over the root of its rays.
+    by_error: f64,
+    /// Its flat contrast over the root of its rays.
+    by_contrast: f64,
+    /// Whether it is flat with no flat neighbour of another value.
+    plain: bool,
+}
+
+/// Each pixel's [`Weights`], for the pixels `estimates` (row-major, `width` wide) having traced
+/// `rays`.
 fn draw_weights(
     (estimates, rays): (&[PixelEstimate], &[u64]),
     calibration: &Calibration,
     width: usize,
-) -> Vec<(f64, f64)> {
+) -> Vec<Weights> {
     let squared_errors: Vec<f64> = estimates.par_iter().map(|e| e.squared_error()).collect();
     let contrasts = flat_contrasts(estimates, &squared_errors, width);
-    (estimates
-        .par_iter()
-        .zip(rays)
-        .zip(squared_errors.par_iter().zip(contrasts)))
-    .map(|((e, &r), (&squared_error, contrast))| {
-        let root = (r.max(1) as f64).sqrt();
-        let by_error = calibration.corrected(e.count(), squared_error).max(0.0) / root;
-        let by_error = if by_error.is_finite() { by_error } else { 0.0 };
-        (by_error, contrast / root)
-    })
-    .collect()
+    (estimates.par_iter().zip(rays))
+        .zip(squared_errors.par_iter().zip(contrasts))
+        .map(|((e, &r), (&squared_error, contrast))| {
+            let root = (r.max(1) as f64).sqrt();
+            let by_error = calibration.corrected(e.count(), squared_error).max(0.0) / root;
+            Weights {
+                by_error: if by_error.is_finite() { by_error } else { 0.0 },
+                by_contrast: contrast / root,
+                plain: is_flat_error(squared_error) && contrast == 0.0,
+            }
+        })
+        .collect()
 }

@@ -15,7 +15,7 @@
 //!   is, by its own estimate, and it has no more samples than that neighbour.
 //! - **Slivers**: an edge along the border of two flat pixels (whose samples all agree) may
 //!   cross into either by a sliver every sample missed, so in the first [`SLIVER_ROUNDS`] rounds
-//!   a flat pixel beside a flat neighbour of another value is sampled too ([`slivers`]).
+//!   a flat pixel beside a flat neighbour of another value is sampled too ([`missed`]).
 //! - **Samples**: a pixel's samples are the prefix of its own progressive sequence
 //!   ([`crate::sampler::progressive_2d`]), so samples added later keep the stratification of the
 //!   earlier ones, and a power-of-two count is a (0, k, 2)-net in the pixel.
@@ -57,10 +57,10 @@ use std::time::Instant;
 /// following neighbours in every round cost 1.2–1.4× the CPU time of this at equal RMSE.
 pub const NEIGHBOUR_ROUNDS: u32 = 3;
 /// The first refinement rounds in which a flat pixel beside a flat neighbour of another value is
-/// sampled ([`slivers`]): an edge between them may cross into either by a sliver all their
+/// sampled ([`missed`]): an edge between them may cross into either by a sliver all their
 /// samples missed. On defense (480x270, one thread, seeds 1 to 3) it lowered the true error 5% at
 /// target 0.002, 13–17% at 0.001 and 27–40% at 0.0005 for 0.4% more rays (a horizon in one
-/// row); 3 rounds, or a least difference of 0.005 instead of [`slivers::SLIVER_CONTRAST`], gave
+/// row); 3 rounds, or a least difference of 0.005 instead of [`missed::SLIVER_CONTRAST`], gave
 /// the same images. At most [`NEIGHBOUR_ROUNDS`], whose border a crop or a tile is sampled with.
 pub const SLIVER_ROUNDS: u32 = 2;
 const _: () = assert!(SLIVER_ROUNDS <= NEIGHBOUR_ROUNDS);
@@ -305,7 +305,7 @@ impl WindowState {
             // samples its pixels by their own estimates only, and a pilot pixel whose first
             // samples all missed an edge was left with them.
             let pilot_followed = plan.is_some_and(|p| p.followed);
-            let follow = follow_neighbours(&own, self.width, |i, j| {
+            let follow = missed::follow_neighbours(&own, self.width, |i, j| {
                 counts[i] < max_spp
                     && counts[i] <= counts[j]
                     && !(pilot_followed && self.pilot_rounds[i].is_some())
@@ -322,7 +322,7 @@ impl WindowState {
             // As neighbours are followed, pilot pixels too unless the pilot followed them itself.
             let pilot_followed = plan.is_some_and(|p| p.followed);
             // Under the image rule `errors` holds each pixel's batch-means squared error.
-            let across = slivers::across_flat_edges(&self.estimates, &self.errors, self.width);
+            let across = missed::across_flat_edges(&self.estimates, &self.errors, self.width);
             for ((target, s), (&across, pilot)) in
                 (targets.iter_mut().zip(&states)).zip(across.iter().zip(&self.pilot_rounds))
             {
@@ -420,37 +420,6 @@ impl WindowState {
             target_error: adaptive.target_error,
         }
     }
-}
-
-/// Marks the pixels `own` marks, and in the neighbour rounds each pixel `i` one of whose eight
-/// neighbours `j` is marked in `own` where `follows(i, j)` (row-major, `width` wide).
-fn follow_neighbours(
-    own: &[bool],
-    width: usize,
-    follows: impl Fn(usize, usize) -> bool + Sync,
-) -> Vec<bool> {
-    let height = own.len() / width;
-    let mut refine = own.to_vec();
-    refine
-        .par_chunks_mut(width)
-        .enumerate()
-        .for_each(|(y, row)| {
-            let (y0, y1) = (y.saturating_sub(1), (y + 1).min(height - 1));
-            for (x, wanted) in row.iter_mut().enumerate() {
-                if *wanted {
-                    continue;
-                }
-                let i = y * width + x;
-                let (x0, x1) = (x.saturating_sub(1), (x + 1).min(width - 1));
-                *wanted = (y0..=y1).any(|ny| {
-                    (x0..=x1).any(|nx| {
-                        let j = ny * width + nx;
-                        own[j] && follows(i, j)
-                    })
-                });
-            }
-        });
-    refine
 }
 
 /// Recomputes `error` of the pixels the last round sampled (a target above 0; pilot pixels,
@@ -604,11 +573,11 @@ mod calibration;
 mod image_rule;
 #[cfg(test)]
 mod image_tests;
+mod missed;
 mod pilot;
 mod pixel_rule;
 mod rounds;
 mod settings;
-mod slivers;
 mod stats;
 #[cfg(test)]
 mod tests;

@@ -11,7 +11,8 @@
 
 use super::calibration::{self, Calibration, Twin};
 use super::image_rule::{self, Aim, Budget, PixelState, Step};
-use super::{Adaptive, NEIGHBOUR_ROUNDS, Stop, follow_neighbours, sample_pixel};
+use super::missed::follow_neighbours;
+use super::{Adaptive, NEIGHBOUR_ROUNDS, Stop, sample_pixel};
 use crate::aov::AovSample;
 use crate::film::PixelEstimate;
 use crate::integrator::RayCounts;
@@ -193,7 +194,7 @@ fn why_stopped(states: &[PixelState], aim: &Aim) -> Stop {
 
 /// Each pilot pixel's count after `round`: `min_spp` in round 0, then the count `step` gives it
 /// under its calibration. When the pilot holds every pixel of the image (`width` wide), the
-/// neighbour rounds follow as in the image ([`super::follow_neighbours`]); the second element
+/// neighbour rounds follow as in the image ([`super::missed::follow_neighbours`]); the second element
 /// tells which pixels are sampled by their own estimate.
 fn round_targets(
     adaptive: &Adaptive,

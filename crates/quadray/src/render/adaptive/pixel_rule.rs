@@ -1,7 +1,8 @@
 //! The pixel rule: every pixel is brought to one relative error of its display value; round k
 //! brings the pixels it samples to `min_spp`·2^k samples.
 
-use super::{Adaptive, FIRST_ROUND_MARGIN, NEIGHBOUR_ROUNDS, Stop, follow_neighbours};
+use super::missed::follow_neighbours;
+use super::{Adaptive, FIRST_ROUND_MARGIN, NEIGHBOUR_ROUNDS, Stop};
 use crate::film::PixelEstimate;
 
 /// Whether a pixel with `count` samples and relative error `error` is above `threshold` and

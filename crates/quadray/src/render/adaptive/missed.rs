@@ -1,7 +1,13 @@
-//! Flat pixels beside a flat neighbour of another value: where an edge runs along the border
-//! between two pixels whose samples all agree, a sliver of it can cross into either and be
-//! missed by every sample, so the pair's difference is the only sign of it. The rounds sample
-//! such pixels ([`super::SLIVER_ROUNDS`]), and the audit draws them ([`super::audit`]).
+//! Pixels whose first samples may have missed a feature, which the first rounds sample whatever
+//! their own estimates say:
+//! - the neighbours of pixels sampled by their own estimates ([`follow_neighbours`],
+//!   [`super::NEIGHBOUR_ROUNDS`]): a feature that crosses into a pixel can be missed by all of
+//!   its first samples while its neighbour meets it;
+//! - flat pixels beside a flat neighbour of another value ([`across_flat_edges`],
+//!   [`super::SLIVER_ROUNDS`]): where an edge runs along the border between two pixels whose
+//!   samples all agree, a sliver of it can cross into either and be missed by every sample, so
+//!   the pair's difference is the only sign of it. The audit draws such pixels too
+//!   ([`super::audit`]).
 
 use super::calibration::is_flat_error;
 use crate::film::PixelEstimate;
@@ -43,6 +49,37 @@ pub(super) fn across_flat_edges(
     (flat_contrasts(estimates, squared_errors, width).into_iter())
         .map(|c| c > least)
         .collect()
+}
+
+/// Marks the pixels `own` marks, and in the neighbour rounds each pixel `i` one of whose eight
+/// neighbours `j` is marked in `own` where `follows(i, j)` (row-major, `width` wide).
+pub(super) fn follow_neighbours(
+    own: &[bool],
+    width: usize,
+    follows: impl Fn(usize, usize) -> bool + Sync,
+) -> Vec<bool> {
+    let height = own.len() / width;
+    let mut refine = own.to_vec();
+    refine
+        .par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let (y0, y1) = (y.saturating_sub(1), (y + 1).min(height - 1));
+            for (x, wanted) in row.iter_mut().enumerate() {
+                if *wanted {
+                    continue;
+                }
+                let i = y * width + x;
+                let (x0, x1) = (x.saturating_sub(1), (x + 1).min(width - 1));
+                *wanted = (y0..=y1).any(|ny| {
+                    (x0..=x1).any(|nx| {
+                        let j = ny * width + nx;
+                        own[j] && follows(i, j)
+                    })
+                });
+            }
+        });
+    refine
 }
 
 /// The indices of the four neighbours of pixel `i` in a row-major window `width` pixels wide
