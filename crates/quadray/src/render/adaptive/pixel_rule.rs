@@ -1,9 +1,10 @@
 //! The pixel rule: every pixel is brought to one relative error of its display value; round k
 //! brings the pixels it samples to `min_spp`·2^k samples.
 
-use super::missed::follow_neighbours;
-use super::{Adaptive, FIRST_ROUND_MARGIN, NEIGHBOUR_ROUNDS, Stop};
+use super::missed::{across_flat_edges, follow_neighbours};
+use super::{Adaptive, FIRST_ROUND_MARGIN, NEIGHBOUR_ROUNDS, SLIVER_ROUNDS, Stop};
 use crate::film::PixelEstimate;
+use rayon::prelude::*;
 
 /// Whether a pixel with `count` samples and relative error `error` is above `threshold` and
 /// below the maximum count.
@@ -36,7 +37,8 @@ pub(super) fn round_count(adaptive: &Adaptive, round: u32) -> u32 {
 /// The pixels that `round` (at least 1) samples: those whose own error is above the target
 /// (above [`FIRST_ROUND_MARGIN`] × the target after the first round) and, in the first
 /// [`NEIGHBOUR_ROUNDS`] rounds, their neighbours below the round's count, since a feature that
-/// crosses into a pixel can be missed by all of its first samples.
+/// crosses into a pixel can be missed by all of its first samples, and in the first
+/// [`SLIVER_ROUNDS`] flat pixels beside a flat neighbour of another value ([`super::missed`]).
 pub(super) fn select(
     adaptive: &Adaptive,
     round: u32,
@@ -57,7 +59,16 @@ pub(super) fn select(
     if round > NEIGHBOUR_ROUNDS.min(refinement_rounds(adaptive)) {
         return own;
     }
-    follow_neighbours(&own, width, |i, _| estimates[i].count() < count)
+    let mut refine = follow_neighbours(&own, width, |i, _| estimates[i].count() < count);
+    if round <= SLIVER_ROUNDS {
+        // A flat pixel's relative error is 0: its squared error is what says it is flat.
+        let squared_errors: Vec<f64> = estimates.par_iter().map(|e| e.squared_error()).collect();
+        let across = across_flat_edges(estimates, &squared_errors, width);
+        for ((refine, across), estimate) in refine.iter_mut().zip(across).zip(estimates) {
+            *refine |= across && estimate.count() < count;
+        }
+    }
+    refine
 }
 
 /// Why a pixel-rule render that samples no more pixels stopped: every pixel met the target, or
