@@ -152,29 +152,24 @@ pub(super) fn audit(
 /// to none (each pixel's own count).
 fn set_counts(estimates: &[PixelEstimate], weights: &[Weights], chances: &[f64]) -> Vec<u32> {
     let rendered: f64 = estimates.iter().map(|e| e.count() as f64).sum();
-    let counts = |floor: u32| -> Vec<u32> {
-        (estimates.iter().zip(weights))
-            .map(|(e, w)| match w.plain {
-                true => e.count(),
-                false => e.count().max(floor),
-            })
-            .collect()
+    let count = |e: &PixelEstimate, w: &Weights, floor: u32| match w.plain {
+        true => e.count(),
+        false => e.count().max(floor),
     };
-    // The samples the floor adds to the pixels' own counts, in expectation.
-    let added = |counts: &[u32]| -> f64 {
-        (chances.iter().zip(counts).zip(estimates))
-            .map(|((p, &n), e)| p * 2.0 * (n - e.count()) as f64)
+    // The samples `floor` adds to the pixels' own counts, in expectation.
+    let added = |floor: u32| -> f64 {
+        (estimates.iter().zip(weights).zip(chances))
+            .map(|((e, w), p)| p * 2.0 * (count(e, w, floor) - e.count()) as f64)
             .sum()
     };
     let mut floor = AUDIT_MIN_SAMPLES;
-    while floor > 1 {
-        let candidate = counts(floor);
-        if added(&candidate) <= AUDIT_SHARE * rendered {
-            return candidate;
-        }
+    while floor > 1 && added(floor) > AUDIT_SHARE * rendered {
         floor /= 2;
     }
-    counts(0)
+    let floor = if floor > 1 { floor } else { 0 };
+    (estimates.iter().zip(weights))
+        .map(|(e, w)| count(e, w, floor))
+        .collect()
 }
 
 /// A pixel's weights in the audit's draws.

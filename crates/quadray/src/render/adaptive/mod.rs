@@ -299,36 +299,25 @@ impl WindowState {
                 None => target > s.count,
             })
             .collect();
-        if round <= NEIGHBOUR_ROUNDS {
-            let counts: Vec<u32> = states.iter().map(|s| s.count).collect();
-            // Pilot pixels follow too, unless the pilot followed neighbours itself: a sparse pilot
-            // samples its pixels by their own estimates only, and a pilot pixel whose first
-            // samples all missed an edge was left with them.
-            let pilot_followed = plan.is_some_and(|p| p.followed);
-            let follow = missed::follow_neighbours(&own, self.width, |i, j| {
-                counts[i] < max_spp
-                    && counts[i] <= counts[j]
-                    && !(pilot_followed && self.pilot_rounds[i].is_some())
-            });
-            for ((target, &count), (&followed, &own)) in
-                targets.iter_mut().zip(&counts).zip(follow.iter().zip(&own))
-            {
-                if followed && !own {
-                    *target = (*target).max((2 * count).min(max_spp));
-                }
-            }
-        }
-        if round <= SLIVER_ROUNDS {
-            // As neighbours are followed, pilot pixels too unless the pilot followed them itself.
-            let pilot_followed = plan.is_some_and(|p| p.followed);
-            // Under the image rule `errors` holds each pixel's batch-means squared error.
-            let across = missed::across_flat_edges(&self.estimates, &self.errors, self.width);
-            for ((target, s), (&across, pilot)) in
-                (targets.iter_mut().zip(&states)).zip(across.iter().zip(&self.pilot_rounds))
-            {
-                if across && !(pilot_followed && pilot.is_some()) {
-                    *target = (*target).max((2 * s.count).min(max_spp));
-                }
+        // Pilot pixels follow neighbours and slivers too, unless the pilot followed neighbours
+        // itself: a sparse pilot samples its pixels by their own estimates only, and a pilot
+        // pixel whose first samples all missed an edge was left with them.
+        let pilot_followed = plan.is_some_and(|p| p.followed);
+        let may_follow = |i: usize| !(pilot_followed && self.pilot_rounds[i].is_some());
+        let follow = (round <= NEIGHBOUR_ROUNDS).then(|| {
+            missed::follow_neighbours(&own, self.width, |i, j| {
+                let (count, other) = (states[i].count, states[j].count);
+                count < max_spp && count <= other && may_follow(i)
+            })
+        });
+        // Under the image rule `errors` holds each pixel's batch-means squared error.
+        let across = (round <= SLIVER_ROUNDS)
+            .then(|| missed::across_flat_edges(&self.estimates, &self.errors, self.width));
+        for (i, (target, s)) in targets.iter_mut().zip(&states).enumerate() {
+            let followed = follow.as_ref().is_some_and(|f| f[i] && !own[i]);
+            let sliver = across.as_ref().is_some_and(|a| a[i] && may_follow(i));
+            if followed || sliver {
+                *target = (*target).max((2 * s.count).min(max_spp));
             }
         }
         if !targets.iter().zip(&states).any(|(&t, s)| t > s.count) && plan.is_none() {
