@@ -327,7 +327,7 @@ impl Whitted {
             SpecularModel::Ggx => m.fresnel_f0(base),
             _ => m.highlight_color(base),
         };
-        for light in scene.lights() {
+        for (index, light) in scene.lights().iter().enumerate() {
             let Some(inc) = light.incident(g.point) else {
                 continue;
             };
@@ -348,7 +348,7 @@ impl Whitted {
                     continue;
                 }
                 through
-            } else if scene.occluded_from(&shadow, inc.distance, Some(hit.prim)) {
+            } else if scene.occluded_towards_light(index, &shadow, inc.distance, Some(hit.prim)) {
                 continue;
             } else {
                 Vec3::ONE

@@ -106,6 +106,16 @@ impl Light {
         }
     }
 
+    /// Where the light sits, for the lights at a point (not directional ones).
+    pub fn position(&self) -> Option<DVec3> {
+        match self {
+            Light::Point { position, .. }
+            | Light::PointNoFalloff { position, .. }
+            | Light::Spot { position, .. } => Some(*position),
+            Light::Directional { .. } => None,
+        }
+    }
+
     /// Why the light is invalid, if it is: non-finite values, a non-unit direction, a negative
     /// colour, or a spot cone with its inner angle wider than its outer one.
     pub fn validate(&self) -> Result<(), String> {

@@ -309,6 +309,7 @@ impl Accel {
             .max(origin_extent.abs());
         let extents = level_extents(geometry, &bounds.all, world);
         let n = geometry.level_count();
+        let world_extent = extents[0].min(crate::scene::MAX_COORDINATE) as f32;
         let mut levels: Vec<Option<LevelAccel>> = vec![None; n];
         // Children first (prototypes place only earlier ones), the world last: an instance's box
         // is made of its prototype's covering boxes, placed.
@@ -341,6 +342,7 @@ impl Accel {
             planes: geometry.planes.len() as u32,
             avx2: simd_path() == SimdPath::Avx2 && triangles > 4 * analytic_count,
             triangles,
+            world_extent,
         }
     }
 }

@@ -234,6 +234,34 @@ impl Accel {
         false
     }
 
+    /// Lowers `best_t` to the nearest hit of `ray` with top item `item` of the world, on the
+    /// baseline path (the eye buffer's test of the one item it sees).
+    pub(super) fn closest_world_item(
+        &self,
+        g: &Geometry,
+        item: TopItem,
+        ray: &Ray,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) {
+        let q = Query::new(g, 0, 0, ray, None);
+        self.closest_in::<false>(&self.levels[0], item, &q, best_t, best);
+    }
+
+    /// Whether top item `item` of the world blocks `ray` in (0, `t_max`), on the baseline path
+    /// (the light buffers' test of an item they list).
+    pub(super) fn occluded_world_item(
+        &self,
+        g: &Geometry,
+        item: TopItem,
+        ray: &Ray,
+        t_max: f64,
+        from: Option<PrimRef>,
+    ) -> bool {
+        let q = Query::new(g, 0, 0, ray, from);
+        self.occluded_in::<false>(&self.levels[0], item, &q, t_max)
+    }
+
     /// Whether `item` of level `l` blocks the query's ray in (0, `t_max`).
     #[inline(always)]
     fn occluded_in<const AVX2: bool>(

@@ -12,6 +12,9 @@
 //!   is traversed the same way). Up to eight items are tested box by box (measured: an obvhs BVH2
 //!   over the two items of scenes/defense.toml cost several percent); more get an obvhs BVH2. The
 //!   world's infinite planes are tested in a short list beside it.
+//! - **Direction buffers** ([`buffers`]): in a world of few shapes, shadow rays towards a point
+//!   light and rays from a pinhole camera's eye test only the shapes listed for their direction
+//!   from that point.
 //!
 //! A hit names its placement ([`crate::geometry::instance::Placements`]): the instance path from the world,
 //! numbered, so a shared triangle placed twice is two primitives and a ray spawned on one copy
@@ -32,6 +35,7 @@
 //! from the AVX2 copy, so the mesh traversal keeps out of closures.
 
 mod analytic;
+mod buffers;
 mod build;
 mod level;
 mod mesh_bvh;
@@ -49,6 +53,7 @@ use crate::geometry::instance::Placements;
 use crate::math::Ray;
 use crate::shape::{LocalPrim, PrimRef};
 use analytic::AnalyticBvh;
+pub use buffers::{EyeBuffer, LightBuffer};
 use build::Bounds;
 pub use build::Layout;
 use glam::DVec3;
@@ -116,6 +121,8 @@ pub struct Accel {
     /// frame and rays 8-20% faster; the quadric grid 6% slower, and scenes/defense.toml, 20
     /// triangles among six quadrics and spheres, 6-7% slower in the latest runs, medians of 5-7).
     avx2: bool,
+    /// Bound on the world's coordinates, ray origins included (the world level's box padding).
+    world_extent: f32,
 }
 
 impl std::fmt::Debug for Accel {
@@ -201,7 +208,7 @@ impl Accel {
     /// The world level inlined (nested levels are entered through [`Accel::closest_level`]),
     /// then the planes.
     #[inline(always)]
-    fn closest_impl<const AVX2: bool>(
+    pub(super) fn closest_impl<const AVX2: bool>(
         &self,
         g: &Geometry,
         ray: &Ray,

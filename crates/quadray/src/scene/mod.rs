@@ -1,6 +1,6 @@
 //! A validated, immutable scene: camera, materials, lights, geometry and its BVH.
 
-use crate::accel::{Accel, max_abs_coordinate};
+use crate::accel::{Accel, EyeBuffer, LightBuffer, max_abs_coordinate};
 use crate::camera::{Camera, CameraError, Projection};
 use crate::footprint::HitFootprint;
 use crate::geometry::Geometry;
@@ -89,6 +89,10 @@ pub struct Scene {
     lights: Vec<Light>,
     geometry: Geometry,
     accel: Accel,
+    /// Per light, its light buffer where the scene has one ([`Accel::light_buffer`]).
+    light_buffers: Vec<Option<LightBuffer>>,
+    /// The pinhole camera's eye buffer, where the scene has one ([`Accel::eye_buffer`]).
+    eye_buffer: Option<EyeBuffer>,
     /// Whether any mesh is single-sided: only then do closest hits check for back faces.
     single_sided: bool,
     /// Whether any material has a texture that is filtered over ray cones: only then do rays
@@ -214,6 +218,18 @@ impl Scene {
             .any(|l| d.geometry.level(l).meshes.iter().any(Mesh::has_colors));
         let constant_radiance =
             seen::constant_radiances(&d.materials, !d.lights.is_empty(), vertex_colors);
+        // Shadow rays through glass take the transmittance query, and single-sided meshes their
+        // own: neither asks the buffers.
+        let light_buffers = (d.lights.iter())
+            .map(|l| {
+                let position = l.position().filter(|_| !transmits && !single_sided)?;
+                accel.light_buffer(&d.geometry, position)
+            })
+            .collect();
+        let eye_buffer = match d.camera.projection {
+            Projection::Perspective { .. } => accel.eye_buffer(&d.geometry, d.camera.from),
+            Projection::Orthographic { .. } => None,
+        };
         Ok(Scene {
             camera: d.camera,
             background: d.background,
@@ -222,6 +238,8 @@ impl Scene {
             lights: d.lights,
             geometry: d.geometry,
             accel,
+            light_buffers,
+            eye_buffer,
             single_sided,
             filters_textures,
             transmits,
@@ -411,13 +429,23 @@ impl Scene {
     /// The nearest surface `ray` meets, whichever side.
     #[inline(always)]
     fn first_hit(&self, ray: &Ray, from: Option<PrimRef>) -> Option<SurfaceHit> {
-        let (t, prim) = self
-            .accel
-            .closest(&self.geometry, ray, f64::INFINITY, from)?;
+        let (t, prim) = self.closest(ray, from)?;
         let mut slot = None;
         let path = self.path_in(prim.placement, &mut slot);
         let material = self.geometry.material(prim, path);
         Some(self.surface_hit(ray, (t, prim), path, material))
+    }
+
+    /// Phase one: the nearest hit's distance and primitive, through the eye buffer for rays from
+    /// the camera's eye.
+    #[inline(always)]
+    fn closest(&self, ray: &Ray, from: Option<PrimRef>) -> Option<(f64, PrimRef)> {
+        if let Some(eye) = &self.eye_buffer
+            && from.is_none()
+        {
+            return (self.accel).closest_from_eye(&self.geometry, eye, ray);
+        }
+        (self.accel).closest(&self.geometry, ray, f64::INFINITY, from)
     }
 
     /// The full record of the hit `(t, prim)` of `ray` on `material`, `prim` placed by `path`
@@ -473,6 +501,22 @@ impl Scene {
             return self.occluded_culling(ray, t_max, from);
         }
         self.accel.occluded(&self.geometry, ray, t_max, from)
+    }
+
+    /// [`Scene::occluded_from`] for a shadow ray ending at light `light` (its index): through the
+    /// light's buffer where the scene has one.
+    #[inline]
+    pub fn occluded_towards_light(
+        &self,
+        light: usize,
+        ray: &Ray,
+        t_max: f64,
+        from: Option<PrimRef>,
+    ) -> bool {
+        match &self.light_buffers[light] {
+            Some(buffer) => (self.accel).occluded_towards(&self.geometry, buffer, ray, t_max, from),
+            None => self.occluded_from(ray, t_max, from),
+        }
     }
 
     /// [`Scene::occluded_from`] in a scene with single-sided meshes: nearest hits in turn, passing

@@ -59,7 +59,7 @@ impl Scene {
         }
         // Phase one written out as in `Scene::first_hit` rather than shared with it: a helper
         // both called made the kitchen's camera-rays-only frame 9% slower (its codegen).
-        let Some((t, prim)) = self.accel.closest(&self.geometry, ray, f64::INFINITY, from) else {
+        let Some((t, prim)) = self.closest(ray, from) else {
             return Seen::Nothing;
         };
         let mut slot = None;

@@ -170,3 +170,160 @@ fn shadow_rays_pass_glass_attenuated_and_stop_at_opaque_surfaces() {
         Vec3::ZERO
     );
 }
+
+/// A world of spheres, every kind of clipped quadric, a mesh, an instanced mesh and a plane, lit
+/// by lights around and among the shapes (one inside a sphere, whose box then fills every cell),
+/// seen by a pinhole camera from `eye`.
+fn buffered_world(eye: DVec3) -> Scene {
+    use crate::plane::Plane;
+    use crate::quadric::{ClipBox, Quadric, QuadricKind, QuadricSurface};
+    let mut next = uniform(0x1234_5678_9abc_def1);
+    let mut geometry = Geometry::default();
+    for _ in 0..12 {
+        geometry.spheres.push(Sphere {
+            center: DVec3::new(next(), next(), next() + 0.5) * 8.0,
+            radius: 0.3 + next().abs(),
+            material: 0,
+        });
+    }
+    for (n, &kind) in QuadricKind::ALL.iter().enumerate() {
+        let at = DVec3::new(n as f64 - 4.0, 2.0 * next(), 2.0 + next());
+        let t = Transform::from_srt(DVec3::splat(0.6), DVec3::new(next(), next(), 0.0), at);
+        let surface = QuadricSurface::Canonical {
+            kind,
+            a: 1.0,
+            b: 1.0,
+            c: 1.0,
+        };
+        let q = Quadric::new(surface, ClipBox::cube(1.0), t.unwrap(), 0).unwrap();
+        geometry.quadrics.push(q);
+    }
+    geometry.meshes.push(square(false));
+    geometry.prototypes.push(Prototype::mesh(square(false)));
+    let placed = DAffine3::from_translation(DVec3::new(3.0, -2.0, 4.0));
+    (geometry.instances).push(Instance::new(0, Transform::new(placed).unwrap()));
+    geometry.planes.push(Plane {
+        point: DVec3::new(0.0, 0.0, -4.5),
+        normal: DVec3::Z,
+        material: 0,
+    });
+    let inside = geometry.spheres[0].center;
+    let lights: Vec<Light> = [
+        DVec3::new(5.0, -6.0, 12.0),
+        DVec3::new(-9.0, 2.0, 3.0),
+        DVec3::new(0.5, 0.2, 1.0),
+        inside,
+    ]
+    .into_iter()
+    .map(|position| Light::PointNoFalloff {
+        position,
+        irradiance: Vec3::ONE,
+    })
+    .collect();
+    Scene::new(SceneDescription {
+        camera: Camera {
+            from: eye,
+            ..looking_down()
+        },
+        background: Vec3::ZERO,
+        environment: None,
+        materials: vec![Material::default()],
+        lights,
+        geometry,
+    })
+    .unwrap()
+}
+
+/// A generator of numbers in [−0.5, 0.5).
+fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+}
+
+/// Shadow rays answered through the light buffers agree with the BVH's answers, ray for ray, in
+/// [`buffered_world`], the shadow rays made as shading makes them from the first hits of random
+/// rays.
+#[test]
+fn light_buffers_answer_as_the_bvh() {
+    let scene = buffered_world(DVec3::new(0.0, 0.0, 10.0));
+    assert!(scene.light_buffers.iter().all(Option::is_some));
+    let mut next = uniform(0x2545_f491_4f6c_dd1d);
+    let (mut answered, mut blocked, mut rays) = (0, 0, 0);
+    for _ in 0..20_000 {
+        let origin = DVec3::new(next(), next(), next()) * 30.0;
+        let target = DVec3::new(next(), next(), next() + 0.2) * 8.0;
+        let Some(hit) = scene.intersect(&Ray::new(origin, target - origin)) else {
+            continue;
+        };
+        let g = &hit.geometry;
+        for (i, light) in scene.lights().iter().enumerate() {
+            let Some(inc) = light.incident(g.point) else {
+                continue;
+            };
+            let from =
+                crate::math::offset_origin(g.point, g.geometric_normal, g.error, inc.to_light);
+            let shadow = Ray::new(from, inc.to_light);
+            let want = scene.occluded_from(&shadow, inc.distance, Some(hit.prim));
+            let got = scene.occluded_towards_light(i, &shadow, inc.distance, Some(hit.prim));
+            assert_eq!(got, want, "light {i}, shadow ray {shadow:?}");
+            let buffer = scene.light_buffers[i].as_ref().unwrap();
+            answered += usize::from(buffer.answers(&shadow, inc.distance));
+            blocked += usize::from(want);
+            rays += 1;
+        }
+    }
+    // The buffers answered nearly every ray, blocked and clear ones both.
+    assert!(
+        rays > 20_000 && answered * 100 > rays * 99,
+        "{answered} of {rays}"
+    );
+    assert!(
+        blocked * 10 > rays && blocked * 10 < rays * 9,
+        "{blocked} of {rays}"
+    );
+}
+
+/// Rays from the eye answered through the eye buffer find the BVH's nearest hit, ray for ray, in
+/// [`buffered_world`] seen from outside, from among the shapes and from inside a sphere's box:
+/// rays in every direction, and rays aimed at the shapes.
+#[test]
+fn the_eye_buffer_answers_as_the_bvh() {
+    let mut next = uniform(0x0ddb_1a5e_55ee_d001);
+    for eye in [
+        DVec3::new(0.0, 0.0, 10.0),
+        DVec3::new(-14.0, 9.0, 3.0),
+        DVec3::new(0.4, -0.3, 2.2),
+    ] {
+        let scene = buffered_world(eye);
+        let buffer = scene
+            .eye_buffer
+            .as_ref()
+            .expect("a pinhole camera in a few shapes");
+        let (mut answered, mut hits, mut rays) = (0, 0, 0);
+        for k in 0..40_000 {
+            let dir = if k % 2 == 0 {
+                DVec3::new(next(), next(), next())
+            } else {
+                DVec3::new(next(), next(), next() + 0.5) * 8.0 - eye
+            };
+            let ray = Ray::new(eye, dir);
+            let want = scene
+                .accel
+                .closest(&scene.geometry, &ray, f64::INFINITY, None);
+            let got = scene.accel.closest_from_eye(&scene.geometry, buffer, &ray);
+            assert_eq!(got, want, "eye {eye}, ray {ray:?}");
+            answered += usize::from(buffer.answers(&ray));
+            hits += usize::from(want.is_some());
+            rays += 1;
+        }
+        // Most rays are answered by the buffer, and many hit something.
+        assert!(
+            answered * 2 > rays && hits * 4 > rays,
+            "{answered}, {hits} of {rays}"
+        );
+    }
+}

@@ -1,0 +1,132 @@
+//! Light buffers: for shadow rays ending at a point light, the shapes that can block them.
+//!
+//! Why every blocker is listed. A blocker's hit at `p = o + t·d`, `0 < t < t_max`, lies in its
+//! shape's padded box. The ray ends at `e = o + t_max·d`, within `reach` of the light `l` on every
+//! axis (checked per ray): `p = (1 − s)·o + s·e` for some `s` in (0, 1), so `q = p − s·(e − l)`
+//! lies on the segment from `o` to `l`, within `reach` of `p`. `q − l = (1 − s)·(o − l)` points the
+//! way the looked-up direction `o − l` does, so the shape is listed in its cell.
+
+use super::{Candidate, Cube, Shape, relative_box};
+use crate::accel::{Accel, to_obvhs};
+use crate::geometry::Geometry;
+use crate::math::Ray;
+use crate::shape::{LocalPrim, PrimRef};
+use glam::DVec3;
+
+/// The light buffers' cube: 32² cells a face, about 3° each (64² measured no faster on
+/// scenes/reflective.toml and scenes/defense.toml).
+const CUBE: Cube = Cube { n: 32 };
+
+/// The shapes each direction from one light can meet.
+#[derive(Clone, Debug)]
+pub struct LightBuffer {
+    /// The light's position.
+    light: DVec3,
+    /// How far a shadow ray's end may miss the light for the buffer to answer (world units).
+    reach: f64,
+    /// Where each cell's candidates start in `candidates` (one entry more than cells).
+    starts: Vec<u32>,
+    candidates: Vec<Candidate>,
+}
+
+impl LightBuffer {
+    /// The buffer of a light at `light` over `shapes`; a shape around the light is listed in
+    /// every cell.
+    fn new(light: DVec3, reach: f64, shapes: &[Candidate]) -> LightBuffer {
+        let mut lists: Vec<Vec<Candidate>> = vec![Vec::new(); CUBE.len()];
+        for candidate in shapes {
+            let (lo, hi) = relative_box(candidate, light, reach);
+            CUBE.for_cells_seeing(lo, hi, |cell| lists[cell].push(*candidate));
+        }
+        let mut starts = Vec::with_capacity(CUBE.len() + 1);
+        let mut candidates = Vec::new();
+        for list in lists {
+            starts.push(candidates.len() as u32);
+            candidates.extend(list);
+        }
+        starts.push(candidates.len() as u32);
+        LightBuffer {
+            light,
+            reach,
+            starts,
+            candidates,
+        }
+    }
+
+    /// Whether the buffer answers for this shadow ray (else the BVH does).
+    #[cfg(test)]
+    pub(crate) fn answers(&self, ray: &Ray, t_max: f64) -> bool {
+        self.candidates(ray, t_max).is_some()
+    }
+
+    /// The shapes a shadow ray may meet, or `None` when the buffer cannot tell: the ray's end
+    /// misses the light by more than `reach`, or the ray is not finite.
+    #[inline]
+    fn candidates(&self, ray: &Ray, t_max: f64) -> Option<&[Candidate]> {
+        let end = ray.origin + ray.dir * t_max - self.light;
+        // The rounding of `end`: three operations, each within half an ulp of its largest term.
+        let rounding = (ray.origin.abs().max_element()
+            + (ray.dir * t_max).abs().max_element()
+            + self.light.abs().max_element())
+            * (4.0 * f64::EPSILON);
+        // Also refuses a NaN end (the comparison fails).
+        let within = end.abs().max_element() + rounding <= self.reach;
+        if !within {
+            return None;
+        }
+        let cell = CUBE.cell(ray.origin - self.light)?;
+        let (first, last) = (self.starts[cell], self.starts[cell + 1]);
+        Some(&self.candidates[first as usize..last as usize])
+    }
+}
+
+impl Accel {
+    /// The light buffer of a light at `light`, in a world that has buffers
+    /// ([`Accel::buffered_shapes`]).
+    pub(crate) fn light_buffer(&self, g: &Geometry, light: DVec3) -> Option<LightBuffer> {
+        let shapes = self.buffered_shapes(g).filter(|_| light.is_finite())?;
+        Some(LightBuffer::new(light, self.reach(light), &shapes))
+    }
+
+    /// [`Accel::occluded`] for a shadow ray ending at the light of `buffer`: the world's planes,
+    /// then the shapes the buffer lists for the ray's direction, each culled by its padded box
+    /// first; or the BVH where the buffer cannot tell.
+    #[inline]
+    pub(crate) fn occluded_towards(
+        &self,
+        g: &Geometry,
+        buffer: &LightBuffer,
+        ray: &Ray,
+        t_max: f64,
+        from: Option<PrimRef>,
+    ) -> bool {
+        // The BVH's answer for a ray beyond f32's range is "nothing": keep it.
+        let finite_in_f32 = ray.origin.as_vec3a().is_finite() && ray.dir.as_vec3a().is_finite();
+        let Some(candidates) = buffer.candidates(ray, t_max).filter(|_| finite_in_f32) else {
+            return self.occluded(g, ray, t_max, from);
+        };
+        for i in 0..self.planes {
+            let prim = PrimRef::world(LocalPrim::Plane(i));
+            if g.intersect_plane(i, ray, t_max, from == Some(prim))
+                .is_some()
+            {
+                return true;
+            }
+        }
+        if candidates.is_empty() {
+            return false;
+        }
+        let level = g.level(0);
+        let fray = to_obvhs(ray, t_max);
+        candidates.iter().any(|c| {
+            c.bounds.intersect_ray(&fray) < fray.tmax
+                && match c.shape {
+                    Shape::Analytic(shape) => {
+                        let from_self = from == Some(PrimRef::world(shape));
+                        level.intersect(shape, ray, t_max, from_self).is_some()
+                    }
+                    Shape::Item(item) => self.occluded_world_item(g, item, ray, t_max, from),
+                }
+        })
+    }
+}

@@ -1,0 +1,265 @@
+//! Direction buffers for rays through one point (Haines and Greenberg's light buffer, 1986, and
+//! its camera-side twin): which of the world's shapes each direction from the point can meet, so a
+//! ray through the point tests those alone instead of traversing the BVH.
+//!
+//! A cube around the point is divided into cells ([`Cube`]). Every shape of the world (a sphere
+//! or a quadric; a mesh or an instance as the top item holding it) is listed in each cell its
+//! padded box, grown by `reach`, can be seen through from the point. A ray looks up the cell of its
+//! direction and tests the listed shapes with the exact tests, so its answer is the BVH's: a hit
+//! at `p` lies in its shape's padded box (what makes the BVH agree with a test of every shape),
+//! and the direction looked up is that of a point within `reach` of `p` on every axis ([`light`]
+//! and [`eye`] say why for their rays). The projection widens each cell range by [`SLACK`], which
+//! covers the rounding of the divisions on both sides; the box's coordinates relative to the point
+//! round by far less than `reach`. Rays the argument does not cover go to the BVH.
+//!
+//! - [`LightBuffer`]: shadow rays ending at a point light, blocked or not.
+//! - [`EyeBuffer`]: rays from a pinhole camera's eye, where at most one shape can be met.
+//!
+//! Both are built only for worlds of a few shapes on the baseline path ([`Accel::buffered_shapes`]),
+//! where the BVH's per-ray set-up and node tests cost more than the shapes themselves.
+
+mod eye;
+mod light;
+
+pub use eye::EyeBuffer;
+pub use light::LightBuffer;
+
+use super::build::padded_aabb;
+use super::{Accel, TopItem};
+use crate::geometry::Geometry;
+use crate::shape::LocalPrim;
+use glam::DVec3;
+use obvhs::aabb::Aabb;
+
+/// Most analytic shapes in the world for which buffers are built: beyond, the lists grow long and
+/// the BVH's culling pays.
+const MAX_SHAPES: usize = 64;
+/// Widening of every projected range, in face coordinates (which run from −1 to 1): many times
+/// the rounding of a quotient of f64 coordinates.
+const SLACK: f64 = 1e-9;
+/// `reach` as a share of the larger of the world's coordinate extent and the point's: far more
+/// than a shadow ray's offset from its surface, far less than a cell.
+const REACH: f64 = 1.0 / (1u64 << 24) as f64;
+
+/// What a listed shape is: a world sphere or quadric, or a top item of the world (meshes,
+/// instances).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Shape {
+    Analytic(LocalPrim),
+    Item(TopItem),
+}
+
+/// A listed shape with its padded box.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    bounds: Aabb,
+    shape: Shape,
+}
+
+/// A cube of `n`² cells a face around a point, indexing directions from it: a direction's face
+/// is that of its largest component, and its cell along each other axis that component divided by
+/// the largest, from −1 to 1 in `n` equal steps.
+#[derive(Clone, Copy, Debug)]
+struct Cube {
+    n: usize,
+}
+
+impl Cube {
+    /// Number of cells.
+    fn len(self) -> usize {
+        6 * self.n * self.n
+    }
+
+    /// The cell of direction `d`, or `None` for a zero or non-finite direction.
+    #[inline]
+    fn cell(self, d: DVec3) -> Option<usize> {
+        let a = d.abs();
+        let (axis, u, v) = if a.x >= a.y && a.x >= a.z {
+            (0, d.y, d.z)
+        } else if a.y >= a.z {
+            (1, d.x, d.z)
+        } else {
+            (2, d.x, d.y)
+        };
+        let m = a[axis];
+        if !(m > 0.0 && d.is_finite()) {
+            return None;
+        }
+        let face = 2 * axis + usize::from(d[axis] < 0.0);
+        let n = self.n;
+        // The float-to-integer cast saturates: a quotient rounded below −1 gives 0.
+        let cell = |c: f64| ((((c / m) + 1.0) * (0.5 * n as f64)) as usize).min(n - 1);
+        Some((face * n + cell(u)) * n + cell(v))
+    }
+
+    /// Calls `f` with every cell through which a point of the box [`lo`, `hi`] (relative to the
+    /// cube's centre) can be seen from the centre.
+    fn for_cells_seeing(self, lo: DVec3, hi: DVec3, mut f: impl FnMut(usize)) {
+        for face in 0..6 {
+            let Some((us, vs)) = self.face_cells(face, lo, hi) else {
+                continue;
+            };
+            for u in us.0..=us.1 {
+                for v in vs.0..=vs.1 {
+                    f((face * self.n + u) * self.n + v);
+                }
+            }
+        }
+    }
+
+    /// The cell ranges (first, last) along `face`'s two coordinates that the box [`lo`, `hi`] can
+    /// be seen through, or `None` when none.
+    fn face_cells(
+        self,
+        face: usize,
+        lo: DVec3,
+        hi: DVec3,
+    ) -> Option<((usize, usize), (usize, usize))> {
+        let axis = face / 2;
+        // Distances along the face's axis, on its side.
+        let (m0, m1) = if face.is_multiple_of(2) {
+            (lo[axis], hi[axis])
+        } else {
+            (-hi[axis], -lo[axis])
+        };
+        if m1 <= 0.0 {
+            return None;
+        }
+        let (b, c) = match axis {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        let u = self.range(lo[b], hi[b], m0, m1)?;
+        let v = self.range(lo[c], hi[c], m0, m1)?;
+        Some((u, v))
+    }
+
+    /// The cells spanned by y / m for y in [`y0`, `y1`] and m in (max(`m0`, 0), `m1`]: the
+    /// quotient is smallest at y0 over the largest m when y0 ≥ 0, else over the smallest, which
+    /// near 0 is −∞ (and the largest likewise).
+    fn range(self, y0: f64, y1: f64, m0: f64, m1: f64) -> Option<(usize, usize)> {
+        let low = if y0 >= 0.0 {
+            y0 / m1
+        } else if m0 > 0.0 {
+            y0 / m0
+        } else {
+            f64::NEG_INFINITY
+        };
+        let high = if y1 <= 0.0 {
+            y1 / m1
+        } else if m0 > 0.0 {
+            y1 / m0
+        } else {
+            f64::INFINITY
+        };
+        let (low, high) = (low - SLACK, high + SLACK);
+        if low > 1.0 || high < -1.0 {
+            return None;
+        }
+        let n = self.n;
+        let cell = |c: f64| (((c.clamp(-1.0, 1.0) + 1.0) * (0.5 * n as f64)) as usize).min(n - 1);
+        Some((cell(low), cell(high)))
+    }
+}
+
+/// The relative box of `candidate` as listed from `point`: its padded box grown by `reach`, minus
+/// the point.
+fn relative_box(candidate: &Candidate, point: DVec3, reach: f64) -> (DVec3, DVec3) {
+    let b = candidate.bounds;
+    (
+        b.min.as_dvec3() - DVec3::splat(reach) - point,
+        b.max.as_dvec3() + DVec3::splat(reach) - point,
+    )
+}
+
+impl Accel {
+    /// The world's shapes with their padded boxes (its spheres and quadrics one by one, its other
+    /// top items whole), for a world of at most [`MAX_SHAPES`] analytic shapes and no top BVH on
+    /// the baseline path; `None` for any other.
+    fn buffered_shapes(&self, g: &Geometry) -> Option<Vec<Candidate>> {
+        let world = &self.levels[0];
+        let level = g.level(0);
+        if self.avx2
+            || world.top.is_some()
+            || level.spheres.len() + level.quadrics.len() > MAX_SHAPES
+        {
+            return None;
+        }
+        let extent = self.world_extent;
+        let analytic = |prim: LocalPrim, bounds| Candidate {
+            bounds: padded_aabb(bounds, extent),
+            shape: Shape::Analytic(prim),
+        };
+        let mut shapes = Vec::new();
+        for (&item, &bounds) in world.items.iter().zip(&world.item_boxes) {
+            match item {
+                TopItem::Analytic => {
+                    for (i, s) in level.spheres.iter().enumerate() {
+                        shapes.push(analytic(LocalPrim::Sphere(i as u32), s.bounds()));
+                    }
+                    for (i, q) in level.quadrics.iter().enumerate() {
+                        shapes.push(analytic(LocalPrim::Quadric(i as u32), q.bounds()));
+                    }
+                }
+                _ => shapes.push(Candidate {
+                    bounds,
+                    shape: Shape::Item(item),
+                }),
+            }
+        }
+        Some(shapes)
+    }
+
+    /// `reach` for buffers around `point` ([`REACH`]).
+    fn reach(&self, point: DVec3) -> f64 {
+        (self.world_extent as f64).max(point.abs().max_element()) * REACH
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cells a box is seen through hold the direction of every point of the box: its corners,
+    /// and random points inside it and on its faces (boxes around the centre too), on cubes of
+    /// several sizes.
+    #[test]
+    fn boxes_are_seen_through_the_cells_of_their_points() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for n in [1, 7, 32, 128] {
+            let cube = Cube { n };
+            for _ in 0..5_000 {
+                let c = DVec3::new(next(), next(), next()) * 10.0;
+                let h = DVec3::new(next().abs(), next().abs(), next().abs());
+                let (lo, hi) = (c - h, c + h);
+                let mut seen = vec![false; cube.len()];
+                cube.for_cells_seeing(lo, hi, |cell| seen[cell] = true);
+                for k in 0..24 {
+                    let pick = |bit: u32, r: f64| match (k < 8, k & bit != 0) {
+                        (true, false) => 0.0,
+                        (true, true) => 1.0,
+                        (false, _) => (r * 1.2 + 0.5).clamp(0.0, 1.0),
+                    };
+                    let t = DVec3::new(pick(1, next()), pick(2, next()), pick(4, next()));
+                    let p = lo + (hi - lo) * t;
+                    if p == DVec3::ZERO {
+                        continue;
+                    }
+                    let cell = cube.cell(p).expect("a non-zero direction");
+                    assert!(seen[cell], "{p} in [{lo}, {hi}], {n} cells a face");
+                }
+            }
+        }
+        let cube = Cube { n: 32 };
+        assert_eq!(cube.cell(DVec3::ZERO), None);
+        assert_eq!(cube.cell(DVec3::new(f64::NAN, 1.0, 0.0)), None);
+        assert_eq!(cube.cell(DVec3::new(f64::INFINITY, 1.0, 0.0)), None);
+    }
+}
