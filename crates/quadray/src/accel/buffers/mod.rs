@@ -70,7 +70,7 @@ impl Cube {
         6 * self.n * self.n
     }
 
-    /// The cell of direction `d`, or `None` for a zero or non-finite direction.
+    /// The cell of direction `d`, or `None` for a zero, subnormal or non-finite direction.
     #[inline]
     fn cell(self, d: DVec3) -> Option<usize> {
         let a = d.abs();
@@ -81,14 +81,23 @@ impl Cube {
         } else {
             (2, d.x, d.y)
         };
-        let m = a[axis];
-        if !(m > 0.0 && d.is_finite()) {
+        let n = self.n;
+        // (c / m + 1)·n/2 with one division for both coordinates: a few ulps off the quotient,
+        // far inside the projection's slack. An infinite scale (m zero, or so small that n/2m
+        // overflows) is refused: c·∞ would not be the quotient.
+        let scale = 0.5 * n as f64 / a[axis];
+        if !(scale.is_finite() && d.is_finite()) {
             return None;
         }
         let face = 2 * axis + usize::from(d[axis] < 0.0);
-        let n = self.n;
-        // The float-to-integer cast saturates: a quotient rounded below −1 gives 0.
-        let cell = |c: f64| ((((c / m) + 1.0) * (0.5 * n as f64)) as usize).min(n - 1);
+        // Clamped in f64 (a quotient rounded below −1 or above 1 stays at the edge), so the
+        // conversion needs none of a saturating cast's checks.
+        let top = (n - 1) as f64;
+        let cell = |c: f64| {
+            let x = (c * scale + 0.5 * n as f64).max(0.0).min(top);
+            // SAFETY: `x` is finite (d is, and m > 0) and within [0, n − 1].
+            unsafe { x.to_int_unchecked::<u32>() as usize }
+        };
         Some((face * n + cell(u)) * n + cell(v))
     }
 
@@ -261,5 +270,8 @@ mod tests {
         assert_eq!(cube.cell(DVec3::ZERO), None);
         assert_eq!(cube.cell(DVec3::new(f64::NAN, 1.0, 0.0)), None);
         assert_eq!(cube.cell(DVec3::new(f64::INFINITY, 1.0, 0.0)), None);
+        // A subnormal largest component: n/2m overflows.
+        assert_eq!(cube.cell(DVec3::new(1e-320, 0.0, 1e-321)), None);
+        assert_eq!(cube.cell(DVec3::new(0.0, -1e-300, 0.0)), Some(3 * 32 * 32 + 16 * 32 + 16));
     }
 }
