@@ -272,6 +272,9 @@ mod tests {
         assert_eq!(cube.cell(DVec3::new(f64::INFINITY, 1.0, 0.0)), None);
         // A subnormal largest component: n/2m overflows.
         assert_eq!(cube.cell(DVec3::new(1e-320, 0.0, 1e-321)), None);
-        assert_eq!(cube.cell(DVec3::new(0.0, -1e-300, 0.0)), Some(3 * 32 * 32 + 16 * 32 + 16));
+        assert_eq!(
+            cube.cell(DVec3::new(0.0, -1e-300, 0.0)),
+            Some(3 * 32 * 32 + 16 * 32 + 16)
+        );
     }
 }
