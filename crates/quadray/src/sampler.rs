@@ -3,13 +3,24 @@
 //! fixed whatever the thread count.
 
 /// A pseudo-random permutation of [0, len) indexed by `i`, keyed by `pattern` (Kensler's `permute`).
-fn permute(mut i: u32, len: u32, pattern: u32) -> u32 {
+fn permute(i: u32, len: u32, pattern: u32) -> u32 {
+    permute_in(i, len, walk_mask(len), pattern)
+}
+
+/// The mask of `len`'s bits and all below (Kensler's `w`): the range [`permute`] walks in.
+fn walk_mask(len: u32) -> u32 {
     let mut w = len - 1;
     w |= w >> 1;
     w |= w >> 2;
     w |= w >> 4;
     w |= w >> 8;
     w |= w >> 16;
+    w
+}
+
+/// [`permute`] with `len`'s [`walk_mask`] `w` given.
+#[inline(always)]
+fn permute_in(mut i: u32, len: u32, w: u32, pattern: u32) -> u32 {
     let p = pattern;
     loop {
         i ^= p;
@@ -205,7 +216,10 @@ pub struct PixelSampler {
     count: u32,
     columns: u32,
     rows: u32,
-    pattern: u32,
+    /// [`walk_mask`] of the count, the columns and the rows.
+    masks: [u32; 3],
+    /// The current pixel's keys: of the strata's order, of the jitter in x and in y.
+    keys: [u32; 3],
     /// The permuted column of each column index, then the permuted row of each row index.
     strata: Vec<u32>,
 }
@@ -218,17 +232,22 @@ impl PixelSampler {
             count,
             columns,
             rows,
-            pattern: 0,
+            masks: [walk_mask(count.max(1)), walk_mask(columns), walk_mask(rows)],
+            keys: [0; 3],
             strata: vec![0; (columns + rows) as usize],
         }
     }
 
     /// Starts the pixel whose pattern key is `pattern` ([`pixel_pattern`]).
     pub fn start_pixel(&mut self, pattern: u32) {
-        self.pattern = pattern;
         if self.count <= 1 {
             return;
         }
+        self.keys = [
+            pattern.wrapping_mul(ORDER_KEY),
+            pattern.wrapping_mul(JITTER_X_KEY),
+            pattern.wrapping_mul(JITTER_Y_KEY),
+        ];
         let (m, n) = (self.columns, self.rows);
         let (column_key, row_key) = (
             pattern.wrapping_mul(COLUMN_KEY),
@@ -236,26 +255,29 @@ impl PixelSampler {
         );
         let (columns, rows) = self.strata.split_at_mut(m as usize);
         for (i, column) in columns.iter_mut().enumerate() {
-            *column = permute(i as u32, m, column_key);
+            *column = permute_in(i as u32, m, self.masks[1], column_key);
         }
         for (i, row) in rows.iter_mut().enumerate() {
-            *row = permute(i as u32, n, row_key);
+            *row = permute_in(i as u32, n, self.masks[2], row_key);
         }
     }
 
-    /// Sample `s` of the current pixel: [`sample_2d`]`(s, count, pattern)`.
+    /// Sample `s` of the current pixel: [`sample_2d`]`(s, count, pattern)`, with the pixel's
+    /// keys and the count's masks computed once (the same operations on the same values as
+    /// [`multi_jittered`], so the same bits).
     pub fn sample(&self, s: u32) -> (f64, f64) {
         if self.count <= 1 {
             return (0.5, 0.5);
         }
-        let m = self.columns;
-        multi_jittered(
-            s,
-            self.count,
-            (m, self.rows),
-            self.pattern,
-            |column| self.strata[column as usize],
-            |row| self.strata[(m + row) as usize],
+        let (count, m, n) = (self.count, self.columns, self.rows);
+        let s = permute_in(s, count, self.masks[0], self.keys[0]);
+        let sx = self.strata[remainder(s, m) as usize];
+        let sy = self.strata[(m + quotient(s, m)) as usize];
+        let jx = rand_float(s, self.keys[1]);
+        let jy = rand_float(s, self.keys[2]);
+        (
+            divide(sx as f64 + divide(sy as f64 + jx, n), m),
+            divide(s as f64 + jy, count),
         )
     }
 }
