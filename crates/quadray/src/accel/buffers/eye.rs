@@ -26,7 +26,7 @@ const MANY_SHAPES: u8 = u8::MAX - 1;
 pub struct EyeBuffer {
     /// The eye.
     eye: DVec3,
-    shapes: Vec<Candidate>,
+    shapes: Vec<Shape>,
     /// Per cell: an index into `shapes`, [`NO_SHAPE`] or [`MANY_SHAPES`].
     cells: Vec<u8>,
 }
@@ -46,6 +46,7 @@ impl EyeBuffer {
                 };
             });
         }
+        let shapes = shapes.iter().map(|c| c.shape).collect();
         EyeBuffer { eye, shapes, cells }
     }
 
@@ -65,7 +66,7 @@ impl EyeBuffer {
         match self.cells[CUBE.cell(ray.dir)?] {
             NO_SHAPE => Some(None),
             MANY_SHAPES => None,
-            k => Some(Some(self.shapes[k as usize].shape)),
+            k => Some(Some(self.shapes[k as usize])),
         }
     }
 }

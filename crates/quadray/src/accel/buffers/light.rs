@@ -7,7 +7,7 @@
 //! way the looked-up direction `o − l` does, so the shape is listed in its cell.
 
 use super::{Candidate, Cube, Shape, relative_box};
-use crate::accel::{Accel, to_obvhs};
+use crate::accel::Accel;
 use crate::geometry::Geometry;
 use crate::math::Ray;
 use crate::shape::{LocalPrim, PrimRef};
@@ -24,19 +24,19 @@ pub struct LightBuffer {
     light: DVec3,
     /// How far a shadow ray's end may miss the light for the buffer to answer (world units).
     reach: f64,
-    /// Where each cell's candidates start in `candidates` (one entry more than cells).
+    /// Where each cell's shapes start in `candidates` (one entry more than cells).
     starts: Vec<u32>,
-    candidates: Vec<Candidate>,
+    candidates: Vec<Shape>,
 }
 
 impl LightBuffer {
     /// The buffer of a light at `light` over `shapes`; a shape around the light is listed in
     /// every cell.
     fn new(light: DVec3, reach: f64, shapes: &[Candidate]) -> LightBuffer {
-        let mut lists: Vec<Vec<Candidate>> = vec![Vec::new(); CUBE.len()];
+        let mut lists: Vec<Vec<Shape>> = vec![Vec::new(); CUBE.len()];
         for candidate in shapes {
             let (lo, hi) = relative_box(candidate, light, reach);
-            CUBE.for_cells_seeing(lo, hi, |cell| lists[cell].push(*candidate));
+            CUBE.for_cells_seeing(lo, hi, |cell| lists[cell].push(candidate.shape));
         }
         let mut starts = Vec::with_capacity(CUBE.len() + 1);
         let mut candidates = Vec::new();
@@ -62,7 +62,7 @@ impl LightBuffer {
     /// The shapes a shadow ray may meet, or `None` when the buffer cannot tell: the ray's end
     /// misses the light by more than `reach`, or the ray is not finite.
     #[inline]
-    fn candidates(&self, ray: &Ray, t_max: f64) -> Option<&[Candidate]> {
+    fn candidates(&self, ray: &Ray, t_max: f64) -> Option<&[Shape]> {
         let end = ray.origin + ray.dir * t_max - self.light;
         // The rounding of `end`: three operations, each within half an ulp of its largest term.
         let rounding = (ray.origin.abs().max_element()
@@ -89,8 +89,8 @@ impl Accel {
     }
 
     /// [`Accel::occluded`] for a shadow ray ending at the light of `buffer`: the world's planes,
-    /// then the shapes the buffer lists for the ray's direction, each culled by its padded box
-    /// first; or the BVH where the buffer cannot tell.
+    /// then the shapes the buffer lists for the ray's direction; or the BVH where the buffer
+    /// cannot tell.
     #[inline]
     pub(crate) fn occluded_towards(
         &self,
@@ -113,20 +113,15 @@ impl Accel {
                 return true;
             }
         }
-        if candidates.is_empty() {
-            return false;
-        }
+        // No box test before the shapes' own: the BVH's robust slab test would cost about as
+        // much as it saves (measured), and obvhs' single-box test is not widened for rounding.
         let level = g.level(0);
-        let fray = to_obvhs(ray, t_max);
-        candidates.iter().any(|c| {
-            c.bounds.intersect_ray(&fray) < fray.tmax
-                && match c.shape {
-                    Shape::Analytic(shape) => {
-                        let from_self = from == Some(PrimRef::world(shape));
-                        level.intersect(shape, ray, t_max, from_self).is_some()
-                    }
-                    Shape::Item(item) => self.occluded_world_item(g, item, ray, t_max, from),
-                }
+        candidates.iter().any(|&c| match c {
+            Shape::Analytic(shape) => {
+                let from_self = from == Some(PrimRef::world(shape));
+                level.intersect(shape, ray, t_max, from_self).is_some()
+            }
+            Shape::Item(item) => self.occluded_world_item(g, item, ray, t_max, from),
         })
     }
 }

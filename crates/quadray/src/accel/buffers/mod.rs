@@ -49,7 +49,7 @@ enum Shape {
     Item(TopItem),
 }
 
-/// A listed shape with its padded box.
+/// A shape to list, with its padded box (what decides the cells it is listed in).
 #[derive(Clone, Copy, Debug)]
 struct Candidate {
     bounds: Aabb,
