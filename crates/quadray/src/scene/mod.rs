@@ -503,8 +503,10 @@ impl Scene {
         self.accel.occluded(&self.geometry, ray, t_max, from)
     }
 
-    /// [`Scene::occluded_from`] for a shadow ray ending at light `light` (its index): through the
-    /// light's buffer where the scene has one.
+    /// [`Scene::occluded_from`] for a shadow ray towards light `light` (its index in
+    /// [`Scene::lights`]): through the light's buffer where the scene has one. The answer is
+    /// [`Scene::occluded_from`]'s for any ray; a ray that does not end at the light, or an index
+    /// out of range, takes the BVH.
     #[inline]
     pub fn occluded_towards_light(
         &self,
@@ -513,7 +515,7 @@ impl Scene {
         t_max: f64,
         from: Option<PrimRef>,
     ) -> bool {
-        match &self.light_buffers[light] {
+        match self.light_buffers.get(light).and_then(Option::as_ref) {
             Some(buffer) => (self.accel).occluded_towards(&self.geometry, buffer, ray, t_max, from),
             None => self.occluded_from(ray, t_max, from),
         }
