@@ -55,13 +55,14 @@ impl Plane {
         }
     }
 
-    /// How the texture coordinates change along the vector `v` (they are linear in the point).
-    pub fn texture_offset(&self, v: DVec3) -> TexturePoint {
+    /// How the texture coordinates change along each of the vectors `along` (they are linear in
+    /// the point), the plane's frame made once for both.
+    pub fn texture_offsets(&self, along: [DVec3; 2]) -> [TexturePoint; 2] {
         let (u, w) = orthonormal_basis(self.normal);
-        TexturePoint {
+        along.map(|v| TexturePoint {
             local: DVec3::new(v.dot(u), v.dot(w), 0.0),
             height: 0.0,
-        }
+        })
     }
 }
 

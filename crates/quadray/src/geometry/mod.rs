@@ -256,19 +256,29 @@ impl Geometry {
         })
     }
 
-    /// How `prim`'s texture coordinates change along the world-space vector `v` (every texture
-    /// map is affine in the point, so this holds anywhere on it): `v` is carried through the
-    /// instances' linear maps into the primitive's own space.
-    pub fn texture_offset(&self, prim: PrimRef, path: &InstancePath, v: DVec3) -> TexturePoint {
+    /// How the texture coordinates of `prim` (reached through `path`) change along each of the
+    /// world-space vectors `along` (every texture map is affine in the point, so this holds
+    /// anywhere on it): the vectors carried through the instances' linear maps into the
+    /// primitive's own space, the primitive looked up once (a plane's texture frame made once),
+    /// for the two axes of a sample's footprint.
+    pub fn texture_offsets(
+        &self,
+        prim: PrimRef,
+        path: &InstancePath,
+        along: [DVec3; 2],
+    ) -> [TexturePoint; 2] {
         let level = self.level_of(path);
-        let v = path
-            .instances(self)
-            .fold(v, |v, inst| inst.transform.from_world.transform_vector3(v));
+        let [u, v] = along.map(|v| {
+            path.instances(self)
+                .fold(v, |v, inst| inst.transform.from_world.transform_vector3(v))
+        });
         match prim.local {
-            LocalPrim::Sphere(i) => level.spheres[i as usize].texture_offset(v),
-            LocalPrim::Quadric(i) => level.quadrics[i as usize].texture_offset(v),
-            LocalPrim::Triangle { mesh, .. } => level.meshes[mesh as usize].texture_offset(v),
-            LocalPrim::Plane(i) => self.planes[i as usize].texture_offset(v),
+            LocalPrim::Sphere(i) => [u, v].map(|v| level.spheres[i as usize].texture_offset(v)),
+            LocalPrim::Quadric(i) => [u, v].map(|v| level.quadrics[i as usize].texture_offset(v)),
+            LocalPrim::Triangle { mesh, .. } => {
+                [u, v].map(|v| level.meshes[mesh as usize].texture_offset(v))
+            }
+            LocalPrim::Plane(i) => self.planes[i as usize].texture_offsets([u, v]),
         }
     }
 

@@ -361,10 +361,8 @@ impl Scene {
         footprint: &HitFootprint,
     ) -> TextureExtent {
         let (ax, ay) = footprint.axes(hit.geometry.geometric_normal);
-        TextureExtent::spanned(
-            &self.geometry.texture_offset(hit.prim, path, ax),
-            &self.geometry.texture_offset(hit.prim, path, ay),
-        )
+        let [along_x, along_y] = self.geometry.texture_offsets(hit.prim, path, [ax, ay]);
+        TextureExtent::spanned(&along_x, &along_y)
     }
 
     /// The instances leading to `placement`: the world's own path (most of a scene's hits, which
