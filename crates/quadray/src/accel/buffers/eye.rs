@@ -1,6 +1,9 @@
 //! The eye buffer: for rays from a pinhole camera's eye, the one shape each direction can meet,
 //! where there is at most one. Such a ray tests that shape and the planes; a ray that two shapes or
 //! more may meet traverses the BVH, so hits tied at equal distances resolve as they always did.
+//! (Testing several listed shapes here would not give the BVH's bits either: a quadric's t
+//! depends in its last bits on the limit it is tested with, since its tangency step is clamped
+//! to it, and the BVH lowers that limit in its own order.)
 //!
 //! Why the one shape is the only one. A hit at `p = e + t·d` on a ray from the eye `e` lies in its
 //! shape's padded box, and `p − e = t·d` has the direction `d` looked up, so the shape is listed
