@@ -76,6 +76,8 @@ pub mod shape;
 pub mod sphere;
 pub mod texture;
 pub use texture::image as image_texture;
+#[cfg(test)]
+mod test_rng;
 pub mod triangle;
 
 pub use accel::{AccelStats, SimdPath, simd_path};

@@ -281,11 +281,9 @@ mod tests {
             1.0 - f64::EPSILON / 2.0,
             -(1.0 - f64::EPSILON / 2.0),
         ];
-        let mut bits = 0x2545_f491_4f6c_dd1du64;
+        let mut state = 0x2545_f491_4f6c_dd1du64;
         for _ in 0..200_000 {
-            bits ^= bits << 13;
-            bits ^= bits >> 7;
-            bits ^= bits << 17;
+            let bits = crate::test_rng::xorshift(&mut state);
             values.push(f64::from_bits(bits));
             values.push((bits >> 11) as f64 / (1u64 << 40) as f64 - 4096.0);
         }

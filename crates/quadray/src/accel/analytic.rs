@@ -367,13 +367,7 @@ mod tests {
     /// outside and rays spawned on the primitives.
     #[test]
     fn traversal_matches_brute_force_grouped_or_not() {
-        let mut seed = 0x1234_5678_9abc_def0u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::test_rng::unit_stream(0x1234_5678_9abc_def0);
         let mut spheres = Vec::new();
         for i in 0..12 {
             for j in 0..12 {

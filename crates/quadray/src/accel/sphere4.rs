@@ -146,13 +146,9 @@ mod tests {
     use glam::DVec3;
 
     /// A xorshift stream of numbers in [-1, 1).
-    fn stream(mut seed: u64) -> impl FnMut() -> f64 {
-        move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        }
+    fn stream(seed: u64) -> impl FnMut() -> f64 {
+        let mut unit = crate::test_rng::unit_stream(seed);
+        move || unit() * 2.0 - 1.0
     }
 
     /// A unit vector orthogonal to `d`.

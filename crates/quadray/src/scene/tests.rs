@@ -235,13 +235,9 @@ fn buffered_world(eye: DVec3) -> Scene {
 }
 
 /// A generator of numbers in [−0.5, 0.5).
-fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
-    move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    }
+fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut unit = crate::test_rng::unit_stream(seed);
+    move || unit() - 0.5
 }
 
 /// Shadow rays answered through the light buffers agree with the BVH's answers, ray for ray, in

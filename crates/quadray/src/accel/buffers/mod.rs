@@ -237,13 +237,8 @@ mod tests {
     /// several sizes.
     #[test]
     fn boxes_are_seen_through_the_cells_of_their_points() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut unit = crate::test_rng::unit_stream(0x9e37_79b9_7f4a_7c15);
+        let mut next = || unit() - 0.5;
         for n in [1, 7, 32, 128] {
             let cube = Cube { n };
             for _ in 0..5_000 {

@@ -390,12 +390,8 @@ mod tests {
     #[test]
     fn independent_samples_need_no_correction() {
         let mut state = 0x9E37_79B9_7F4A_7C15u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next =
+            || (crate::test_rng::xorshift(&mut state) >> 40) as f32 / (1u64 << 24) as f32;
         let mut pairs = Vec::new();
         for _ in 0..4000 {
             let (mut a, mut b) = (PixelEstimate::default(), Twin::default());
