@@ -156,22 +156,43 @@ fn strata(count: u32) -> (u32, u32) {
     (columns, count.div_ceil(columns))
 }
 
-/// Sample `s` of `count` (more than one) in the `(m, n)` grid of [`strata`], given the pixel's
-/// permutations of the columns and rows (Kensler's correlated multi-jitter).
+/// A pixel's keys for the hashes of each of its samples ([`multi_jittered`]): of the order the
+/// strata are visited in, and of the jitter in x and in y.
+#[derive(Clone, Copy, Debug, Default)]
+struct SampleKeys {
+    order: u32,
+    jitter_x: u32,
+    jitter_y: u32,
+}
+
+impl SampleKeys {
+    /// The keys of pixel `pattern`.
+    fn of(pattern: u32) -> SampleKeys {
+        SampleKeys {
+            order: pattern.wrapping_mul(ORDER_KEY),
+            jitter_x: pattern.wrapping_mul(JITTER_X_KEY),
+            jitter_y: pattern.wrapping_mul(JITTER_Y_KEY),
+        }
+    }
+}
+
+/// Sample `s` of `count` (more than one, whose [`walk_mask`] is `count_mask`) in the `(m, n)` grid
+/// of [`strata`], given the pixel's `keys` and its permutations of the columns and rows
+/// (Kensler's correlated multi-jitter).
 #[inline]
 fn multi_jittered(
     s: u32,
-    count: u32,
+    (count, count_mask): (u32, u32),
     (m, n): (u32, u32),
-    pattern: u32,
+    keys: SampleKeys,
     permuted_column: impl Fn(u32) -> u32,
     permuted_row: impl Fn(u32) -> u32,
 ) -> (f64, f64) {
-    let s = permute(s, count, pattern.wrapping_mul(ORDER_KEY));
+    let s = permute_in(s, count, count_mask, keys.order);
     let sx = permuted_column(remainder(s, m));
     let sy = permuted_row(quotient(s, m));
-    let jx = rand_float(s, pattern.wrapping_mul(JITTER_X_KEY));
-    let jy = rand_float(s, pattern.wrapping_mul(JITTER_Y_KEY));
+    let jx = rand_float(s, keys.jitter_x);
+    let jy = rand_float(s, keys.jitter_y);
     (
         divide(sx as f64 + divide(sy as f64 + jx, n), m),
         divide(s as f64 + jy, count),
@@ -199,9 +220,9 @@ pub fn sample_2d(s: u32, count: u32, pattern: u32) -> (f64, f64) {
     let (m, n) = strata(count);
     multi_jittered(
         s,
-        count,
+        (count, walk_mask(count)),
         (m, n),
-        pattern,
+        SampleKeys::of(pattern),
         |column| permute(column, m, pattern.wrapping_mul(COLUMN_KEY)),
         |row| permute(row, n, pattern.wrapping_mul(ROW_KEY)),
     )
@@ -218,8 +239,8 @@ pub struct PixelSampler {
     rows: u32,
     /// [`walk_mask`] of the count, the columns and the rows.
     masks: [u32; 3],
-    /// The current pixel's keys: of the strata's order, of the jitter in x and in y.
-    keys: [u32; 3],
+    /// The current pixel's keys.
+    keys: SampleKeys,
     /// The permuted column of each column index, then the permuted row of each row index.
     strata: Vec<u32>,
 }
@@ -233,7 +254,7 @@ impl PixelSampler {
             columns,
             rows,
             masks: [walk_mask(count.max(1)), walk_mask(columns), walk_mask(rows)],
-            keys: [0; 3],
+            keys: SampleKeys::default(),
             strata: vec![0; (columns + rows) as usize],
         }
     }
@@ -243,11 +264,7 @@ impl PixelSampler {
         if self.count <= 1 {
             return;
         }
-        self.keys = [
-            pattern.wrapping_mul(ORDER_KEY),
-            pattern.wrapping_mul(JITTER_X_KEY),
-            pattern.wrapping_mul(JITTER_Y_KEY),
-        ];
+        self.keys = SampleKeys::of(pattern);
         let (m, n) = (self.columns, self.rows);
         let (column_key, row_key) = (
             pattern.wrapping_mul(COLUMN_KEY),
@@ -263,21 +280,19 @@ impl PixelSampler {
     }
 
     /// Sample `s` of the current pixel: [`sample_2d`]`(s, count, pattern)`, with the pixel's
-    /// keys and the count's masks computed once (the same operations on the same values as
-    /// [`multi_jittered`], so the same bits).
+    /// keys and the count's mask computed once.
     pub fn sample(&self, s: u32) -> (f64, f64) {
         if self.count <= 1 {
             return (0.5, 0.5);
         }
-        let (count, m, n) = (self.count, self.columns, self.rows);
-        let s = permute_in(s, count, self.masks[0], self.keys[0]);
-        let sx = self.strata[remainder(s, m) as usize];
-        let sy = self.strata[(m + quotient(s, m)) as usize];
-        let jx = rand_float(s, self.keys[1]);
-        let jy = rand_float(s, self.keys[2]);
-        (
-            divide(sx as f64 + divide(sy as f64 + jx, n), m),
-            divide(s as f64 + jy, count),
+        let m = self.columns;
+        multi_jittered(
+            s,
+            (self.count, self.masks[0]),
+            (m, self.rows),
+            self.keys,
+            |column| self.strata[column as usize],
+            |row| self.strata[(m + row) as usize],
         )
     }
 }
