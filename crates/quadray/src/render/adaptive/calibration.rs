@@ -175,7 +175,7 @@ pub(super) fn uniform_draw(seed: u32, at: (u32, u32)) -> f64 {
 }
 
 /// Whether a pixel's samples all agree (an unknown error is not flat).
-pub(super) fn is_flat(estimate: &PixelEstimate) -> bool {
+fn is_flat(estimate: &PixelEstimate) -> bool {
     is_flat_error(estimate.squared_error())
 }
 
