@@ -1,4 +1,5 @@
-//! Uniform sampling: the same number of samples in every pixel, rows in parallel.
+//! Uniform sampling: the same number of samples in every pixel, bands of rows in parallel, each
+//! band traced in square tiles.
 
 use crate::aov::{AovSample, Aovs};
 use crate::film::{Film, PixelEstimate};
@@ -6,7 +7,7 @@ use crate::footprint::RayCone;
 use crate::integrator::RayCounts;
 use crate::render::adaptive::SamplingStats;
 use crate::render::context::SampleContext;
-use crate::render::row_order::row_keys;
+use crate::render::row_order::{BLOCK_ROWS, row_keys};
 use crate::render::{Progress, RenderError, Rendered};
 use crate::sampler::{PixelSampler, SampleKey, pixel_pattern};
 use glam::Vec3;
@@ -15,6 +16,15 @@ use std::sync::Mutex;
 
 /// Camera rays made at once before they are traced (at least one pixel's worth).
 const BATCH_SAMPLES: usize = 16;
+
+/// The width of the tiles a band is traced in, as tall as the band ([`BLOCK_ROWS`]): neighbouring
+/// camera rays meet the same nodes of the acceleration structure, which a tile keeps in cache
+/// where a row of the whole width does not (the bunny's and the kitchen's camera-rays-only
+/// frames 12% faster than row by row; tiles 2 to 32 pixels wide measured the same).
+const TILE: usize = 8;
+
+/// One image row of a band: its pixels and, when a pass is selected, their pass samples.
+type BandRow<'a> = (&'a mut [Vec3], Option<&'a mut [AovSample]>);
 
 /// `settings.spp` samples in every pixel, by correlated multi-jittered sampling.
 pub(super) fn render_uniform(
@@ -29,26 +39,31 @@ pub(super) fn render_uniform(
     let aov_rows = context.aov_rows(&mut aov_samples);
     let totals = Mutex::new(RayCounts::default());
     let cone = context.sample_cone(settings.spp);
-    // Rows are taken up in interleaved blocks (row_order), so progress counts representative work.
+    // Bands of rows are taken up in interleaved order (row_order), so progress counts
+    // representative work.
+    let mut bands: Vec<(usize, Vec<BandRow<'_>>)> = Vec::new();
+    for (row_index, row) in film.pixels_mut().chunks_mut(ww).zip(aov_rows).enumerate() {
+        if row_index % BLOCK_ROWS == 0 {
+            bands.push((row_index, Vec::with_capacity(BLOCK_ROWS)));
+        }
+        if let Some((_, rows)) = bands.last_mut() {
+            rows.push(row);
+        }
+    }
     let keys = row_keys(window.height() as usize);
-    let mut rows: Vec<_> = film
-        .pixels_mut()
-        .chunks_mut(ww)
-        .zip(aov_rows)
-        .enumerate()
-        .collect();
-    rows.sort_unstable_by_key(|(row_index, _)| keys[*row_index]);
-    rows.into_par_iter()
-        .for_each(|(row_index, (row, aov_row))| {
-            if progress.cancelled() {
-                return;
-            }
-            let y = window.y0 + row_index as u32;
-            let mut counts = RayCounts::default();
-            render_row(context, (y, row), aov_row, cone, &mut counts);
-            *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
+    bands.sort_unstable_by_key(|(first_row, _)| keys[*first_row]);
+    bands.into_par_iter().for_each(|(first_row, mut rows)| {
+        if progress.cancelled() {
+            return;
+        }
+        let y0 = window.y0 + first_row as u32;
+        let mut counts = RayCounts::default();
+        render_band(context, y0, &mut rows, cone, &mut counts);
+        *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
+        for _ in &rows {
             progress.row_done();
-        });
+        }
+    });
     if progress.cancelled() {
         return Err(RenderError::Cancelled);
     }
@@ -64,13 +79,13 @@ pub(super) fn render_uniform(
     ))
 }
 
-/// Samples every pixel of image row `y` (the window's pixels `row`, and their passes when
-/// `aov_row` is given), counting the rays into `counts`. Pixels are sampled by their position in
-/// the full image, so a window's pixels equal the whole render's.
-fn render_row(
+/// Samples every pixel of the band of image rows starting at `y0` (the window's pixels `rows`,
+/// and their passes when selected), tile by tile, counting the rays into `counts`. Pixels are
+/// sampled by their position in the full image, so a window's pixels equal the whole render's.
+fn render_band(
     context: &SampleContext<'_>,
-    (y, row): (u32, &mut [Vec3]),
-    mut aov_row: Option<&mut [AovSample]>,
+    y0: u32,
+    rows: &mut [BandRow<'_>],
     cone: RayCone,
     counts: &mut RayCounts,
 ) {
@@ -80,44 +95,130 @@ fn render_row(
     let mut sampler = PixelSampler::new(spp);
     let mut rays = Vec::with_capacity(BATCH_SAMPLES.max(spp as usize));
     let batch_pixels = (BATCH_SAMPLES / spp as usize).max(1);
-    for (batch, pixels) in row.chunks_mut(batch_pixels).enumerate() {
-        let first_column = batch * batch_pixels;
-        // The batch's camera rays first: their divisions and square roots do not wait on each
-        // other, where made one before each trace they wait in line.
-        rays.clear();
-        for column in first_column..first_column + pixels.len() {
-            let x = window.x0 + column as u32;
-            sampler.start_pixel(pixel_pattern(x, y, settings.seed));
-            rays.extend((0..spp).map(|s| context.camera_ray((x, y), sampler.sample(s))));
+    let width = rows.first().map_or(0, |(pixels, _)| pixels.len());
+    // A tile's pixels as (row in the band, column in the window), row by row.
+    let mut tile = Vec::with_capacity(TILE * TILE);
+    for first_column in (0..width).step_by(TILE) {
+        tile.clear();
+        for r in 0..rows.len() {
+            for column in first_column..(first_column + TILE).min(width) {
+                tile.push((r, column));
+            }
         }
-        let mut rays = rays.iter();
-        for (i, pixel) in pixels.iter_mut().enumerate() {
-            let column = first_column + i;
-            let x = window.x0 + column as u32;
-            // The pixel's key hashed again rather than kept from the batch above: keeping the
-            // batch's keys made this loop 13-16% slower (grid, bunny frame), through codegen.
-            let pattern = pixel_pattern(x, y, settings.seed);
-            let mut aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
-            // The variance pass needs the running estimate; the image keeps its f32 sum.
-            let mut estimate = selection.variance.then(PixelEstimate::default);
-            let mut sum = Vec3::ZERO;
-            for (s, ray) in (0..spp).zip(&mut rays) {
-                let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
-                let key = SampleKey {
-                    pattern,
-                    index: s,
-                    count: Some(spp),
-                };
-                let radiance = context.trace_ray(ray, cone, key, first_hit, counts);
-                if let Some(e) = &mut estimate {
-                    e.add(radiance);
+        for batch in tile.chunks(batch_pixels) {
+            // The batch's camera rays first: their divisions and square roots do not wait on
+            // each other, where made one before each trace they wait in line.
+            rays.clear();
+            for &(r, column) in batch {
+                let (x, y) = (window.x0 + column as u32, y0 + r as u32);
+                sampler.start_pixel(pixel_pattern(x, y, settings.seed));
+                rays.extend((0..spp).map(|s| context.camera_ray((x, y), sampler.sample(s))));
+            }
+            let mut rays = rays.iter();
+            for &(r, column) in batch {
+                let (x, y) = (window.x0 + column as u32, y0 + r as u32);
+                let (pixels, aov_row) = &mut rows[r];
+                let pattern = pixel_pattern(x, y, settings.seed);
+                let mut aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
+                // The variance pass needs the running estimate; the image keeps its f32 sum.
+                let mut estimate = selection.variance.then(PixelEstimate::default);
+                let mut sum = Vec3::ZERO;
+                for (s, ray) in (0..spp).zip(&mut rays) {
+                    let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
+                    let key = SampleKey {
+                        pattern,
+                        index: s,
+                        count: Some(spp),
+                    };
+                    let radiance = context.trace_ray(ray, cone, key, first_hit, counts);
+                    if let Some(e) = &mut estimate {
+                        e.add(radiance);
+                    }
+                    sum += radiance;
                 }
-                sum += radiance;
-            }
-            *pixel = sum * inv_spp;
-            if let Some(aov) = aov {
-                aov.fill_sampling(selection, spp, estimate.map(|e| e.variance()));
+                pixels[column] = sum * inv_spp;
+                if let Some(aov) = aov {
+                    aov.fill_sampling(selection, spp, estimate.map(|e| e.variance()));
+                }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::aov::AovSelection;
+    use crate::render::adaptive::tests::white_on_black;
+    use crate::render::context::SampleContext;
+    use crate::render::{NoProgress, PixelWindow, RenderSettings, render_with_aovs};
+    use crate::sampler::{PixelSampler, SampleKey, pixel_pattern};
+    use crate::{RayCounts, Sphere};
+    use glam::{DVec3, Vec3};
+
+    /// Every pixel of a window whose sides are not multiples of a tile or a band holds the mean
+    /// of its own samples traced one by one, and every sample is traced once: tiles and bands
+    /// cover the window exactly.
+    #[test]
+    fn tiles_cover_every_pixel_once() {
+        let scene = white_on_black(vec![
+            Sphere {
+                center: DVec3::new(0.3, -0.2, 0.0),
+                radius: 0.9,
+                material: 0,
+            },
+            Sphere {
+                center: DVec3::new(-1.2, 1.1, 0.0),
+                radius: 0.4,
+                material: 0,
+            },
+        ]);
+        let spp = 3;
+        let window = PixelWindow {
+            x0: 5,
+            y0: 3,
+            x1: 5 + 21,
+            y1: 3 + 19,
+        };
+        let settings = RenderSettings {
+            width: 48,
+            height: 48,
+            spp,
+            crop: Some(window),
+            ..RenderSettings::default()
+        };
+        let (rendered, _) =
+            render_with_aovs(&scene, &settings, AovSelection::NONE, &NoProgress).unwrap();
+        assert_eq!(
+            rendered.counts.camera,
+            (window.width() * window.height() * spp) as u64
+        );
+        let context = SampleContext::new(&scene, &settings, AovSelection::NONE).unwrap();
+        let cone = context.sample_cone(spp);
+        let mut sampler = PixelSampler::new(spp);
+        let mut counts = RayCounts::default();
+        let mut covered = 0;
+        for y in window.y0..window.y1 {
+            for x in window.x0..window.x1 {
+                let pattern = pixel_pattern(x, y, settings.seed);
+                sampler.start_pixel(pattern);
+                let sum: Vec3 = (0..spp)
+                    .map(|index| {
+                        let key = SampleKey {
+                            pattern,
+                            index,
+                            count: Some(spp),
+                        };
+                        let offset = sampler.sample(index);
+                        context.trace((x, y), offset, cone, key, None, &mut counts)
+                    })
+                    .sum();
+                let expected = sum * (1.0 / spp as f32);
+                let got = rendered.film.get(x - window.x0, y - window.y0);
+                assert_eq!(got, expected, "pixel ({x}, {y})");
+                covered += (got != Vec3::ZERO && got != Vec3::ONE) as u32;
+            }
+        }
+        // The spheres' edges cross the window: pixels differ, so a misplaced one would show.
+        assert!(covered > 10, "{covered} edge pixels");
     }
 }

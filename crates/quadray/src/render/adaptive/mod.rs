@@ -569,4 +569,4 @@ mod rounds;
 mod settings;
 mod stats;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -21,7 +21,7 @@ pub(super) fn disc() -> Scene {
 
 /// White `spheres` (flat, ambient only) on a black background, seen from above by an
 /// orthographic camera 4 units tall centred on the origin (48 pixels: 12 to a unit).
-pub(super) fn white_on_black(spheres: Vec<Sphere>) -> Scene {
+pub(crate) fn white_on_black(spheres: Vec<Sphere>) -> Scene {
     white_shapes_on_black(Geometry {
         spheres,
         ..Geometry::default()
@@ -29,7 +29,7 @@ pub(super) fn white_on_black(spheres: Vec<Sphere>) -> Scene {
 }
 
 /// The shapes of `geometry`, white, as [`white_on_black`] shows spheres.
-pub(super) fn white_shapes_on_black(geometry: Geometry) -> Scene {
+pub(crate) fn white_shapes_on_black(geometry: Geometry) -> Scene {
     Scene::new(SceneDescription {
         camera: Camera {
             from: DVec3::new(0.0, 0.0, 10.0),
