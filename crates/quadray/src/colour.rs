@@ -21,7 +21,9 @@ pub fn display_channels(radiance: Vec3) -> [f32; 3] {
         // linear interpolation (its slope in √linear is bounded, unlike in linear).
         let position = linear.clamp(0.0, 1.0).sqrt() * SRGB_TABLE_STEPS as f32;
         let position = if position.is_nan() { 0.0 } else { position };
-        let index = (position as usize).min(SRGB_TABLE_STEPS - 1);
+        // Through i32: `position` lies in [0, steps], where the truncation is the same, and a
+        // float-to-usize cast is a dozen instructions on x86-64 (3% of an adaptive render).
+        let index = (position as i32 as usize).min(SRGB_TABLE_STEPS - 1);
         let t = position - index as f32;
         table[index] + t * (table[index + 1] - table[index])
     };

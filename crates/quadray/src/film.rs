@@ -136,7 +136,9 @@ impl PixelEstimate {
             }
             self.batch_sums[half..].fill([0.0; 3]);
         }
-        let batch = &mut self.batch_sums[(index / Self::batch_size(index + 1)) as usize];
+        // The run of sample `index`: a shift, as the run length is a power of two.
+        let batch =
+            &mut self.batch_sums[(index >> Self::batch_size(index + 1).trailing_zeros()) as usize];
         for (sum, value) in batch.iter_mut().zip(display_channels(radiance)) {
             *sum += value;
         }

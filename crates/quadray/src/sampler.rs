@@ -307,31 +307,33 @@ impl PixelSampler {
 /// property and decorrelates the pixels.
 pub fn progressive_2d(index: u32, pattern: u32) -> (f64, f64) {
     // Dimension 0 of Sobol is the van der Corput sequence (the index's bits reversed); dimension
-    // 1 uses the direction numbers v_k = v_{k-1} ^ (v_{k-1} >> 1), v_0 = 2^31.
-    let x = index.reverse_bits();
-    let mut y = 0u32;
-    let mut direction = 1u32 << 31;
+    // 1 uses the direction numbers v_k = v_{k-1} ^ (v_{k-1} >> 1), v_0 = 2^31. The scramble works
+    // on the reversed bits, so both are made reversed: dimension 0 is the index itself, and
+    // dimension 1 sums the reversed direction numbers r_k = r_{k-1} ^ (r_{k-1} << 1), r_0 = 1
+    // (reversal is linear over xor). Without a bit-reversal instruction on baseline x86-64 this
+    // saves three of the five reversals.
+    let mut y_reversed = 0u32;
+    let mut direction = 1u32;
     let mut bits = index;
     while bits != 0 {
         if bits & 1 != 0 {
-            y ^= direction;
+            y_reversed ^= direction;
         }
         bits >>= 1;
-        direction ^= direction >> 1;
+        direction ^= direction << 1;
     }
-    let x = owen_scramble(x, pattern.wrapping_mul(0x8da6b343));
-    let y = owen_scramble(y, pattern.wrapping_mul(0xd8163841) ^ 0x6c50b47c);
+    let x = owen_scramble_reversed(index, pattern.wrapping_mul(0x8da6b343));
+    let y = owen_scramble_reversed(y_reversed, pattern.wrapping_mul(0xd8163841) ^ 0x6c50b47c);
     // 2^-32 keeps the coordinates below 1.
     let unit = 1.0 / 4294967296.0;
     (x as f64 * unit, y as f64 * unit)
 }
 
-/// Nested uniform (Owen) scrambling of a 32-bit binary fraction keyed by `seed`: each bit is
-/// flipped by a hash of the bits above it. It works on the reversed bits, where Laine and Karras's
-/// hash flips each bit by the bits below it.
-fn owen_scramble(value: u32, seed: u32) -> u32 {
-    let mut v = value.reverse_bits();
-    v = v.wrapping_add(seed);
+/// Nested uniform (Owen) scrambling, keyed by `seed`, of the 32-bit binary fraction whose bits
+/// reversed are `reversed`: each bit is flipped by a hash of the bits above it. It works on the
+/// reversed bits, where Laine and Karras's hash flips each bit by the bits below it.
+fn owen_scramble_reversed(reversed: u32, seed: u32) -> u32 {
+    let mut v = reversed.wrapping_add(seed);
     v ^= v.wrapping_mul(0x6c50b47c);
     v ^= v.wrapping_mul(0xb82f1e52);
     v ^= v.wrapping_mul(0xc7afe638);
@@ -407,6 +409,38 @@ mod tests {
                     (x / d as f64).to_bits(),
                     "{x} / {d}"
                 );
+            }
+        }
+    }
+
+    /// The progressive points are those of the sequence as first written: Sobol's two
+    /// dimensions in their own bit order, each reversed, scrambled and reversed back.
+    #[test]
+    fn progressive_points_match_the_direct_construction() {
+        let scramble = |value: u32, seed: u32| {
+            let mut v = value.reverse_bits().wrapping_add(seed);
+            v ^= v.wrapping_mul(0x6c50b47c);
+            v ^= v.wrapping_mul(0xb82f1e52);
+            v ^= v.wrapping_mul(0xc7afe638);
+            v ^= v.wrapping_mul(0x8d22f6e6);
+            v.reverse_bits()
+        };
+        for pattern in [0u32, 1, 0x9e37_79b9, u32::MAX] {
+            for index in (0..4096).chain([u32::MAX / 3, u32::MAX - 1, u32::MAX]) {
+                let x = index.reverse_bits();
+                let (mut y, mut direction, mut bits) = (0u32, 1u32 << 31, index);
+                while bits != 0 {
+                    if bits & 1 != 0 {
+                        y ^= direction;
+                    }
+                    bits >>= 1;
+                    direction ^= direction >> 1;
+                }
+                let x = scramble(x, pattern.wrapping_mul(0x8da6b343));
+                let y = scramble(y, pattern.wrapping_mul(0xd8163841) ^ 0x6c50b47c);
+                let unit = 1.0 / 4294967296.0;
+                let want = (x as f64 * unit, y as f64 * unit);
+                assert_eq!(progressive_2d(index, pattern), want, "{index}, {pattern}");
             }
         }
     }
