@@ -31,7 +31,10 @@ impl Film {
         Film {
             width,
             height,
-            pixels: vec![Vec3::ZERO; width as usize * height as usize],
+            // Zero pages from the allocator, not zeros written by this thread: the render threads
+            // fault in the pages they write (the quadric grid's 1280x720 frame on two threads
+            // 0.037 -> 0.033 s, medians of 15; one thread unchanged).
+            pixels: bytemuck::zeroed_vec(width as usize * height as usize),
         }
     }
 
