@@ -60,10 +60,12 @@ pub(super) fn render_uniform(
         }
         let y0 = window.y0 + first_row as u32;
         let mut counts = RayCounts::default();
-        render_band(context, y0, &mut rows, cone, &mut counts);
+        let finished = render_band(context, y0, &mut rows, (cone, progress), &mut counts);
         *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
-        for _ in &rows {
-            progress.row_done();
+        if finished {
+            for _ in &rows {
+                progress.row_done();
+            }
         }
     });
     if progress.cancelled() {
@@ -82,17 +84,22 @@ pub(super) fn render_uniform(
 }
 
 /// Samples every pixel of the band of image rows starting at `y0` (the window's pixels `rows`,
-/// and their passes when selected), tile by tile, counting the rays into `counts`.
+/// and their passes when selected), tile by tile, counting the rays into `counts`, with each
+/// sample standing for `cone`. Stops between tiles once `progress` is cancelled (a band of a
+/// costly frame takes a second or more, a tile a fraction of it); returns whether it finished.
 fn render_band(
     context: &SampleContext<'_>,
     y0: u32,
     rows: &mut [BandRow<'_>],
-    cone: RayCone,
+    (cone, progress): (RayCone, &dyn Progress),
     counts: &mut RayCounts,
-) {
+) -> bool {
     let mut sampler = PixelSampler::new(context.settings.spp);
     let width = rows.first().map_or(0, |(pixels, _)| pixels.len());
     for first_column in (0..width).step_by(TILE) {
+        if progress.cancelled() {
+            return false;
+        }
         let columns = first_column..(first_column + TILE).min(width);
         for (y, (pixels, aovs)) in (y0..).zip(rows.iter_mut()) {
             let aovs = aovs.as_deref_mut().map(|aovs| &mut aovs[columns.clone()]);
@@ -100,6 +107,7 @@ fn render_band(
             render_segment(context, y, segment, &mut sampler, cone, counts);
         }
     }
+    true
 }
 
 /// Samples the pixels of image row `y` from window column `first_column` on (`pixels`, and
@@ -164,10 +172,68 @@ mod tests {
     use crate::aov::AovSelection;
     use crate::render::adaptive::tests::white_on_black;
     use crate::render::context::SampleContext;
-    use crate::render::{NoProgress, PixelWindow, RenderSettings, render_with_aovs};
+    use crate::render::{
+        NoProgress, PixelWindow, Progress, RenderError, RenderSettings, render_with_aovs,
+    };
     use crate::sampler::{PixelSampler, SampleKey, pixel_pattern};
     use crate::{RayCounts, Sphere};
     use glam::{DVec3, Vec3};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    /// A progress that asks to cancel from its `after`-th question on, and counts the rows
+    /// reported done.
+    struct CancelAfter {
+        after: usize,
+        asked: AtomicUsize,
+        rows: AtomicUsize,
+    }
+
+    impl Progress for CancelAfter {
+        fn row_done(&self) {
+            self.rows.fetch_add(1, Ordering::Relaxed);
+        }
+
+        fn cancelled(&self) -> bool {
+            self.asked.fetch_add(1, Ordering::Relaxed) + 1 >= self.after
+        }
+    }
+
+    /// A cancelled render stops within a band, between tiles, and reports no row of the band it
+    /// left: on one thread, cancelled at its third question (the first band's start and its
+    /// first two tiles), the first band of a four-tile-wide image is left after two tiles.
+    #[test]
+    fn a_cancelled_render_stops_between_tiles() {
+        let scene = white_on_black(vec![Sphere {
+            center: DVec3::ZERO,
+            radius: 1.0,
+            material: 0,
+        }]);
+        let settings = RenderSettings {
+            width: 4 * 32,
+            height: 16,
+            spp: 2,
+            ..RenderSettings::default()
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        for (after, rows) in [(3, 0), (6, 8)] {
+            let progress = CancelAfter {
+                after,
+                asked: AtomicUsize::new(0),
+                rows: AtomicUsize::new(0),
+            };
+            let result =
+                pool.install(|| render_with_aovs(&scene, &settings, AovSelection::NONE, &progress));
+            assert!(
+                matches!(result, Err(RenderError::Cancelled)),
+                "after {after}"
+            );
+            // At the sixth question the first band (five questions) is done and reported.
+            assert_eq!(progress.rows.load(Ordering::Relaxed), rows, "after {after}");
+        }
+    }
 
     /// Every pixel of a window whose sides are not multiples of a tile or a band holds the mean
     /// of its own samples traced one by one, and every sample is traced once: tiles and bands
