@@ -8,51 +8,24 @@ use crate::accel::wide::{LEAF, leaf_blocks, pop_nearer};
 use crate::mesh::Mesh;
 use crate::triangle::TriangleHit;
 use std::cell::Cell;
-use std::mem::ManuallyDrop;
-use std::ptr::NonNull;
-
-/// An entry of the traversal stack: a child reference and its entry distance.
-type Entry = (u32, f32);
 
 thread_local! {
-    /// The traversal stack reused across rays, as the buffer of a `Vec` (pointer, capacity): a
-    /// thread-local without a destructor is reached in an instruction or two, where one holding a
-    /// `Vec` checks its state at each access (about 50 instructions a ray in callgrind). The
-    /// buffer outlives its thread (a few kilobytes a thread, leaked when it ends).
-    static STACK: Cell<(*mut Entry, usize)> = const { Cell::new(EMPTY_STACK) };
+    /// The traversal stack of (child reference, entry distance), reused across rays.
+    static STACK: Cell<Vec<(u32, f32)>> = const { Cell::new(Vec::new()) };
 }
 
-/// The raw parts of an empty `Vec` that owns nothing.
-const EMPTY_STACK: (*mut Entry, usize) = (NonNull::<Entry>::dangling().as_ptr(), 0);
-
-/// This thread's traversal stack, empty, taken out of [`STACK`] (give it back with
-/// [`put_stack`]).
+/// This thread's traversal stack, empty, taken out of [`STACK`] (give it back with `STACK.set`).
 ///
 /// Taken rather than lent to a closure (as [`super::stack::with_stack`] does): a closure is
 /// compiled with the target features of the function it is written in, so the traversal in it
 /// ran without AVX2 on the AVX2 path unless inlined, and inlining it through `LocalKey::with`
 /// was not reliable. A mesh traversal never runs inside another, so one stack a thread is enough
-/// (a nested one would start from an empty vector, and the outer one's buffer would be freed).
+/// (a nested one would start from an empty vector).
 #[inline(always)]
-fn take_stack() -> Vec<Entry> {
-    let (buffer, capacity) = STACK.replace(EMPTY_STACK);
-    // SAFETY: (buffer, capacity) are either EMPTY_STACK, the parts of an empty Vec, or the parts
-    // of a Vec's buffer of `capacity` entries given to `put_stack` and not taken since (a take
-    // leaves EMPTY_STACK behind), so this Vec is its only owner; length 0 needs no initialised
-    // entries.
-    unsafe { Vec::from_raw_parts(buffer, 0, capacity) }
-}
-
-/// Gives `stack` back to this thread's [`STACK`] for the next traversal.
-#[inline(always)]
-fn put_stack(stack: Vec<Entry>) {
-    // The Vec's buffer is kept, not freed: `take_stack` rebuilds the Vec from its parts. Entries
-    // are plain data, so forgetting them leaks nothing.
-    let mut stack = ManuallyDrop::new(stack);
-    let previous = STACK.replace((stack.as_mut_ptr(), stack.capacity()));
-    // SAFETY: `previous` is EMPTY_STACK unless a nested traversal gave a stack back in between,
-    // whose parts are then a Vec's that nothing else owns: freed here, not leaked.
-    drop(unsafe { Vec::from_raw_parts(previous.0, 0, previous.1) });
+fn take_stack() -> Vec<(u32, f32)> {
+    let mut stack = STACK.take();
+    stack.clear();
+    stack
 }
 
 impl MeshBvh {
@@ -198,7 +171,7 @@ impl MeshBvh {
                 None => break,
             }
         }
-        put_stack(stack);
+        STACK.set(stack);
         best.map(|(number, hit)| MeshHit {
             id: self.id(number),
             hit,
@@ -272,7 +245,7 @@ impl MeshBvh {
                 Some((child, _)) => current = child,
             }
         };
-        put_stack(stack);
+        STACK.set(stack);
         blocked
     }
 }
