@@ -182,13 +182,13 @@ mod tests {
 
     /// A progress that asks to cancel from its `after`-th question on, and counts the rows
     /// reported done.
-    struct CancelAfter {
+    struct CancelAtQuestion {
         after: usize,
         asked: AtomicUsize,
         rows: AtomicUsize,
     }
 
-    impl Progress for CancelAfter {
+    impl Progress for CancelAtQuestion {
         fn row_done(&self) {
             self.rows.fetch_add(1, Ordering::Relaxed);
         }
@@ -199,8 +199,8 @@ mod tests {
     }
 
     /// A cancelled render stops within a band, between tiles, and reports no row of the band it
-    /// left: on one thread, cancelled at its third question (the first band's start and its
-    /// first two tiles), the first band of a four-tile-wide image is left after two tiles.
+    /// left: on one thread, cancelled at its third question (asked at the first band's start,
+    /// then before each tile), the first band of a four-tile-wide image is left after one tile.
     #[test]
     fn a_cancelled_render_stops_between_tiles() {
         let scene = white_on_black(vec![Sphere {
@@ -219,7 +219,7 @@ mod tests {
             .build()
             .unwrap();
         for (after, rows) in [(3, 0), (6, 8)] {
-            let progress = CancelAfter {
+            let progress = CancelAtQuestion {
                 after,
                 asked: AtomicUsize::new(0),
                 rows: AtomicUsize::new(0),
