@@ -1,5 +1,5 @@
-//! Uniform sampling: the same number of samples in every pixel, bands of rows in parallel, each
-//! band traced in tiles.
+//! Uniform sampling: the same number of samples in every pixel, traced in tiles (up to 32 columns
+//! of a band of eight rows) in parallel.
 
 use crate::aov::{AovSample, Aovs};
 use crate::film::{Film, PixelEstimate};
@@ -8,11 +8,12 @@ use crate::integrator::RayCounts;
 use crate::render::adaptive::SamplingStats;
 use crate::render::context::SampleContext;
 use crate::render::row_order::{BLOCK_ROWS, row_keys};
-use crate::render::{Progress, RenderError, Rendered};
+use crate::render::{PixelWindow, Progress, RenderError, Rendered};
 use crate::sampler::{PixelSampler, SampleKey, pixel_pattern};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Camera rays made at once before they are traced (at least one pixel's worth).
 const BATCH_SAMPLES: usize = 16;
@@ -25,8 +26,18 @@ const BATCH_SAMPLES: usize = 16;
 /// loop: narrower ones made it 4-12% slower).
 const TILE: usize = 32;
 
-/// One image row of a band: its pixels and, when a pass is selected, their pass samples.
-type BandRow<'a> = (&'a mut [Vec3], Option<&'a mut [AovSample]>);
+/// One image row of a tile: its pixels and, when a pass is selected, their pass samples.
+type TileRow<'a> = (&'a mut [Vec3], Option<&'a mut [AovSample]>);
+
+/// A tile of the window: up to [`TILE`] columns of the rows of one band.
+struct Tile<'a> {
+    /// The band the tile belongs to, in the order bands are taken up.
+    band: usize,
+    /// The window's row and column of the tile's top-left pixel.
+    first_row: usize,
+    first_column: usize,
+    rows: Vec<TileRow<'a>>,
+}
 
 /// `settings.spp` samples in every pixel, by correlated multi-jittered sampling.
 pub(super) fn render_uniform(
@@ -34,40 +45,38 @@ pub(super) fn render_uniform(
     progress: &dyn Progress,
 ) -> Result<(Rendered, Option<Aovs>), RenderError> {
     let (settings, window) = (context.settings, context.window);
-    let ww = window.width() as usize;
     let mut film = Film::new(window.width(), window.height());
     // Pass samples are allocated and computed only when a pass is selected.
     let mut aov_samples = context.aov_buffer();
     let aov_rows = context.aov_rows(&mut aov_samples);
+    let (tiles, band_rows) = cut_into_tiles(&mut film, window, aov_rows);
     let totals = Mutex::new(RayCounts::default());
     let cone = context.sample_cone(settings.spp);
-    // Bands of rows are taken up in interleaved order (row_order), so progress counts
-    // representative work.
-    let mut bands: Vec<(usize, Vec<BandRow<'_>>)> = Vec::new();
-    for (row_index, row) in film.pixels_mut().chunks_mut(ww).zip(aov_rows).enumerate() {
-        if row_index % BLOCK_ROWS == 0 {
-            bands.push((row_index, Vec::with_capacity(BLOCK_ROWS)));
-        }
-        if let Some((_, rows)) = bands.last_mut() {
-            rows.push(row);
-        }
-    }
-    let keys = row_keys(window.height() as usize);
-    bands.sort_unstable_by_key(|(first_row, _)| keys[*first_row]);
-    bands.into_par_iter().for_each(|(first_row, mut rows)| {
-        if progress.cancelled() {
-            return;
-        }
-        let y0 = window.y0 + first_row as u32;
-        let mut counts = RayCounts::default();
-        let finished = render_band(context, y0, &mut rows, (cone, progress), &mut counts);
-        *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
-        if finished {
-            for _ in &rows {
-                progress.row_done();
+    // A band's rows are reported done when its last tile is.
+    let tiles_left: Vec<AtomicUsize> = (band_rows.iter())
+        .map(|&(_, tiles)| AtomicUsize::new(tiles))
+        .collect();
+    // The tiles are the parallel work, so a window of a few rows still keeps every thread busy.
+    tiles.into_par_iter().for_each_init(
+        || PixelSampler::new(settings.spp),
+        |sampler, tile| {
+            if progress.cancelled() {
+                return;
             }
-        }
-    });
+            let mut counts = RayCounts::default();
+            let y0 = window.y0 + tile.first_row as u32;
+            for (y, (pixels, aovs)) in (y0..).zip(tile.rows) {
+                let segment = (tile.first_column, pixels, aovs);
+                render_segment(context, y, segment, sampler, cone, &mut counts);
+            }
+            *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
+            if tiles_left[tile.band].fetch_sub(1, Ordering::AcqRel) == 1 {
+                for _ in 0..band_rows[tile.band].0 {
+                    progress.row_done();
+                }
+            }
+        },
+    );
     if progress.cancelled() {
         return Err(RenderError::Cancelled);
     }
@@ -83,31 +92,49 @@ pub(super) fn render_uniform(
     ))
 }
 
-/// Samples every pixel of the band of image rows starting at `y0` (the window's pixels `rows`,
-/// and their passes when selected), tile by tile, counting the rays into `counts`, with each
-/// sample standing for `cone`. Stops between tiles once `progress` is cancelled (a band of a
-/// costly frame takes a second or more, a tile a fraction of it); returns whether it finished.
-fn render_band(
-    context: &SampleContext<'_>,
-    y0: u32,
-    rows: &mut [BandRow<'_>],
-    (cone, progress): (RayCone, &dyn Progress),
-    counts: &mut RayCounts,
-) -> bool {
-    let mut sampler = PixelSampler::new(context.settings.spp);
-    let width = rows.first().map_or(0, |(pixels, _)| pixels.len());
-    for first_column in (0..width).step_by(TILE) {
-        if progress.cancelled() {
-            return false;
+/// The window's pixels (`film`, and the passes' `aov_rows`) cut into tiles: bands of
+/// [`BLOCK_ROWS`] rows taken up in interleaved order ([`row_keys`], so that progress counts
+/// representative work), each band's tiles left to right. Also each band's rows and tiles.
+fn cut_into_tiles<'a>(
+    film: &'a mut Film,
+    window: PixelWindow,
+    aov_rows: Vec<Option<&'a mut [AovSample]>>,
+) -> (Vec<Tile<'a>>, Vec<(usize, usize)>) {
+    let ww = window.width() as usize;
+    let mut bands: Vec<(usize, Vec<TileRow<'a>>)> = Vec::new();
+    for (row_index, row) in film.pixels_mut().chunks_mut(ww).zip(aov_rows).enumerate() {
+        if row_index % BLOCK_ROWS == 0 {
+            bands.push((row_index, Vec::with_capacity(BLOCK_ROWS)));
         }
-        let columns = first_column..(first_column + TILE).min(width);
-        for (y, (pixels, aovs)) in (y0..).zip(rows.iter_mut()) {
-            let aovs = aovs.as_deref_mut().map(|aovs| &mut aovs[columns.clone()]);
-            let segment = (first_column, &mut pixels[columns.clone()], aovs);
-            render_segment(context, y, segment, &mut sampler, cone, counts);
+        if let Some((_, rows)) = bands.last_mut() {
+            rows.push(row);
         }
     }
-    true
+    let keys = row_keys(window.height() as usize);
+    bands.sort_unstable_by_key(|(first_row, _)| keys[*first_row]);
+    let columns = ww.div_ceil(TILE);
+    let mut tiles = Vec::with_capacity(bands.len() * columns);
+    let mut band_rows = Vec::with_capacity(bands.len());
+    for (band, (first_row, rows)) in bands.into_iter().enumerate() {
+        band_rows.push((rows.len(), columns));
+        let mut band_tiles: Vec<Tile<'a>> = (0..columns)
+            .map(|c| Tile {
+                band,
+                first_row,
+                first_column: c * TILE,
+                rows: Vec::with_capacity(rows.len()),
+            })
+            .collect();
+        for (pixels, aovs) in rows {
+            let mut aov_segments = aovs.map(|aovs| aovs.chunks_mut(TILE));
+            for (tile, segment) in band_tiles.iter_mut().zip(pixels.chunks_mut(TILE)) {
+                let aov_segment = aov_segments.as_mut().and_then(Iterator::next);
+                tile.rows.push((segment, aov_segment));
+            }
+        }
+        tiles.extend(band_tiles);
+    }
+    (tiles, band_rows)
 }
 
 /// Samples the pixels of image row `y` from window column `first_column` on (`pixels`, and
@@ -198,9 +225,10 @@ mod tests {
         }
     }
 
-    /// A cancelled render stops within a band, between tiles, and reports no row of the band it
-    /// left: on one thread, cancelled at its third question (asked at the first band's start,
-    /// then before each tile), the first band of a four-tile-wide image is left after one tile.
+    /// A cancelled render stops between tiles and reports no row of a band it left unfinished:
+    /// on one thread, where each tile asks once, cancelled at the third question the first band of
+    /// a four-tile-wide image is left after two tiles; at the sixth, the first band is finished
+    /// and reported, the second left after one tile.
     #[test]
     fn a_cancelled_render_stops_between_tiles() {
         let scene = white_on_black(vec![Sphere {
@@ -230,7 +258,6 @@ mod tests {
                 matches!(result, Err(RenderError::Cancelled)),
                 "after {after}"
             );
-            // At the sixth question the first band (five questions) is done and reported.
             assert_eq!(progress.rows.load(Ordering::Relaxed), rows, "after {after}");
         }
     }
