@@ -33,9 +33,11 @@ type TileRow<'a> = (&'a mut [Vec3], Option<&'a mut [AovSample]>);
 struct Tile<'a> {
     /// The band the tile belongs to, in the order bands are taken up.
     band: usize,
-    /// The window's row and column of the tile's top-left pixel.
+    /// The window's row of the tile's top row.
     first_row: usize,
+    /// The window's column of the tile's left column.
     first_column: usize,
+    /// The tile's part of each row of its band, top to bottom.
     rows: Vec<TileRow<'a>>,
 }
 
