@@ -218,19 +218,34 @@ impl Accel {
         let mut best_t = t_max;
         let mut best = None;
         self.closest_level_impl::<AVX2>(g, 0, 0, ray, from, &mut best_t, &mut best);
-        for i in 0..self.planes {
-            let prim = PrimRef::world(LocalPrim::Plane(i));
-            if let Some(t) = g.intersect_plane(i, ray, best_t, from == Some(prim)) {
-                best_t = t;
-                best = Some(prim);
-            }
-        }
+        self.closest_plane(g, ray, from, &mut best_t, &mut best);
         best.map(|p| (best_t, p))
     }
 
-    /// Whether anything blocks the ray in (0, `t_max`): the any-hit query for shadow rays.
+    /// Lowers `best_t` to the nearest hit of `ray` with the world's planes, skipping `from`
+    /// (the planes come after the shapes in every closest-hit query).
     #[inline(always)]
-    pub fn occluded(&self, g: &Geometry, ray: &Ray, t_max: f64, from: Option<PrimRef>) -> bool {
+    fn closest_plane(
+        &self,
+        g: &Geometry,
+        ray: &Ray,
+        from: Option<PrimRef>,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) {
+        for i in 0..self.planes {
+            let prim = PrimRef::world(LocalPrim::Plane(i));
+            if let Some(t) = g.intersect_plane(i, ray, *best_t, from == Some(prim)) {
+                *best_t = t;
+                *best = Some(prim);
+            }
+        }
+    }
+
+    /// Whether one of the world's planes other than `from` blocks `ray` in (0, `t_max`) (tested
+    /// first in every any-hit query).
+    #[inline(always)]
+    fn plane_blocks(&self, g: &Geometry, ray: &Ray, t_max: f64, from: Option<PrimRef>) -> bool {
         for i in 0..self.planes {
             let prim = PrimRef::world(LocalPrim::Plane(i));
             if g.intersect_plane(i, ray, t_max, from == Some(prim))
@@ -238,6 +253,15 @@ impl Accel {
             {
                 return true;
             }
+        }
+        false
+    }
+
+    /// Whether anything blocks the ray in (0, `t_max`): the any-hit query for shadow rays.
+    #[inline(always)]
+    pub fn occluded(&self, g: &Geometry, ray: &Ray, t_max: f64, from: Option<PrimRef>) -> bool {
+        if self.plane_blocks(g, ray, t_max, from) {
+            return true;
         }
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {

@@ -9,11 +9,11 @@
 //! shape's padded box, and `p − e = t·d` has the direction `d` looked up, so the shape is listed
 //! in its cell.
 
-use super::{Candidate, Cube, Shape, relative_box};
+use super::{Candidate, Cube, Shape, finite_in_f32, relative_box};
 use crate::accel::Accel;
 use crate::geometry::Geometry;
 use crate::math::Ray;
-use crate::shape::{LocalPrim, PrimRef};
+use crate::shape::PrimRef;
 use glam::DVec3;
 
 /// The eye buffer's cube: 128² cells a face, about 0.7° each, so most cells of a view of a few
@@ -91,9 +91,7 @@ impl Accel {
         eye: &EyeBuffer,
         ray: &Ray,
     ) -> Option<(f64, PrimRef)> {
-        // The BVH's answer for a ray beyond f32's range is "nothing": keep it.
-        let finite_in_f32 = ray.origin.as_vec3a().is_finite() && ray.dir.as_vec3a().is_finite();
-        let Some(seen) = eye.seen(ray).filter(|_| finite_in_f32) else {
+        let Some(seen) = eye.seen(ray).filter(|_| finite_in_f32(ray)) else {
             return self.closest_impl::<false>(g, ray, f64::INFINITY, None);
         };
         let mut best_t = f64::INFINITY;
@@ -111,12 +109,7 @@ impl Accel {
             }
         }
         // The planes after the shapes, as `Accel::closest` tests them.
-        for i in 0..self.planes {
-            if let Some(t) = g.intersect_plane(i, ray, best_t, false) {
-                best_t = t;
-                best = Some(PrimRef::world(LocalPrim::Plane(i)));
-            }
-        }
+        self.closest_plane(g, ray, None, &mut best_t, &mut best);
         best.map(|p| (best_t, p))
     }
 }

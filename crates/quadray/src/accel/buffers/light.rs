@@ -6,11 +6,11 @@
 //! lies on the segment from `o` to `l`, within `reach` of `p`. `q − l = (1 − s)·(o − l)` points the
 //! way the looked-up direction `o − l` does, so the shape is listed in its cell.
 
-use super::{Candidate, Cube, Shape, relative_box};
+use super::{Candidate, Cube, Shape, finite_in_f32, relative_box};
 use crate::accel::Accel;
 use crate::geometry::Geometry;
 use crate::math::Ray;
-use crate::shape::{LocalPrim, PrimRef};
+use crate::shape::PrimRef;
 use glam::DVec3;
 
 /// The light buffers' cube: 32² cells a face, about 3° each (64² measured no faster on
@@ -100,18 +100,11 @@ impl Accel {
         t_max: f64,
         from: Option<PrimRef>,
     ) -> bool {
-        // The BVH's answer for a ray beyond f32's range is "nothing": keep it.
-        let finite_in_f32 = ray.origin.as_vec3a().is_finite() && ray.dir.as_vec3a().is_finite();
-        let Some(candidates) = buffer.candidates(ray, t_max).filter(|_| finite_in_f32) else {
+        let Some(candidates) = buffer.candidates(ray, t_max).filter(|_| finite_in_f32(ray)) else {
             return self.occluded(g, ray, t_max, from);
         };
-        for i in 0..self.planes {
-            let prim = PrimRef::world(LocalPrim::Plane(i));
-            if g.intersect_plane(i, ray, t_max, from == Some(prim))
-                .is_some()
-            {
-                return true;
-            }
+        if self.plane_blocks(g, ray, t_max, from) {
+            return true;
         }
         // No box test before the shapes' own: the BVH's robust slab test would cost about as
         // much as it saves (measured), and obvhs' single-box test is not widened for rounding.

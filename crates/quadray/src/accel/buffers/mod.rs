@@ -174,6 +174,13 @@ impl Cube {
     }
 }
 
+/// Whether `ray` is finite once rounded to f32, as the BVH traverses it: the BVH's answer for a
+/// ray beyond f32's range is "nothing", so the buffers leave such rays to it.
+#[inline(always)]
+fn finite_in_f32(ray: &crate::math::Ray) -> bool {
+    ray.origin.as_vec3a().is_finite() && ray.dir.as_vec3a().is_finite()
+}
+
 /// The relative box of `candidate` as listed from `point`: its padded box grown by `reach`, minus
 /// the point.
 fn relative_box(candidate: &Candidate, point: DVec3, reach: f64) -> (DVec3, DVec3) {
