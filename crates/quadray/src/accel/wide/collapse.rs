@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 pub(in crate::accel) const LEAF_WEIGHT: u32 = 4;
 
 /// A leaf reference's payload: its first block, shifted past the low bits that hold its count.
-const LEAF_COUNT_BITS: u32 = 3;
+const LEAF_COUNT_BITS: u32 = 4;
 
 /// Roughly how many subtrees the collapse is split into (enough for two cores to share evenly).
 const TASKS: u32 = 64;
@@ -30,8 +30,8 @@ const MIN_TASK_WEIGHT: u32 = 4096;
 /// The reference of a leaf of `count` blocks from block `first`.
 fn leaf_reference(first: usize, count: usize) -> u32 {
     assert!(
-        count < 1 << LEAF_COUNT_BITS && first + count <= 1 << 28,
-        "a BVH leaf holds at most 7 blocks, and a BVH at most 2^28 blocks"
+        count < 1 << LEAF_COUNT_BITS && first + count <= 1 << 27,
+        "a BVH leaf holds at most 15 blocks, and a BVH at most 2^27 blocks"
     );
     LEAF | ((first as u32) << LEAF_COUNT_BITS) | count as u32
 }
@@ -216,7 +216,7 @@ impl Collapse<'_> {
 
 /// Collapses a BVH2 (built down to single primitives) into `N`-wide nodes and leaf blocks: every subtree
 /// whose primitives weigh at most `leaf_weight` together becomes one leaf, whose blocks `pack`
-/// appends from the subtree's primitives (at most 7; [`leaf_blocks`] gives them back from the
+/// appends from the subtree's primitives (at most 15; [`leaf_blocks`] gives them back from the
 /// reference), and each wide node takes the `N` largest subtrees below a BVH2 node (Embree's
 /// BVH4 and BVH8 collapse). A primitive that weighs `leaf_weight` is a leaf of its own.
 pub(in crate::accel) fn collapse<const N: usize, B: Send>(
