@@ -24,6 +24,9 @@ pub(crate) struct SampleContext<'a> {
     pub selection: AovSelection,
     camera: CameraFrame,
     forward: DVec3,
+    /// Whether blocks of pixels may be found to see nothing
+    /// ([`Scene::camera_rays_may_meet_nothing`] for this context's camera).
+    finds_empty_runs: bool,
 }
 
 impl<'a> SampleContext<'a> {
@@ -34,12 +37,14 @@ impl<'a> SampleContext<'a> {
     ) -> Result<SampleContext<'a>, RenderError> {
         let aspect = settings.width as f64 / settings.height as f64;
         let camera = settings.camera.as_ref().unwrap_or(scene.camera());
+        let frame = camera.prepare(aspect)?;
         Ok(SampleContext {
             scene,
             settings,
             window: settings.window(),
             selection,
-            camera: camera.prepare(aspect)?,
+            finds_empty_runs: scene.camera_rays_may_meet_nothing(frame.origin()),
+            camera: frame,
             forward: (camera.to - camera.from).normalize(),
         })
     }
@@ -82,6 +87,23 @@ impl<'a> SampleContext<'a> {
     pub fn camera_ray(&self, (x, y): (u32, u32), (dx, dy): (f64, f64)) -> Ray {
         let (w, h) = (self.settings.width as f64, self.settings.height as f64);
         self.camera.ray((x as f64 + dx) / w, (y as f64 + dy) / h)
+    }
+
+    /// Whether every camera ray through the `width` × `height` pixels from `(x, y)` meets
+    /// nothing ([`Scene::camera_rays_meet_nothing`] for the rays through the block's corners,
+    /// whose cone holds every sample's ray: a sample's offset lies in [0, 1)² of its pixel).
+    pub(crate) fn meets_nothing(&self, (x, y): (u32, u32), (width, height): (u32, u32)) -> bool {
+        if !self.finds_empty_runs {
+            return false;
+        }
+        let (last_x, last_y) = (x + width - 1, y + height - 1);
+        let corners = [
+            self.camera_ray((x, y), (0.0, 0.0)),
+            self.camera_ray((last_x, y), (1.0, 0.0)),
+            self.camera_ray((x, last_y), (0.0, 1.0)),
+            self.camera_ray((last_x, last_y), (1.0, 1.0)),
+        ];
+        self.scene.camera_rays_meet_nothing(&corners)
     }
 
     /// [`SampleContext::trace`] of a camera ray made by [`SampleContext::camera_ray`].

@@ -67,9 +67,15 @@ pub(super) fn render_uniform(
             }
             let mut counts = RayCounts::default();
             let y0 = window.y0 + tile.first_row as u32;
-            for (y, (pixels, aovs)) in (y0..).zip(tile.rows) {
-                let segment = (tile.first_column, pixels, aovs);
-                render_segment(context, y, segment, sampler, cone, &mut counts);
+            if meets_nothing(context, &tile) {
+                for (pixels, _) in tile.rows {
+                    fill_background(context, pixels, &mut counts);
+                }
+            } else {
+                for (y, (pixels, aovs)) in (y0..).zip(tile.rows) {
+                    let segment = (tile.first_column, pixels, aovs);
+                    render_segment(context, y, segment, sampler, cone, &mut counts);
+                }
             }
             *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
             if tiles_left[tile.band].fetch_sub(1, Ordering::AcqRel) == 1 {
@@ -142,6 +148,29 @@ fn cut_into_tiles<'a>(
 /// Samples the pixels of image row `y` from window column `first_column` on (`pixels`, and
 /// their passes `aovs` when selected), counting the rays into `counts`. Pixels are sampled by
 /// their position in the full image, so a window's pixels equal the whole render's.
+/// Whether every camera ray of `tile` provably meets nothing ([`SampleContext::meets_nothing`]);
+/// `false` for a tile with passes, which are filled from each sample's hit.
+fn meets_nothing(context: &SampleContext<'_>, tile: &Tile<'_>) -> bool {
+    let Some((pixels, None)) = tile.rows.first() else {
+        return false;
+    };
+    let x = context.window.x0 + tile.first_column as u32;
+    let y = context.window.y0 + tile.first_row as u32;
+    context.meets_nothing((x, y), (pixels.len() as u32, tile.rows.len() as u32))
+}
+
+/// Fills `pixels` with what the pixel loop of [`render_segment`] leaves where every sample sees
+/// the background (its sum and scale, done once), and counts their camera rays.
+fn fill_background(context: &SampleContext<'_>, pixels: &mut [Vec3], counts: &mut RayCounts) {
+    let spp = context.settings.spp;
+    let mut sum = Vec3::ZERO;
+    for _ in 0..spp {
+        sum += context.scene.background();
+    }
+    pixels.fill(sum * (1.0 / spp as f32));
+    counts.camera += pixels.len() as u64 * u64::from(spp);
+}
+
 fn render_segment(
     context: &SampleContext<'_>,
     y: u32,
@@ -199,13 +228,19 @@ fn render_segment(
 #[cfg(test)]
 mod tests {
     use crate::aov::AovSelection;
+    use crate::camera::{Camera, Projection};
+    use crate::geometry::Geometry;
+    use crate::material::Material;
+    use crate::quadric::{ClipBox, Quadric, QuadricKind, QuadricSurface};
     use crate::render::adaptive::tests::white_on_black;
     use crate::render::context::SampleContext;
     use crate::render::{
         NoProgress, PixelWindow, Progress, RenderError, RenderSettings, render_with_aovs,
     };
     use crate::sampler::{PixelSampler, SampleKey, pixel_pattern};
-    use crate::{RayCounts, Sphere};
+    use crate::scene::{Scene, SceneDescription};
+    use crate::texture::Texture;
+    use crate::{RayCounts, Sphere, Transform};
     use glam::{DVec3, Vec3};
     use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -264,49 +299,26 @@ mod tests {
         }
     }
 
-    /// Every pixel of a window whose sides are not multiples of a tile or a band holds the mean
-    /// of its own samples traced one by one, and every sample is traced once: tiles and bands
-    /// cover the window exactly.
-    #[test]
-    fn tiles_cover_every_pixel_once() {
-        let scene = white_on_black(vec![
-            Sphere {
-                center: DVec3::new(0.3, -0.2, 0.0),
-                radius: 0.9,
-                material: 0,
-            },
-            Sphere {
-                center: DVec3::new(-1.2, 1.1, 0.0),
-                radius: 0.4,
-                material: 0,
-            },
-        ]);
-        let spp = 3;
-        // 45 columns: a whole tile of 32 and a partial one; 19 rows: two whole bands and a third.
-        let window = PixelWindow {
-            x0: 5,
-            y0: 3,
-            x1: 5 + 45,
-            y1: 3 + 19,
-        };
-        let settings = RenderSettings {
-            width: 64,
-            height: 48,
-            spp,
-            crop: Some(window),
-            ..RenderSettings::default()
-        };
+    /// Every pixel of `window` holds the mean of its own samples traced one by one, and every
+    /// sample is counted once; returns how many pixels are neither of `flat`'s two colours.
+    fn assert_pixels_are_traced(
+        scene: &Scene,
+        settings: &RenderSettings,
+        window: PixelWindow,
+        flat: [Vec3; 2],
+    ) -> u32 {
+        let spp = settings.spp;
         let (rendered, _) =
-            render_with_aovs(&scene, &settings, AovSelection::NONE, &NoProgress).unwrap();
+            render_with_aovs(scene, settings, AovSelection::NONE, &NoProgress).unwrap();
         assert_eq!(
             rendered.counts.camera,
             (window.width() * window.height() * spp) as u64
         );
-        let context = SampleContext::new(&scene, &settings, AovSelection::NONE).unwrap();
+        let context = SampleContext::new(scene, settings, AovSelection::NONE).unwrap();
         let cone = context.sample_cone(spp);
         let mut sampler = PixelSampler::new(spp);
         let mut counts = RayCounts::default();
-        let mut covered = 0;
+        let mut varied = 0;
         for y in window.y0..window.y1 {
             for x in window.x0..window.x1 {
                 let pattern = pixel_pattern(x, y, settings.seed);
@@ -325,10 +337,118 @@ mod tests {
                 let expected = sum * (1.0 / spp as f32);
                 let got = rendered.film.get(x - window.x0, y - window.y0);
                 assert_eq!(got, expected, "pixel ({x}, {y})");
-                covered += (got != Vec3::ZERO && got != Vec3::ONE) as u32;
+                varied += !flat.contains(&got) as u32;
             }
         }
+        varied
+    }
+
+    /// Every pixel of a window whose sides are not multiples of a tile or a band holds the mean
+    /// of its own samples traced one by one, and every sample is traced once: tiles and bands
+    /// cover the window exactly.
+    #[test]
+    fn tiles_cover_every_pixel_once() {
+        let scene = white_on_black(vec![
+            Sphere {
+                center: DVec3::new(0.3, -0.2, 0.0),
+                radius: 0.9,
+                material: 0,
+            },
+            Sphere {
+                center: DVec3::new(-1.2, 1.1, 0.0),
+                radius: 0.4,
+                material: 0,
+            },
+        ]);
+        // 45 columns: a whole tile of 32 and a partial one; 19 rows: two whole bands and a third.
+        let window = PixelWindow {
+            x0: 5,
+            y0: 3,
+            x1: 5 + 45,
+            y1: 3 + 19,
+        };
+        let settings = RenderSettings {
+            width: 64,
+            height: 48,
+            spp: 3,
+            crop: Some(window),
+            ..RenderSettings::default()
+        };
+        let varied = assert_pixels_are_traced(&scene, &settings, window, [Vec3::ZERO, Vec3::ONE]);
         // The spheres' edges cross the window: pixels differ, so a misplaced one would show.
-        assert!(covered > 10, "{covered} edge pixels");
+        assert!(varied > 10, "{varied} edge pixels");
+    }
+
+    /// Tiles whose rays provably meet nothing (a pinhole camera among a few shapes) are filled
+    /// with the background without tracing, and hold exactly what tracing each sample gives; the
+    /// scene has such tiles and others.
+    #[test]
+    fn empty_tiles_hold_what_tracing_gives() {
+        let mut geometry = Geometry {
+            spheres: vec![
+                Sphere {
+                    center: DVec3::new(0.5, 0.2, 0.0),
+                    radius: 0.7,
+                    material: 0,
+                },
+                Sphere {
+                    center: DVec3::new(-1.6, -0.9, 0.5),
+                    radius: 0.3,
+                    material: 0,
+                },
+            ],
+            ..Geometry::default()
+        };
+        let t = Transform::from_srt(DVec3::splat(0.5), DVec3::ZERO, DVec3::new(-1.0, 1.0, 0.0));
+        let surface = QuadricSurface::Canonical {
+            kind: QuadricKind::Hyperboloid1,
+            a: 1.0,
+            b: 1.0,
+            c: 1.0,
+        };
+        geometry
+            .quadrics
+            .push(Quadric::new(surface, ClipBox::cube(1.0), t.unwrap(), 0).unwrap());
+        let background = Vec3::new(0.2, 0.3, 0.4);
+        let scene = Scene::new(SceneDescription {
+            camera: Camera {
+                from: DVec3::new(0.3, -0.4, 8.0),
+                to: DVec3::ZERO,
+                up: DVec3::Y,
+                projection: Projection::Perspective { vfov_deg: 40.0 },
+            },
+            background,
+            environment: None,
+            materials: vec![Material {
+                texture: Texture::Constant(Vec3::ONE),
+                ambient: 1.0,
+                ..Material::default()
+            }],
+            lights: vec![],
+            geometry,
+        })
+        .unwrap();
+        let window = PixelWindow {
+            x0: 0,
+            y0: 0,
+            x1: 96,
+            y1: 64,
+        };
+        let settings = RenderSettings {
+            width: 96,
+            height: 64,
+            spp: 3,
+            ..RenderSettings::default()
+        };
+        let varied = assert_pixels_are_traced(&scene, &settings, window, [background, Vec3::ONE]);
+        assert!(varied > 10, "{varied} edge pixels");
+        let context = SampleContext::new(&scene, &settings, AovSelection::NONE).unwrap();
+        // The render's tiles: 3 × 8 of 32 × 8 pixels.
+        let tiles: Vec<bool> = (0..8)
+            .flat_map(|band| (0..3).map(move |k| (k * 32, band * 8)))
+            .map(|(x, y)| context.meets_nothing((x, y), (32, 8)))
+            .collect();
+        let empty = tiles.iter().filter(|&&e| e).count();
+        assert!((3..=21).contains(&empty), "{empty} of {}", tiles.len());
     }
 }

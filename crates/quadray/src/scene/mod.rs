@@ -11,7 +11,7 @@ use crate::math::{Ray, offset_origin};
 use crate::mesh::Mesh;
 use crate::shape::{PrimRef, SurfaceGeometry, SurfaceHit};
 use crate::texture::{Texture, TextureExtent};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use validate::{validate_levels, validate_material};
 
 pub use crate::math::MAX_COORDINATE;
@@ -93,6 +93,8 @@ pub struct Scene {
     light_buffers: Vec<Option<LightBuffer>>,
     /// The pinhole camera's eye buffer, where the scene has one ([`Accel::eye_buffer`]).
     eye_buffer: Option<EyeBuffer>,
+    /// Whether camera rays ask the eye buffer one by one ([`Accel::eye_answers_rays`]).
+    eye_answers_rays: bool,
     /// Whether any mesh is single-sided: only then do closest hits check for back faces.
     single_sided: bool,
     /// Whether any material has a texture that is filtered over ray cones: only then do rays
@@ -230,6 +232,7 @@ impl Scene {
             Projection::Perspective { .. } => accel.eye_buffer(&d.geometry, d.camera.from),
             Projection::Orthographic { .. } => None,
         };
+        let eye_answers_rays = accel.eye_answers_rays();
         Ok(Scene {
             camera: d.camera,
             background: d.background,
@@ -239,6 +242,7 @@ impl Scene {
             geometry: d.geometry,
             accel,
             light_buffers,
+            eye_answers_rays,
             eye_buffer,
             single_sided,
             filters_textures,
@@ -434,12 +438,29 @@ impl Scene {
         Some(self.surface_hit(ray, (t, prim), path, material))
     }
 
+    /// Whether [`Scene::camera_rays_meet_nothing`] can say yes for camera rays from `eye`: the
+    /// eye buffer was made for that eye, and the world has no planes.
+    pub(crate) fn camera_rays_may_meet_nothing(&self, eye: DVec3) -> bool {
+        (self.eye_buffer.as_ref()).is_some_and(|b| b.eye() == eye)
+            && self.geometry.planes.is_empty()
+    }
+
+    /// Whether every camera ray whose direction lies in the cone of the four `corners` meets
+    /// nothing: a pinhole camera's rays from the eye the scene's eye buffer was made for, through
+    /// directions no shape is seen through, in a world without planes. `false` when it cannot
+    /// tell.
+    pub(crate) fn camera_rays_meet_nothing(&self, corners: &[Ray; 4]) -> bool {
+        (self.eye_buffer.as_ref())
+            .is_some_and(|eye| (self.accel).eye_sees_nothing(&self.geometry, eye, corners))
+    }
+
     /// Phase one: the nearest hit's distance and primitive, through the eye buffer for rays from
     /// the camera's eye.
     #[inline(always)]
     fn closest(&self, ray: &Ray, from: Option<PrimRef>) -> Option<(f64, PrimRef)> {
-        if let Some(eye) = &self.eye_buffer
+        if self.eye_answers_rays
             && from.is_none()
+            && let Some(eye) = &self.eye_buffer
         {
             return (self.accel).closest_from_eye(&self.geometry, eye, ray);
         }

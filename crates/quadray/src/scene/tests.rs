@@ -175,6 +175,11 @@ fn shadow_rays_pass_glass_attenuated_and_stop_at_opaque_surfaces() {
 /// by lights around and among the shapes (one inside a sphere, whose box then fills every cell),
 /// seen by a pinhole camera from `eye`.
 fn buffered_world(eye: DVec3) -> Scene {
+    buffered_world_with(eye, true)
+}
+
+/// [`buffered_world`], with its plane or without.
+fn buffered_world_with(eye: DVec3, plane: bool) -> Scene {
     use crate::plane::Plane;
     use crate::quadric::{ClipBox, Quadric, QuadricKind, QuadricSurface};
     let mut next = uniform(0x1234_5678_9abc_def1);
@@ -202,11 +207,13 @@ fn buffered_world(eye: DVec3) -> Scene {
     geometry.prototypes.push(Prototype::mesh(square(false)));
     let placed = DAffine3::from_translation(DVec3::new(3.0, -2.0, 4.0));
     (geometry.instances).push(Instance::new(0, Transform::new(placed).unwrap()));
-    geometry.planes.push(Plane {
-        point: DVec3::new(0.0, 0.0, -4.5),
-        normal: DVec3::Z,
-        material: 0,
-    });
+    if plane {
+        geometry.planes.push(Plane {
+            point: DVec3::new(0.0, 0.0, -4.5),
+            normal: DVec3::Z,
+            material: 0,
+        });
+    }
     let inside = geometry.spheres[0].center;
     let lights: Vec<Light> = [
         DVec3::new(5.0, -6.0, 12.0),
@@ -232,6 +239,50 @@ fn buffered_world(eye: DVec3) -> Scene {
         geometry,
     })
     .unwrap()
+}
+
+/// Cones of camera rays that the eye buffer says meet nothing meet nothing in the BVH either:
+/// rays through random points of small random quadrilaterals of directions from the eye, in
+/// [`buffered_world`] without its plane; with the plane, no cone is said to meet nothing.
+#[test]
+fn cones_said_to_meet_nothing_meet_nothing() {
+    let mut next = uniform(0x5eed_c0de_0ff1_ce00);
+    for eye in [DVec3::new(0.0, 0.0, 10.0), DVec3::new(-14.0, 9.0, 3.0)] {
+        let scene = buffered_world_with(eye, false);
+        let with_plane = buffered_world_with(eye, true);
+        let (mut empty, mut cones) = (0, 0);
+        for _ in 0..4000 {
+            let centre = DVec3::new(next(), next(), next()).normalize_or(DVec3::Z);
+            let (e1, e2) = crate::math::orthonormal_basis(centre);
+            let size = 0.2 * next().abs();
+            let corner = |a: f64, b: f64| centre + (e1 * a + e2 * b) * size;
+            let dirs = [
+                corner(-1.0, -1.0),
+                corner(1.0, -1.0),
+                corner(-1.0, 1.0),
+                corner(1.0, 1.0),
+            ];
+            let corners = dirs.map(|d| Ray::new(eye, d));
+            cones += 1;
+            assert!(!with_plane.camera_rays_meet_nothing(&corners));
+            if !scene.camera_rays_meet_nothing(&corners) {
+                continue;
+            }
+            empty += 1;
+            for _ in 0..16 {
+                let (a, b) = (next() * 2.0, next() * 2.0);
+                let ray = Ray::new(eye, corner(a, b));
+                let hit = scene
+                    .accel
+                    .closest(&scene.geometry, &ray, f64::INFINITY, None);
+                assert_eq!(hit, None, "eye {eye}, ray {ray:?}");
+            }
+        }
+        assert!(
+            empty * 10 > cones && empty * 10 < cones * 9,
+            "{empty} of {cones}"
+        );
+    }
 }
 
 /// A generator of numbers in [−0.5, 0.5).

@@ -74,12 +74,75 @@ impl EyeBuffer {
     }
 }
 
+impl EyeBuffer {
+    /// The eye the buffer was made for.
+    pub(crate) fn eye(&self) -> DVec3 {
+        self.eye
+    }
+
+    /// Whether no shape can be met by any ray from the eye whose direction lies in the cone of
+    /// the four `corners` (rays that all start at the eye): their cells, with a margin of one
+    /// cell for the lookup's rounding, lie on one face and away from its edges (where a rounded
+    /// direction could be looked up on the next face), and no shape is seen through any of them.
+    ///
+    /// Why the cone's directions fall in those cells: the directions whose largest component is
+    /// one axis, on one side, form a convex cone, so every direction of the corners' cone looks
+    /// up the corners' face; and there the cell coordinates are central projections of the
+    /// direction, which map the cone onto the quadrilateral of the corners' projections.
+    fn sees_nothing_within(&self, corners: &[Ray; 4]) -> bool {
+        let n = CUBE.n;
+        let (mut face, mut u, mut v) = (None, (n, 0), (n, 0));
+        for ray in corners {
+            if ray.origin != self.eye {
+                return false;
+            }
+            let Some((f, cu, cv)) = CUBE.face_cell(ray.dir) else {
+                return false;
+            };
+            if *face.get_or_insert(f) != f {
+                return false;
+            }
+            (u, v) = ((u.0.min(cu), u.1.max(cu)), (v.0.min(cv), v.1.max(cv)));
+        }
+        let (Some(face), true) = (face, u.0 >= 2 && v.0 >= 2 && u.1 + 2 < n && v.1 + 2 < n) else {
+            return false;
+        };
+        (u.0 - 1..=u.1 + 1).all(|cu| {
+            let row = (face * n + cu) * n;
+            self.cells[row + v.0 - 1..=row + v.1 + 1]
+                .iter()
+                .all(|&c| c == NO_SHAPE)
+        })
+    }
+}
+
 impl Accel {
-    /// The eye buffer of a pinhole camera at `eye`, in a world that has buffers
-    /// ([`Accel::buffered_shapes`]).
+    /// Whether every camera ray in the cone of the four `corners` (rays from the eye of `eye`)
+    /// meets nothing, as [`Accel::closest_from_eye`] would answer each: no shape is seen through
+    /// their cells, and the world has no planes.
+    pub(crate) fn eye_sees_nothing(
+        &self,
+        g: &Geometry,
+        eye: &EyeBuffer,
+        corners: &[Ray; 4],
+    ) -> bool {
+        g.planes.is_empty() && corners.iter().all(finite_in_f32) && eye.sees_nothing_within(corners)
+    }
+
+    /// The eye buffer of a pinhole camera at `eye`, in a world of few shapes
+    /// ([`Accel::buffered_shapes`]) on either path: camera rays ask it one by one only on the
+    /// baseline path ([`Accel::eye_answers_rays`]), runs of pixels on both.
     pub(crate) fn eye_buffer(&self, g: &Geometry, eye: DVec3) -> Option<EyeBuffer> {
-        let shapes = self.buffered_shapes(g).filter(|_| eye.is_finite())?;
+        let shapes = self.buffered_shapes(g, true).filter(|_| eye.is_finite())?;
         Some(EyeBuffer::new(eye, self.reach(eye), shapes))
+    }
+
+    /// Whether camera rays ask the eye buffer one by one ([`Accel::closest_from_eye`]): on the
+    /// baseline path. The AVX2 path's traversal answers a ray about as fast as the lookup (an
+    /// eye buffer answering its rays that meet nothing measured the bunny's frame 3% faster and
+    /// the kitchen's 4% slower).
+    pub(crate) fn eye_answers_rays(&self) -> bool {
+        !self.avx2
     }
 
     /// [`Accel::closest`] for a ray spawned on nothing: through `eye` when the ray starts there

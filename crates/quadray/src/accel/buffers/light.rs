@@ -84,7 +84,9 @@ impl Accel {
     /// The light buffer of a light at `light`, in a world that has buffers
     /// ([`Accel::buffered_shapes`]).
     pub(crate) fn light_buffer(&self, g: &Geometry, light: DVec3) -> Option<LightBuffer> {
-        let shapes = self.buffered_shapes(g).filter(|_| light.is_finite())?;
+        let shapes = self
+            .buffered_shapes(g, false)
+            .filter(|_| light.is_finite())?;
         Some(LightBuffer::new(light, self.reach(light), &shapes))
     }
 

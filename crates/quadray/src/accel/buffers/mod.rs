@@ -103,6 +103,14 @@ impl Cube {
         Some((face * n + cell(u)) * n + cell(v))
     }
 
+    /// The face and the two cell coordinates of direction `d` (as [`Cube::cell`] finds them), or
+    /// `None` for a zero, subnormal or non-finite direction.
+    fn face_cell(self, d: DVec3) -> Option<(usize, usize, usize)> {
+        let cell = self.cell(d)?;
+        let n = self.n;
+        Some((cell / (n * n), cell / n % n, cell % n))
+    }
+
     /// Calls `f` with every cell through which a point of the box [`lo`, `hi`] (relative to the
     /// cube's centre) can be seen from the centre.
     fn for_cells_seeing(self, lo: DVec3, hi: DVec3, mut f: impl FnMut(usize)) {
@@ -193,12 +201,12 @@ fn relative_box(candidate: &Candidate, point: DVec3, reach: f64) -> (DVec3, DVec
 
 impl Accel {
     /// The world's shapes with their padded boxes (its spheres and quadrics one by one, its other
-    /// top items whole), for a world of at most [`MAX_SHAPES`] analytic shapes and no top BVH on
-    /// the baseline path; `None` for any other.
-    fn buffered_shapes(&self, g: &Geometry) -> Option<Vec<Candidate>> {
+    /// top items whole), for a world of at most [`MAX_SHAPES`] analytic shapes and no top BVH,
+    /// on the baseline path unless `any_path`; `None` for any other.
+    fn buffered_shapes(&self, g: &Geometry, any_path: bool) -> Option<Vec<Candidate>> {
         let world = &self.levels[0];
         let level = g.level(0);
-        if self.avx2
+        if (self.avx2 && !any_path)
             || world.top.is_some()
             || level.spheres.len() + level.quadrics.len() > MAX_SHAPES
         {

@@ -464,8 +464,20 @@ fn sample_sequence(
     (count, footprint_spp): (u32, u32),
     counts: &mut RayCounts,
 ) {
+    let first = estimate.count();
+    // Asked once, at a pixel's first samples: later rounds come back to few of the pixels that
+    // see nothing.
+    if first == 0 && count > 0 && aov.is_none() && context.meets_nothing((x, y), (1, 1)) {
+        // Every sample sees the background, which is what tracing them would add.
+        let background = context.scene.background();
+        for _ in first..count {
+            estimate.add(background);
+        }
+        counts.camera += u64::from(count - first);
+        return;
+    }
     let cone = context.sample_cone(footprint_spp);
-    for index in estimate.count()..count {
+    for index in first..count {
         let first_hit = match aov.as_deref_mut() {
             Some(aov) if index == 0 => Some(aov),
             _ => None,
