@@ -231,6 +231,7 @@ mod tests {
     use crate::camera::{Camera, Projection};
     use crate::geometry::Geometry;
     use crate::material::Material;
+    use crate::plane::Plane;
     use crate::quadric::{ClipBox, Quadric, QuadricKind, QuadricSurface};
     use crate::render::adaptive::tests::white_on_black;
     use crate::render::context::SampleContext;
@@ -379,9 +380,9 @@ mod tests {
         assert!(varied > 10, "{varied} edge pixels");
     }
 
-    /// Tiles whose rays provably meet nothing (a pinhole camera among a few shapes) are filled
-    /// with the background without tracing, and hold exactly what tracing each sample gives; the
-    /// scene has such tiles and others.
+    /// Tiles whose rays provably meet nothing (a pinhole camera among a few shapes above a
+    /// floor) are filled with the background without tracing, and hold exactly what tracing each
+    /// sample gives; the scene has such tiles and others.
     #[test]
     fn empty_tiles_hold_what_tracing_gives() {
         let mut geometry = Geometry {
@@ -409,6 +410,12 @@ mod tests {
         geometry
             .quadrics
             .push(Quadric::new(surface, ClipBox::cube(1.0), t.unwrap(), 0).unwrap());
+        // A floor below the shapes: the tiles below its horizon see it.
+        geometry.planes.push(Plane {
+            point: DVec3::new(0.0, -1.5, 0.0),
+            normal: DVec3::Y,
+            material: 0,
+        });
         let background = Vec3::new(0.2, 0.3, 0.4);
         let scene = Scene::new(SceneDescription {
             camera: Camera {

@@ -439,16 +439,15 @@ impl Scene {
     }
 
     /// Whether [`Scene::camera_rays_meet_nothing`] can say yes for camera rays from `eye`: the
-    /// eye buffer was made for that eye, and the world has no planes.
+    /// eye buffer was made for that eye.
     pub(crate) fn camera_rays_may_meet_nothing(&self, eye: DVec3) -> bool {
         (self.eye_buffer.as_ref()).is_some_and(|b| b.eye() == eye)
-            && self.geometry.planes.is_empty()
     }
 
     /// Whether every camera ray whose direction lies in the cone of the four `corners` meets
     /// nothing: a pinhole camera's rays from the eye the scene's eye buffer was made for, through
-    /// directions no shape is seen through, in a world without planes. `false` when it cannot
-    /// tell.
+    /// directions no shape is seen through and that leave every plane behind. `false` when it
+    /// cannot tell.
     pub(crate) fn camera_rays_meet_nothing(&self, corners: &[Ray; 4]) -> bool {
         (self.eye_buffer.as_ref())
             .is_some_and(|eye| (self.accel).eye_sees_nothing(&self.geometry, eye, corners))
