@@ -181,6 +181,11 @@ impl CameraFrame {
         self.origin
     }
 
+    /// Whether the camera is orthographic (its rays parallel) rather than a pinhole.
+    pub fn is_orthographic(&self) -> bool {
+        self.orthographic
+    }
+
     /// The image position (u, v) at which `point` appears, the inverse of [`CameraFrame::ray`];
     /// `None` for a point behind a perspective camera. Positions outside [0, 1]² are off the image.
     pub fn project(&self, point: DVec3) -> Option<glam::DVec2> {

@@ -29,13 +29,13 @@ impl Plane {
         (t > 0.0 && t < t_max).then_some(t)
     }
 
-    /// Whether every ray from `eye` whose direction is a positive combination of `dirs` misses
+    /// Whether every ray from `eye` whose direction is a positive combination of the four `dirs` misses
     /// the plane ([`Plane::intersect`] with no limit): the eye lies on the plane, or every
     /// direction leaves the side the eye is on. The directions' dot products with the normal are
     /// then a positive combination of the given ones, so one sign at all of them, kept clear of 0
     /// by 10⁻⁶ of their lengths (far beyond the rounding of a direction made from the same
     /// camera), is the sign of every direction between them.
-    pub fn missed_by_cone(&self, eye: DVec3, dirs: &[DVec3]) -> bool {
+    pub(crate) fn missed_by_cone(&self, eye: DVec3, dirs: &[DVec3; 4]) -> bool {
         let side = (self.point - eye).dot(self.normal);
         if side == 0.0 {
             return true;

@@ -24,9 +24,9 @@ pub(crate) struct SampleContext<'a> {
     pub selection: AovSelection,
     camera: CameraFrame,
     forward: DVec3,
-    /// Whether blocks of pixels may be found to see nothing
-    /// ([`Scene::camera_rays_may_meet_nothing`] for this context's camera).
-    finds_empty_runs: bool,
+    /// Whether tiles of pixels may be found to see nothing: a pinhole camera at the eye of the
+    /// scene's eye buffer ([`Scene::camera_rays_may_meet_nothing`]).
+    finds_empty_tiles: bool,
 }
 
 impl<'a> SampleContext<'a> {
@@ -43,7 +43,8 @@ impl<'a> SampleContext<'a> {
             settings,
             window: settings.window(),
             selection,
-            finds_empty_runs: scene.camera_rays_may_meet_nothing(frame.origin()),
+            finds_empty_tiles: !frame.is_orthographic()
+                && scene.camera_rays_may_meet_nothing(frame.origin()),
             camera: frame,
             forward: (camera.to - camera.from).normalize(),
         })
@@ -93,7 +94,7 @@ impl<'a> SampleContext<'a> {
     /// nothing ([`Scene::camera_rays_meet_nothing`] for the rays through the block's corners,
     /// whose cone holds every sample's ray: a sample's offset lies in [0, 1)² of its pixel).
     pub(crate) fn meets_nothing(&self, (x, y): (u32, u32), (width, height): (u32, u32)) -> bool {
-        if !self.finds_empty_runs {
+        if !self.finds_empty_tiles {
             return false;
         }
         let (last_x, last_y) = (x + width - 1, y + height - 1);

@@ -145,9 +145,6 @@ fn cut_into_tiles<'a>(
     (tiles, band_rows)
 }
 
-/// Samples the pixels of image row `y` from window column `first_column` on (`pixels`, and
-/// their passes `aovs` when selected), counting the rays into `counts`. Pixels are sampled by
-/// their position in the full image, so a window's pixels equal the whole render's.
 /// Whether every camera ray of `tile` provably meets nothing ([`SampleContext::meets_nothing`]);
 /// `false` for a tile with passes, which are filled from each sample's hit.
 fn meets_nothing(context: &SampleContext<'_>, tile: &Tile<'_>) -> bool {
@@ -171,6 +168,9 @@ fn fill_background(context: &SampleContext<'_>, pixels: &mut [Vec3], counts: &mu
     counts.camera += pixels.len() as u64 * u64::from(spp);
 }
 
+/// Samples the pixels of image row `y` from window column `first_column` on (`pixels`, and
+/// their passes `aovs` when selected), counting the rays into `counts`. Pixels are sampled by
+/// their position in the full image, so a window's pixels equal the whole render's.
 fn render_segment(
     context: &SampleContext<'_>,
     y: u32,

@@ -74,9 +74,7 @@ impl EyeBuffer {
             k => Some(Some(self.shapes[k as usize])),
         }
     }
-}
 
-impl EyeBuffer {
     /// The eye the buffer was made for.
     pub(crate) fn eye(&self) -> DVec3 {
         self.eye
@@ -106,9 +104,13 @@ impl EyeBuffer {
             }
             (u, v) = ((u.0.min(cu), u.1.max(cu)), (v.0.min(cv), v.1.max(cv)));
         }
-        let (Some(face), true) = (face, u.0 >= 2 && v.0 >= 2 && u.1 + 2 < n && v.1 + 2 < n) else {
+        let Some(face) = face else {
             return false;
         };
+        // The checked cells, one beyond the corners' on each side, stay off the face's border.
+        if u.0 < 2 || v.0 < 2 || u.1 + 2 >= n || v.1 + 2 >= n {
+            return false;
+        }
         (u.0 - 1..=u.1 + 1).all(|cu| {
             let row = (face * n + cu) * n;
             self.cells[row + v.0 - 1..=row + v.1 + 1]
@@ -135,9 +137,9 @@ impl Accel {
 
     /// The eye buffer of a pinhole camera at `eye`, in a world of few shapes
     /// ([`Accel::buffered_shapes`]) on either path: camera rays ask it one by one only on the
-    /// baseline path ([`Accel::eye_answers_rays`]), runs of pixels on both.
+    /// baseline path ([`Accel::eye_answers_rays`]), tiles of pixels on both.
     pub(crate) fn eye_buffer(&self, g: &Geometry, eye: DVec3) -> Option<EyeBuffer> {
-        let shapes = self.buffered_shapes(g, true).filter(|_| eye.is_finite())?;
+        let shapes = self.buffered_shapes(g).filter(|_| eye.is_finite())?;
         Some(EyeBuffer::new(eye, self.reach(eye), shapes))
     }
 

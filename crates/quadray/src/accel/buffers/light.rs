@@ -82,11 +82,13 @@ impl LightBuffer {
 
 impl Accel {
     /// The light buffer of a light at `light`, in a world that has buffers
-    /// ([`Accel::buffered_shapes`]).
+    /// ([`Accel::buffered_shapes`]), on the baseline path (the AVX2 path is taken for worlds of
+    /// many triangles, whose shadow rays the buffer would send to the BVH anyway).
     pub(crate) fn light_buffer(&self, g: &Geometry, light: DVec3) -> Option<LightBuffer> {
-        let shapes = self
-            .buffered_shapes(g, false)
-            .filter(|_| light.is_finite())?;
+        if self.avx2 {
+            return None;
+        }
+        let shapes = self.buffered_shapes(g).filter(|_| light.is_finite())?;
         Some(LightBuffer::new(light, self.reach(light), &shapes))
     }
 

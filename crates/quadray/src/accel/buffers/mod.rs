@@ -15,8 +15,10 @@
 //! - [`LightBuffer`]: shadow rays ending at a point light, blocked or not.
 //! - [`EyeBuffer`]: rays from a pinhole camera's eye, where at most one shape can be met.
 //!
-//! Both are built only for worlds of a few shapes on the baseline path ([`Accel::buffered_shapes`]),
-//! where the BVH's per-ray set-up and node tests cost more than the shapes themselves.
+//! Both are built only for worlds of a few shapes ([`Accel::buffered_shapes`]), where the BVH's
+//! per-ray set-up and node tests cost more than the shapes themselves; light buffers on the
+//! baseline path only, and the eye buffer on both, where the AVX2 path asks it which tiles of
+//! pixels see nothing but traces its camera rays through the BVH ([`Accel::eye_answers_rays`]).
 
 mod eye;
 mod light;
@@ -201,15 +203,12 @@ fn relative_box(candidate: &Candidate, point: DVec3, reach: f64) -> (DVec3, DVec
 
 impl Accel {
     /// The world's shapes with their padded boxes (its spheres and quadrics one by one, its other
-    /// top items whole), for a world of at most [`MAX_SHAPES`] analytic shapes and no top BVH,
-    /// on the baseline path unless `any_path`; `None` for any other.
-    fn buffered_shapes(&self, g: &Geometry, any_path: bool) -> Option<Vec<Candidate>> {
+    /// top items whole), for a world of at most [`MAX_SHAPES`] analytic shapes and no top BVH;
+    /// `None` for any other.
+    fn buffered_shapes(&self, g: &Geometry) -> Option<Vec<Candidate>> {
         let world = &self.levels[0];
         let level = g.level(0);
-        if (self.avx2 && !any_path)
-            || world.top.is_some()
-            || level.spheres.len() + level.quadrics.len() > MAX_SHAPES
-        {
+        if world.top.is_some() || level.spheres.len() + level.quadrics.len() > MAX_SHAPES {
             return None;
         }
         let extent = self.world_extent;

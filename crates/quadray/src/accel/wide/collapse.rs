@@ -17,8 +17,9 @@ use std::sync::atomic::{AtomicU32, Ordering};
 /// The weight of one block: four lanes.
 pub(in crate::accel) const LEAF_WEIGHT: u32 = 4;
 
-/// A leaf reference's payload: its first block, shifted past the low bits that hold its count.
-const LEAF_COUNT_BITS: u32 = 4;
+/// A leaf reference's payload: its first block, shifted past the low bits that hold its count
+/// less one (a leaf has one block at least, so three bits count up to eight).
+const LEAF_COUNT_BITS: u32 = 3;
 
 /// Roughly how many subtrees the collapse is split into (enough for two cores to share evenly).
 const TASKS: u32 = 64;
@@ -29,18 +30,19 @@ const MIN_TASK_WEIGHT: u32 = 4096;
 
 /// The reference of a leaf of `count` blocks from block `first`.
 fn leaf_reference(first: usize, count: usize) -> u32 {
+    // At most 2²⁸ blocks: the payload's 31 bits are then never all ones, which [`EMPTY`] is.
     assert!(
-        count < 1 << LEAF_COUNT_BITS && first + count <= 1 << 27,
-        "a BVH leaf holds at most 15 blocks, and a BVH at most 2^27 blocks"
+        (1..=1 << LEAF_COUNT_BITS).contains(&count) && first + count <= 1 << 28,
+        "a BVH leaf holds one to 8 blocks, and a BVH at most 2^28 blocks"
     );
-    LEAF | ((first as u32) << LEAF_COUNT_BITS) | count as u32
+    LEAF | ((first as u32) << LEAF_COUNT_BITS) | (count - 1) as u32
 }
 
 /// The blocks of leaf reference `leaf` (made by the collapse).
 #[inline(always)]
 pub(in crate::accel) fn leaf_blocks(leaf: u32) -> Range<usize> {
     let first = ((leaf & !LEAF) >> LEAF_COUNT_BITS) as usize;
-    let count = (leaf & ((1 << LEAF_COUNT_BITS) - 1)) as usize;
+    let count = (leaf & ((1 << LEAF_COUNT_BITS) - 1)) as usize + 1;
     first..first + count
 }
 
@@ -216,7 +218,7 @@ impl Collapse<'_> {
 
 /// Collapses a BVH2 (built down to single primitives) into `N`-wide nodes and leaf blocks: every subtree
 /// whose primitives weigh at most `leaf_weight` together becomes one leaf, whose blocks `pack`
-/// appends from the subtree's primitives (at most 15; [`leaf_blocks`] gives them back from the
+/// appends from the subtree's primitives (one to 8; [`leaf_blocks`] gives them back from the
 /// reference), and each wide node takes the `N` largest subtrees below a BVH2 node (Embree's
 /// BVH4 and BVH8 collapse). A primitive that weighs `leaf_weight` is a leaf of its own.
 pub(in crate::accel) fn collapse<const N: usize, B: Send>(
