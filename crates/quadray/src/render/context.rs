@@ -7,6 +7,7 @@ use crate::camera::CameraFrame;
 use crate::footprint::{HitFootprint, RayCone, footprint_scale};
 use crate::integrator::RayCounts;
 use crate::math::Ray;
+use crate::render::empty_tiles::EmptyTiles;
 use crate::render::{PixelWindow, RenderError, RenderSettings};
 use crate::sampler::SampleKey;
 use crate::scene::Scene;
@@ -27,6 +28,9 @@ pub(crate) struct SampleContext<'a> {
     /// Whether tiles of pixels may be found to see nothing: a pinhole camera at the eye of the
     /// scene's eye buffer ([`Scene::camera_rays_may_meet_nothing`]).
     finds_empty_tiles: bool,
+    /// The tiles found to see nothing, where a sampler that visits pixels many times found them
+    /// once ([`SampleContext::with_empty_tiles`]).
+    empty_tiles: Option<&'a EmptyTiles>,
 }
 
 impl<'a> SampleContext<'a> {
@@ -47,6 +51,7 @@ impl<'a> SampleContext<'a> {
                 && scene.camera_rays_may_meet_nothing(frame.origin()),
             camera: frame,
             forward: (camera.to - camera.from).normalize(),
+            empty_tiles: None,
         })
     }
 
@@ -88,6 +93,32 @@ impl<'a> SampleContext<'a> {
     pub fn camera_ray(&self, (x, y): (u32, u32), (dx, dy): (f64, f64)) -> Ray {
         let (w, h) = (self.settings.width as f64, self.settings.height as f64);
         self.camera.ray((x as f64 + dx) / w, (y as f64 + dy) / h)
+    }
+
+    /// The same context, answering [`SampleContext::sees_nothing_at`] from `tiles` (found for
+    /// this context's window).
+    pub(crate) fn with_empty_tiles<'b>(&self, tiles: &'b EmptyTiles) -> SampleContext<'b>
+    where
+        'a: 'b,
+    {
+        SampleContext {
+            empty_tiles: Some(tiles),
+            ..*self
+        }
+    }
+
+    /// Whether blocks of pixels may be found to see nothing ([`SampleContext::meets_nothing`]).
+    pub(crate) fn finds_empty_tiles(&self) -> bool {
+        self.finds_empty_tiles
+    }
+
+    /// Whether every camera ray through pixel `(x, y)` meets nothing: from the tiles found once
+    /// where the context has them, else asked of the pixel alone.
+    pub(crate) fn sees_nothing_at(&self, (x, y): (u32, u32)) -> bool {
+        match self.empty_tiles {
+            Some(tiles) => tiles.contains((x, y)),
+            None => self.meets_nothing((x, y), (1, 1)),
+        }
     }
 
     /// Whether every camera ray through the `width` × `height` pixels from `(x, y)` meets

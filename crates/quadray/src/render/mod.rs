@@ -4,6 +4,7 @@
 
 pub mod adaptive;
 mod context;
+mod empty_tiles;
 mod error;
 mod progress;
 pub mod progressive;

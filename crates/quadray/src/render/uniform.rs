@@ -226,7 +226,7 @@ fn render_segment(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use crate::aov::AovSelection;
     use crate::camera::{Camera, Projection};
     use crate::geometry::Geometry;
@@ -380,11 +380,12 @@ mod tests {
         assert!(varied > 10, "{varied} edge pixels");
     }
 
-    /// Tiles whose rays provably meet nothing (a pinhole camera among a few shapes above a
-    /// floor) are filled with the background without tracing, and hold exactly what tracing each
-    /// sample gives; the scene has such tiles and others.
-    #[test]
-    fn empty_tiles_hold_what_tracing_gives() {
+    /// Two spheres and a hyperboloid above a floor, white on a blue-grey background, seen by a
+    /// pinhole camera: many of its tiles see nothing, and the floor hides those below its horizon.
+    /// With `hidden` more spheres behind the camera (no camera ray meets them, and the scene has
+    /// no lights or mirrors), the same image; from 62 of them on, too many shapes for an eye
+    /// buffer, so every sample is traced.
+    pub(crate) fn shapes_above_a_floor(hidden: usize) -> (Scene, Vec3) {
         let mut geometry = Geometry {
             spheres: vec![
                 Sphere {
@@ -400,6 +401,11 @@ mod tests {
             ],
             ..Geometry::default()
         };
+        geometry.spheres.extend((0..hidden).map(|i| Sphere {
+            center: DVec3::new(i as f64 * 0.1, 0.0, 20.0),
+            radius: 0.01,
+            material: 0,
+        }));
         let t = Transform::from_srt(DVec3::splat(0.5), DVec3::ZERO, DVec3::new(-1.0, 1.0, 0.0));
         let surface = QuadricSurface::Canonical {
             kind: QuadricKind::Hyperboloid1,
@@ -410,7 +416,6 @@ mod tests {
         geometry
             .quadrics
             .push(Quadric::new(surface, ClipBox::cube(1.0), t.unwrap(), 0).unwrap());
-        // A floor below the shapes: the tiles below its horizon see it.
         geometry.planes.push(Plane {
             point: DVec3::new(0.0, -1.5, 0.0),
             normal: DVec3::Y,
@@ -435,6 +440,15 @@ mod tests {
             geometry,
         })
         .unwrap();
+        (scene, background)
+    }
+
+    /// Tiles whose rays provably meet nothing ([`shapes_above_a_floor`]) are filled with the
+    /// background without tracing, and hold exactly what tracing each sample gives; the scene has
+    /// such tiles and others.
+    #[test]
+    fn empty_tiles_hold_what_tracing_gives() {
+        let (scene, background) = shapes_above_a_floor(0);
         let window = PixelWindow {
             x0: 0,
             y0: 0,

@@ -33,6 +33,7 @@
 use crate::aov::{AovSample, Aovs};
 use crate::film::{Film, PixelEstimate};
 use crate::integrator::RayCounts;
+use crate::render::empty_tiles::EmptyTiles;
 use crate::render::{PixelWindow, Progress, RenderError, Rendered, SampleContext};
 use crate::sampler::{SampleKey, pixel_pattern, progressive_2d};
 pub use calibration::Calibration;
@@ -94,8 +95,10 @@ pub(crate) fn render_adaptive(
         ErrorRule::Pixel => pixel_rule::refinement_rounds(adaptive),
     };
     let window = bordered(inner, border, settings.width, settings.height);
+    let bordered_context = context.with_window(window);
+    let empty_tiles = EmptyTiles::find(&bordered_context);
     let rounds = Rounds {
-        context: &context.with_window(window),
+        context: &bordered_context.with_empty_tiles(&empty_tiles),
         adaptive,
         inner,
         progress,
@@ -134,7 +137,7 @@ pub(crate) fn render_adaptive(
         *rounds.totals.lock().unwrap_or_else(|e| e.into_inner()) += plan.counts;
     }
     let calibration = state.calibration_or(plan.as_ref().map(|p| &p.calibration));
-    let inner_context = context.with_window(inner);
+    let inner_context = context.with_window(inner).with_empty_tiles(&empty_tiles);
     let inner_pixels = (
         &crop(&state.estimates, window, inner)[..],
         &crop(&state.rays, window, inner)[..],
@@ -467,7 +470,7 @@ fn sample_sequence(
     let first = estimate.count();
     // Asked once, at a pixel's first samples: later rounds come back to few of the pixels that
     // see nothing.
-    if first == 0 && count > 0 && aov.is_none() && context.meets_nothing((x, y), (1, 1)) {
+    if first == 0 && count > 0 && aov.is_none() && context.sees_nothing_at((x, y)) {
         // Every sample sees the background, which is what tracing them would add.
         let background = context.scene.background();
         for _ in first..count {
