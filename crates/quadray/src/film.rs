@@ -6,6 +6,7 @@ use glam::{DVec3, Vec3};
 // The sRGB curve, where the film's users have always found it.
 pub use crate::colour::{
     decode_srgb, decode_srgb8, display_channels, display_value, encode_srgb, encode_srgb8,
+    encode_srgb8_pixels,
 };
 
 /// A linear, scene-referred RGB image, row-major from the top-left pixel.
@@ -74,10 +75,7 @@ impl Film {
 
     /// 8-bit sRGB bytes (RGB, row-major), clamped to [0, 1] before encoding.
     pub fn to_srgb8(&self) -> Vec<u8> {
-        self.pixels
-            .iter()
-            .flat_map(|p| p.to_array().map(encode_srgb8))
-            .collect()
+        encode_srgb8_pixels(&self.pixels)
     }
 }
 
