@@ -371,8 +371,16 @@ fn stats_line(
     } else {
         String::new()
     };
+    let untraced = if c.untraced_camera > 0 {
+        format!(
+            " ({} in tiles seeing nothing, not traced)",
+            c.untraced_camera
+        )
+    } else {
+        String::new()
+    };
     format!(
-        "{size}, {}: {} camera + {} shadow + {} reflection{refraction} rays in {secs:.3} s ({:.2} Mrays/s) -> {}",
+        "{size}, {}: {} camera{untraced} + {} shadow + {} reflection{refraction} rays in {secs:.3} s ({:.2} Mrays/s) -> {}",
         sampling.summary(),
         c.camera,
         c.shadow,

@@ -17,6 +17,9 @@ use std::ops::AddAssign;
 pub struct RayCounts {
     /// Primary rays from the camera.
     pub camera: u64,
+    /// Of the camera rays, those of tiles known to see nothing, answered with the background
+    /// without being traced.
+    pub untraced_camera: u64,
     /// Occlusion rays towards lights.
     pub shadow: u64,
     /// Mirror reflection rays.
@@ -35,6 +38,7 @@ impl RayCounts {
 impl AddAssign for RayCounts {
     fn add_assign(&mut self, o: RayCounts) {
         self.camera += o.camera;
+        self.untraced_camera += o.untraced_camera;
         self.shadow += o.shadow;
         self.reflection += o.reflection;
         self.refraction += o.refraction;

@@ -126,5 +126,6 @@ mod tests {
             render_with_aovs(&traced_scene, &settings, AovSelection::NONE, &NoProgress).unwrap();
         assert_eq!(skipping.film.pixels(), tracing.film.pixels());
         assert_eq!(skipping.counts.camera, tracing.counts.camera);
+        assert!(skipping.counts.untraced_camera > 500 && tracing.counts.untraced_camera == 0);
     }
 }

@@ -165,7 +165,9 @@ fn fill_background(context: &SampleContext<'_>, pixels: &mut [Vec3], counts: &mu
         sum += context.scene.background();
     }
     pixels.fill(sum * (1.0 / spp as f32));
-    counts.camera += pixels.len() as u64 * u64::from(spp);
+    let rays = pixels.len() as u64 * u64::from(spp);
+    counts.camera += rays;
+    counts.untraced_camera += rays;
 }
 
 /// Samples the pixels of image row `y` from window column `first_column` on (`pixels`, and
@@ -471,5 +473,9 @@ pub(crate) mod tests {
             .collect();
         let empty = tiles.iter().filter(|&&e| e).count();
         assert!((3..=21).contains(&empty), "{empty} of {}", tiles.len());
+        // The stats count the empty tiles' rays as camera rays not traced.
+        let (rendered, _) =
+            render_with_aovs(&scene, &settings, AovSelection::NONE, &NoProgress).unwrap();
+        assert_eq!(rendered.counts.untraced_camera, empty as u64 * 32 * 8 * 3);
     }
 }

@@ -477,6 +477,7 @@ fn sample_sequence(
             estimate.add(background);
         }
         counts.camera += u64::from(count - first);
+        counts.untraced_camera += u64::from(count - first);
         return;
     }
     let cone = context.sample_cone(footprint_spp);
