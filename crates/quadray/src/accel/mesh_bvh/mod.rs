@@ -63,6 +63,9 @@ pub(crate) struct MeshBvh {
 pub(crate) struct MeshRay {
     boxes: BoxRay,
     sheared: ShearedRay,
+    /// Whether the ray is finite in f32: one that is not meets nothing, and is never traversed
+    /// (its slab tests could enter unused child slots).
+    finite: bool,
 }
 
 impl MeshRay {
@@ -72,6 +75,7 @@ impl MeshRay {
         MeshRay {
             boxes: BoxRay::new(origin.into(), dir.into()),
             sheared: ShearedRay::new(origin, dir),
+            finite: origin.is_finite() && dir.is_finite(),
         }
     }
 

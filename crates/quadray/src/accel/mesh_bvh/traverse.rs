@@ -125,7 +125,7 @@ impl MeshBvh {
         t_max: f32,
         skip: Option<TriId>,
     ) -> Option<MeshHit> {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !ray.finite {
             return None;
         }
         let mut limit = t_max;
@@ -218,7 +218,7 @@ impl MeshBvh {
         t_max: f32,
         skip: Option<TriId>,
     ) -> bool {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !ray.finite {
             return false;
         }
         let mut stack = take_stack();

@@ -23,7 +23,8 @@ use glam::{Vec3A, Vec4};
 
 /// A child reference with this bit set is a leaf; the other bits are the owner's payload.
 pub(super) const LEAF: u32 = 1 << 31;
-/// An unused child slot (its box is empty, so no ray enters it): no leaf reference is all ones.
+/// An unused child slot: its box is empty, so no ray finite in f32 enters it (both traversals take
+/// only those), and no leaf reference is all ones.
 pub(super) const EMPTY: u32 = u32::MAX;
 
 /// `N` children: their boxes as `[min x, max x, min y, max y, min z, max z]` lanes, and their
