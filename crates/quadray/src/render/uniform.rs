@@ -232,17 +232,15 @@ pub(crate) mod tests {
     use crate::aov::AovSelection;
     use crate::camera::{Camera, Projection};
     use crate::geometry::Geometry;
-    use crate::material::Material;
     use crate::plane::Plane;
     use crate::quadric::{ClipBox, Quadric, QuadricKind, QuadricSurface};
-    use crate::render::adaptive::tests::white_on_black;
+    use crate::render::adaptive::tests::{white_on_black, white_shapes};
     use crate::render::context::SampleContext;
     use crate::render::{
         NoProgress, PixelWindow, Progress, RenderError, RenderSettings, render_with_aovs,
     };
     use crate::sampler::{PixelSampler, SampleKey, pixel_pattern};
-    use crate::scene::{Scene, SceneDescription};
-    use crate::texture::Texture;
+    use crate::scene::Scene;
     use crate::{RayCounts, Sphere, Transform};
     use glam::{DVec3, Vec3};
     use std::sync::atomic::{AtomicUsize, Ordering};
@@ -423,26 +421,14 @@ pub(crate) mod tests {
             normal: DVec3::Y,
             material: 0,
         });
+        let camera = Camera {
+            from: DVec3::new(0.3, -0.4, 8.0),
+            to: DVec3::ZERO,
+            up: DVec3::Y,
+            projection: Projection::Perspective { vfov_deg: 40.0 },
+        };
         let background = Vec3::new(0.2, 0.3, 0.4);
-        let scene = Scene::new(SceneDescription {
-            camera: Camera {
-                from: DVec3::new(0.3, -0.4, 8.0),
-                to: DVec3::ZERO,
-                up: DVec3::Y,
-                projection: Projection::Perspective { vfov_deg: 40.0 },
-            },
-            background,
-            environment: None,
-            materials: vec![Material {
-                texture: Texture::Constant(Vec3::ONE),
-                ambient: 1.0,
-                ..Material::default()
-            }],
-            lights: vec![],
-            geometry,
-        })
-        .unwrap();
-        (scene, background)
+        (white_shapes(geometry, camera, background), background)
     }
 
     /// Tiles whose rays provably meet nothing ([`shapes_above_a_floor`]) are filled with the

@@ -30,14 +30,20 @@ pub(crate) fn white_on_black(spheres: Vec<Sphere>) -> Scene {
 
 /// The shapes of `geometry`, white, as [`white_on_black`] shows spheres.
 pub(crate) fn white_shapes_on_black(geometry: Geometry) -> Scene {
+    let camera = Camera {
+        from: DVec3::new(0.0, 0.0, 10.0),
+        to: DVec3::ZERO,
+        up: DVec3::Y,
+        projection: Projection::Orthographic { height: 4.0 },
+    };
+    white_shapes(geometry, camera, Vec3::ZERO)
+}
+
+/// The shapes of `geometry`, white (flat, ambient only), on `background`, seen by `camera`.
+pub(crate) fn white_shapes(geometry: Geometry, camera: Camera, background: Vec3) -> Scene {
     Scene::new(SceneDescription {
-        camera: Camera {
-            from: DVec3::new(0.0, 0.0, 10.0),
-            to: DVec3::ZERO,
-            up: DVec3::Y,
-            projection: Projection::Orthographic { height: 4.0 },
-        },
-        background: Vec3::ZERO,
+        camera,
+        background,
         environment: None,
         materials: vec![Material {
             texture: Texture::Constant(Vec3::ONE),
