@@ -120,6 +120,21 @@ pub struct PixelEstimate {
 impl PixelEstimate {
     /// Adds one sample's linear radiance (the pixel's next sample in its sequence).
     pub fn add(&mut self, radiance: Vec3) {
+        self.add_encoded(radiance, display_channels(radiance));
+    }
+
+    /// [`PixelEstimate::add`] of `count` samples of the same radiance (the background of a pixel
+    /// that sees nothing), encoded for display once.
+    pub fn add_repeated(&mut self, radiance: Vec3, count: u32) {
+        let display = display_channels(radiance);
+        for _ in 0..count {
+            self.add_encoded(radiance, display);
+        }
+    }
+
+    /// [`PixelEstimate::add`] with the sample's display channels given.
+    #[inline(always)]
+    fn add_encoded(&mut self, radiance: Vec3, display: [f32; 3]) {
         let index = self.count;
         self.count += 1;
         let n = self.count as f64;
@@ -140,7 +155,7 @@ impl PixelEstimate {
         // The run of sample `index`: a shift, as the run length is a power of two.
         let batch =
             &mut self.batch_sums[(index >> Self::batch_size(index + 1).trailing_zeros()) as usize];
-        for (sum, value) in batch.iter_mut().zip(display_channels(radiance)) {
+        for (sum, value) in batch.iter_mut().zip(display) {
             *sum += value;
         }
     }
@@ -272,6 +287,30 @@ fn batch_means(sums: impl ExactSizeIterator<Item = f64> + Clone, size: u32) -> (
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Repeated samples of one radiance, added at once, leave the estimate bit for bit as
+    /// adding them one by one does, from an empty pixel and from one holding other samples, for
+    /// counts that fill, cross and double the error runs.
+    #[test]
+    fn repeated_samples_add_as_single_ones() {
+        let background = Vec3::new(0.2, 0.3, 0.4);
+        for start in [0, 3, 8] {
+            for count in [1, 2, 7, 8, 9, 16, 40] {
+                let mut one_by_one = PixelEstimate::default();
+                let mut at_once = PixelEstimate::default();
+                for k in 0..start {
+                    let other = Vec3::splat(0.1 * k as f32);
+                    one_by_one.add(other);
+                    at_once.add(other);
+                }
+                for _ in 0..count {
+                    one_by_one.add(background);
+                }
+                at_once.add_repeated(background, count);
+                assert_eq!(one_by_one, at_once, "start {start}, count {count}");
+            }
+        }
+    }
 
     /// Welford's estimates match the two-pass formulas; the error is the batch-means standard
     /// error over 8 aligned runs, whatever order the runs merged in, and below 8 samples the

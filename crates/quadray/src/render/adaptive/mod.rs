@@ -472,10 +472,7 @@ fn sample_sequence(
     // see nothing.
     if first == 0 && count > 0 && aov.is_none() && context.sees_nothing_at((x, y)) {
         // Every sample sees the background, which is what tracing them would add.
-        let background = context.scene.background();
-        for _ in first..count {
-            estimate.add(background);
-        }
+        estimate.add_repeated(context.scene.background(), count - first);
         counts.camera += u64::from(count - first);
         counts.untraced_camera += u64::from(count - first);
         return;
