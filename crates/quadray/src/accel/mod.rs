@@ -37,6 +37,7 @@
 mod analytic;
 mod buffers;
 mod build;
+mod corner_cone;
 mod level;
 mod mesh_bvh;
 mod simd;

@@ -25,8 +25,8 @@ pub(crate) struct SampleContext<'a> {
     pub selection: AovSelection,
     camera: CameraFrame,
     forward: DVec3,
-    /// Whether tiles of pixels may be found to see nothing: a pinhole camera at the eye of the
-    /// scene's eye buffer ([`Scene::camera_rays_may_meet_nothing`]).
+    /// Whether tiles of pixels may be found to see nothing ([`Scene::camera_rays_meet_nothing`]):
+    /// the rays of a pinhole camera share their origin.
     finds_empty_tiles: bool,
     /// The tiles found to see nothing, where a sampler that visits pixels many times found them
     /// once ([`SampleContext::with_empty_tiles`]).
@@ -47,8 +47,7 @@ impl<'a> SampleContext<'a> {
             settings,
             window: settings.window(),
             selection,
-            finds_empty_tiles: !frame.is_orthographic()
-                && scene.camera_rays_may_meet_nothing(frame.origin()),
+            finds_empty_tiles: !frame.is_orthographic(),
             camera: frame,
             forward: (camera.to - camera.from).normalize(),
             empty_tiles: None,

@@ -384,7 +384,7 @@ pub(crate) mod tests {
     /// pinhole camera: many of its tiles see nothing, and the floor hides those below its horizon.
     /// With `hidden` more spheres behind the camera (no camera ray meets them, and the scene has
     /// no lights or mirrors), the same image; from 62 of them on, too many shapes for an eye
-    /// buffer, so every sample is traced.
+    /// buffer, and the one box covering the shapes holds the camera, so every sample is traced.
     pub(crate) fn shapes_above_a_floor(hidden: usize) -> (Scene, Vec3) {
         let mut geometry = Geometry {
             spheres: vec![

@@ -11,7 +11,7 @@ use crate::math::{Ray, offset_origin};
 use crate::mesh::Mesh;
 use crate::shape::{PrimRef, SurfaceGeometry, SurfaceHit};
 use crate::texture::{Texture, TextureExtent};
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use validate::{validate_levels, validate_material};
 
 pub use crate::math::MAX_COORDINATE;
@@ -438,19 +438,18 @@ impl Scene {
         Some(self.surface_hit(ray, (t, prim), path, material))
     }
 
-    /// Whether [`Scene::camera_rays_meet_nothing`] can say yes for camera rays from `eye`: the
-    /// eye buffer was made for that eye.
-    pub(crate) fn camera_rays_may_meet_nothing(&self, eye: DVec3) -> bool {
-        (self.eye_buffer.as_ref()).is_some_and(|b| b.eye() == eye)
-    }
-
-    /// Whether every camera ray whose direction lies in the cone of the four `corners` meets
-    /// nothing: a pinhole camera's rays from the eye the scene's eye buffer was made for, through
-    /// directions no shape is seen through and that leave every plane behind. `false` when it
-    /// cannot tell.
+    /// Whether every camera ray whose direction lies in the cone of the four `corners` (rays
+    /// from one eye) meets nothing: through the eye buffer where the scene has one for that eye
+    /// (directions no shape is seen through), else through the boxes covering the world's
+    /// content ([`Accel::cone_sees_nothing`]); and the rays leave every plane behind. `false`
+    /// when it cannot tell.
     pub(crate) fn camera_rays_meet_nothing(&self, corners: &[Ray; 4]) -> bool {
-        (self.eye_buffer.as_ref())
-            .is_some_and(|eye| (self.accel).eye_sees_nothing(&self.geometry, eye, corners))
+        match &self.eye_buffer {
+            Some(eye) if eye.eye() == corners[0].origin => {
+                (self.accel).eye_sees_nothing(&self.geometry, eye, corners)
+            }
+            _ => (self.accel).cone_sees_nothing(&self.geometry, corners),
+        }
     }
 
     /// Phase one: the nearest hit's distance and primitive, through the eye buffer for rays from

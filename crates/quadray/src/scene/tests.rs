@@ -292,6 +292,72 @@ fn cones_said_to_meet_nothing_meet_nothing() {
     }
 }
 
+/// In a world too large for an eye buffer (twelve placed squares and spheres: a top-level BVH,
+/// 70 spheres), cones of camera rays said to meet nothing, through the boxes covering the world,
+/// meet nothing in the BVH and the plane, and some cones are said to, from eyes above and beside
+/// the content.
+#[test]
+fn cones_beside_the_world_meet_nothing() {
+    use crate::plane::Plane;
+    let mut next = uniform(0x0b0c_5e1d_e0f7_0001);
+    let mut geometry = Geometry {
+        prototypes: vec![Prototype::mesh(square(false))],
+        ..Geometry::default()
+    };
+    for i in 0..12 {
+        let at = DVec3::new((i % 4) as f64 * 3.0 - 4.5, (i / 4) as f64 * 3.0 - 3.0, 0.0);
+        let t = Transform::new(DAffine3::from_translation(at)).unwrap();
+        geometry.instances.push(Instance::new(0, t));
+    }
+    for i in 0..70 {
+        geometry.spheres.push(Sphere {
+            center: DVec3::new((i % 10) as f64 - 4.5, (i / 10) as f64 - 3.0, 1.0),
+            radius: 0.2,
+            material: 0,
+        });
+    }
+    geometry.planes.push(Plane {
+        point: DVec3::new(0.0, 0.0, -3.0),
+        normal: DVec3::Z,
+        material: 0,
+    });
+    let scene = Scene::new(SceneDescription {
+        camera: looking_down(),
+        background: Vec3::ZERO,
+        environment: None,
+        materials: vec![Material::default()],
+        lights: vec![],
+        geometry,
+    })
+    .unwrap();
+    assert!(scene.eye_buffer.is_none());
+    for eye in [DVec3::new(0.0, 0.0, 12.0), DVec3::new(-16.0, 9.0, 4.0)] {
+        let (mut empty, mut cones) = (0, 0);
+        for _ in 0..3000 {
+            let centre = DVec3::new(next(), next(), next()).normalize_or(DVec3::Z);
+            let (e1, e2) = crate::math::orthonormal_basis(centre);
+            let size = 0.2 * next().abs() + 0.01;
+            let corner = |a: f64, b: f64| centre + (e1 * a + e2 * b) * size;
+            let corners = [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
+                .map(|(a, b)| Ray::new(eye, corner(a, b)));
+            cones += 1;
+            if !scene.camera_rays_meet_nothing(&corners) {
+                continue;
+            }
+            empty += 1;
+            for _ in 0..16 {
+                let ray = Ray::new(eye, corner(next() * 2.0, next() * 2.0));
+                let hit = (scene.accel).closest(&scene.geometry, &ray, f64::INFINITY, None);
+                assert_eq!(hit, None, "eye {eye}, ray {ray:?}");
+            }
+        }
+        assert!(
+            empty * 10 > cones && empty * 10 < cones * 9,
+            "{empty} of {cones}"
+        );
+    }
+}
+
 /// A generator of numbers in [−0.5, 0.5).
 fn uniform(seed: u64) -> impl FnMut() -> f64 {
     let mut unit = crate::test_rng::unit_stream(seed);
