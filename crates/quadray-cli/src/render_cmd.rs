@@ -373,7 +373,7 @@ fn stats_line(
     };
     let untraced = if c.untraced_camera > 0 {
         format!(
-            " ({} in tiles seeing nothing, not traced)",
+            " ({} in tiles seeing nothing, not traced, but counted in the rate)",
             c.untraced_camera
         )
     } else {

@@ -12,7 +12,8 @@ use crate::shape::{PrimRef, SurfaceHit};
 use glam::{DVec3, Vec3};
 use std::ops::AddAssign;
 
-/// Rays traced, by kind.
+/// Rays by kind: those traced, and camera rays answered without tracing (counted among the
+/// camera rays, and apart in [`RayCounts::untraced_camera`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RayCounts {
     /// Primary rays from the camera.

@@ -6,9 +6,12 @@
 //! A box lies outside the cone when one plane through the apex has every corner of the box
 //! strictly on its outer side: one of the four side planes (each through two neighbouring corner
 //! directions), or the plane across the cone's axis (boxes behind the apex). Every ray of the
-//! cone stays on the inner side of all five, so it cannot reach the box. The margin, 10⁻⁹ of the
-//! corners' distances from the apex and of the apex's own magnitude, covers the rounding of the
-//! rays' directions and of the boxes' placement, some 10⁻¹⁵ of the same magnitudes.
+//! cone stays on the inner side of all five, so it cannot reach the box. The margin, 10⁻⁶ of the
+//! corners' distances from the apex, of the apex's own magnitude and of the world's extent,
+//! covers what moves a ray off the cone before it is tested: meshes are hit by the ray rounded
+//! to f32 (origin and direction off by 2⁻²⁴ of their magnitudes, so its points by about 6·10⁻⁸
+//! of the distance travelled and of the origin's magnitude), spheres and quadrics by the f64
+//! ray, and instances' boxes are placed in f64.
 
 use super::Accel;
 use super::build::Bounds;
@@ -16,8 +19,9 @@ use crate::geometry::Geometry;
 use crate::math::Ray;
 use glam::DVec3;
 
-/// The relative margin by which a box's corners must lie outside a plane of the cone.
-const MARGIN: f64 = 1e-9;
+/// The relative margin by which a box's corners must lie outside a plane of the cone: 16 times
+/// the f32 rounding of a mesh's ray.
+const MARGIN: f64 = 1e-6;
 
 /// The cone of rays from `apex` through positive combinations of four corner directions.
 #[derive(Clone, Copy, Debug)]
@@ -65,22 +69,22 @@ impl CornerCone {
     }
 
     /// Whether no ray of the cone can meet the box `[lo, hi]`: one of the cone's planes has
-    /// every corner of the box outside it, by the margin.
-    pub(crate) fn misses_box(&self, (lo, hi): Bounds) -> bool {
-        let corners: [DVec3; 8] = std::array::from_fn(|k| {
-            DVec3::new(
+    /// every corner of the box outside it, by the margin of `scale` (the world's extent) and the
+    /// corners' and the apex's magnitudes.
+    pub(crate) fn misses_box(&self, (lo, hi): Bounds, scale: f64) -> bool {
+        let apex_scale = self.apex.length() + scale;
+        let corners: [(DVec3, f64); 8] = std::array::from_fn(|k| {
+            let p = DVec3::new(
                 if k & 1 == 0 { lo.x } else { hi.x },
                 if k & 2 == 0 { lo.y } else { hi.y },
                 if k & 4 == 0 { lo.z } else { hi.z },
-            )
+            );
+            let v = p - self.apex;
+            (v, MARGIN * (v.length() + apex_scale))
         });
-        let scale = self.apex.length();
         self.planes.iter().any(|n| {
             let length = n.length();
-            corners.iter().all(|&p| {
-                let v = p - self.apex;
-                v.dot(*n) < -MARGIN * (v.length() + scale) * length
-            })
+            (corners.iter()).all(|&(v, margin)| v.dot(*n) < -margin * length)
         })
     }
 }
@@ -93,8 +97,10 @@ impl Accel {
         let Some(cone) = CornerCone::new(corners) else {
             return false;
         };
-        (self.levels[0].covering.iter()).all(|&b| cone.misses_box(b))
-            && (g.planes.iter()).all(|p| p.missed_by_cone(cone.apex, &corners.map(|r| r.dir)))
+        let extent = f64::from(self.world_extent);
+        // The planes first: a view of a floor fails there, before the boxes' corners.
+        (g.planes.iter()).all(|p| p.missed_by_cone(cone.apex, &corners.map(|r| r.dir)))
+            && (self.levels[0].covering.iter()).all(|&b| cone.misses_box(b, extent))
     }
 }
 
@@ -125,12 +131,12 @@ mod tests {
                 .map(|(a, b)| centre + (e1 * a + e2 * b) * size);
             let cone = CornerCone::new(&dirs.map(|d| Ray::new(apex, d))).unwrap();
             let around = (apex - DVec3::splat(0.1), apex + DVec3::splat(0.1));
-            assert!(!cone.misses_box(around));
+            assert!(!cone.misses_box(around, 0.0));
             let at = apex + DVec3::new(next(), next(), next()) * 4.0 + centre * 5.0;
             let half = DVec3::new(next().abs(), next().abs(), next().abs()) * 1.5;
             let b = (at - half, at + half);
             boxes += 1;
-            if !cone.misses_box(b) {
+            if !cone.misses_box(b, 0.0) {
                 continue;
             }
             missed += 1;

@@ -111,13 +111,11 @@ impl<'a> SampleContext<'a> {
         self.finds_empty_tiles
     }
 
-    /// Whether every camera ray through pixel `(x, y)` meets nothing: from the tiles found once
-    /// where the context has them, else asked of the pixel alone.
+    /// Whether every camera ray through pixel `(x, y)` lies in a tile found to see nothing; `false`
+    /// for a context without its tiles found (the pilot's sparse pixels and the viewer's
+    /// progressive film, where asking each pixel alone would cost more than it saves).
     pub(crate) fn sees_nothing_at(&self, (x, y): (u32, u32)) -> bool {
-        match self.empty_tiles {
-            Some(tiles) => tiles.contains((x, y)),
-            None => self.meets_nothing((x, y), (1, 1)),
-        }
+        self.empty_tiles.is_some_and(|tiles| tiles.contains((x, y)))
     }
 
     /// Whether every camera ray through the `width` × `height` pixels from `(x, y)` meets
