@@ -112,8 +112,8 @@ impl<'a> SampleContext<'a> {
     }
 
     /// Whether every camera ray through pixel `(x, y)` lies in a tile found to see nothing; `false`
-    /// for a context without its tiles found (the pilot's sparse pixels and the viewer's
-    /// progressive film, where asking each pixel alone would cost more than it saves).
+    /// for a context without its tiles found (the adaptive pilot's sparse pixels, where asking
+    /// each pixel alone would cost more than it saves).
     pub(crate) fn sees_nothing_at(&self, (x, y): (u32, u32)) -> bool {
         self.empty_tiles.is_some_and(|tiles| tiles.contains((x, y)))
     }

@@ -1,7 +1,7 @@
-//! Which tiles of a window see nothing, found once for the adaptive sampler, which comes back to
-//! a pixel in every round, for its twin and for the audit: asking the eye buffer once a tile
-//! costs a few hundred instructions, asked at each visit of each pixel it cost 8% of a render of
-//! the quadric grid.
+//! Which tiles of a window see nothing, found once for the samplers that come back to a pixel
+//! many times (the adaptive sampler's rounds, twins and audit; the viewer's progressive film,
+//! step by step): asking the eye buffer once a tile costs a few hundred instructions, asked at
+//! each visit of each pixel it cost 8% of a render of the quadric grid.
 
 use super::PixelWindow;
 use super::context::SampleContext;

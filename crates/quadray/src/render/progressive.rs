@@ -12,6 +12,7 @@ use crate::adaptive::{Calibration, Twin, sample_pixel, sample_twin};
 use crate::aov::AovSelection;
 use crate::film::{Film, PixelEstimate};
 use crate::integrator::RayCounts;
+use crate::render::empty_tiles::EmptyTiles;
 use crate::render::{MAX_SPP, Progress, RenderError, RenderSettings, SampleContext};
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -55,6 +56,9 @@ impl ProgressiveFilm {
             return Err(RenderError::Spp(count));
         }
         let context = SampleContext::new(scene, &self.settings, AovSelection::NONE)?;
+        // Found again at each step: the viewer's camera may have moved.
+        let empty_tiles = EmptyTiles::find(&context);
+        let context = context.with_empty_tiles(&empty_tiles);
         let window = context.window;
         let totals = Mutex::new(RayCounts::default());
         self.estimates

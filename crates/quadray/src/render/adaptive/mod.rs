@@ -468,9 +468,9 @@ fn sample_sequence(
     counts: &mut RayCounts,
 ) {
     let first = estimate.count();
-    // Asked once, at a pixel's first samples: later rounds come back to few of the pixels that
-    // see nothing.
-    if first == 0 && count > 0 && aov.is_none() && context.sees_nothing_at((x, y)) {
+    // A pass takes the first sample's hit, so a pixel with passes traces that one.
+    let traces_passes = first == 0 && aov.is_some();
+    if first < count && !traces_passes && context.sees_nothing_at((x, y)) {
         // Every sample sees the background, which is what tracing them would add.
         estimate.add_repeated(context.scene.background(), count - first);
         counts.camera += u64::from(count - first);
