@@ -5,6 +5,7 @@
 
 use super::PixelWindow;
 use super::context::SampleContext;
+use rayon::prelude::*;
 
 /// Columns of a tile.
 const TILE_WIDTH: u32 = 32;
@@ -29,9 +30,11 @@ impl EmptyTiles {
         let window = context.window;
         let columns = window.width().div_ceil(TILE_WIDTH);
         let rows = window.height().div_ceil(TILE_HEIGHT);
+        // In parallel: a 16384-pixel square image has a million tiles.
         let empty = if context.finds_empty_tiles() {
-            (0..rows)
-                .flat_map(|row| (0..columns).map(move |column| (column, row)))
+            (0..rows * columns)
+                .into_par_iter()
+                .map(|tile| (tile % columns, tile / columns))
                 .map(|(column, row)| {
                     let (x, y) = (
                         window.x0 + column * TILE_WIDTH,
