@@ -370,6 +370,16 @@ mod tests {
     use crate::{Transform, math::Ray};
     use glam::DVec3;
 
+    /// A level of `spheres` and nothing else.
+    fn spheres_only(spheres: &[Sphere]) -> Level<'_> {
+        Level {
+            spheres,
+            quadrics: &[],
+            meshes: &[],
+            instances: &[],
+        }
+    }
+
     /// The nearest hit over every primitive, one by one.
     fn brute(level: Level<'_>, ray: &Ray, from: Option<LocalPrim>) -> Option<(f64, LocalPrim)> {
         let prims = (0..level.spheres.len() as u32)
@@ -467,12 +477,7 @@ mod tests {
                 material: 0,
             })
             .collect();
-        let level = Level {
-            spheres: &spheres,
-            quadrics: &[],
-            meshes: &[],
-            instances: &[],
-        };
+        let level = spheres_only(&spheres);
         let bvh = AnalyticBvh::build_grouping(level, 40.0, true).unwrap();
         let bytes = bvh.memory_bytes() + std::mem::size_of_val(spheres.as_slice());
         let per_sphere = bytes as f64 / spheres.len() as f64;
@@ -496,12 +501,7 @@ mod tests {
                 }
             })
             .collect();
-        let level = Level {
-            spheres: &spheres,
-            quadrics: &[],
-            meshes: &[],
-            instances: &[],
-        };
+        let level = spheres_only(&spheres);
         let bvh = AnalyticBvh::build(level, 1e25).unwrap();
         for i in (0..300).step_by(7) {
             let x = 1.2f64.powi(i);

@@ -25,9 +25,6 @@ pub(crate) struct SampleContext<'a> {
     pub selection: AovSelection,
     camera: CameraFrame,
     forward: DVec3,
-    /// Whether tiles of pixels may be found to see nothing ([`Scene::camera_rays_meet_nothing`]):
-    /// the rays of a pinhole camera share their origin.
-    finds_empty_tiles: bool,
     /// The tiles found to see nothing, where a sampler that visits pixels many times found them
     /// once ([`SampleContext::with_empty_tiles`]).
     empty_tiles: Option<&'a EmptyTiles>,
@@ -41,14 +38,12 @@ impl<'a> SampleContext<'a> {
     ) -> Result<SampleContext<'a>, RenderError> {
         let aspect = settings.width as f64 / settings.height as f64;
         let camera = settings.camera.as_ref().unwrap_or(scene.camera());
-        let frame = camera.prepare(aspect)?;
         Ok(SampleContext {
             scene,
             settings,
             window: settings.window(),
             selection,
-            finds_empty_tiles: !frame.is_orthographic(),
-            camera: frame,
+            camera: camera.prepare(aspect)?,
             forward: (camera.to - camera.from).normalize(),
             empty_tiles: None,
         })
@@ -106,9 +101,10 @@ impl<'a> SampleContext<'a> {
         }
     }
 
-    /// Whether blocks of pixels may be found to see nothing ([`SampleContext::meets_nothing`]).
+    /// Whether blocks of pixels may be found to see nothing ([`SampleContext::meets_nothing`]):
+    /// the rays of a pinhole camera share their origin, an orthographic camera's do not.
     pub(crate) fn finds_empty_tiles(&self) -> bool {
-        self.finds_empty_tiles
+        !self.camera.is_orthographic()
     }
 
     /// Whether every camera ray through pixel `(x, y)` lies in a tile found to see nothing; `false`
@@ -122,7 +118,7 @@ impl<'a> SampleContext<'a> {
     /// nothing ([`Scene::camera_rays_meet_nothing`] for the rays through the block's corners,
     /// whose cone holds every sample's ray: a sample's offset lies in [0, 1)² of its pixel).
     pub(crate) fn meets_nothing(&self, (x, y): (u32, u32), (width, height): (u32, u32)) -> bool {
-        if !self.finds_empty_tiles {
+        if !self.finds_empty_tiles() {
             return false;
         }
         let (last_x, last_y) = (x + width - 1, y + height - 1);

@@ -439,17 +439,18 @@ impl Scene {
     }
 
     /// Whether every camera ray whose direction lies in the cone of the four `corners` (rays
-    /// from one eye) meets nothing: through the eye buffer where the scene has one for that eye
-    /// (directions no shape is seen through), else through the boxes covering the world's
-    /// content ([`Accel::cone_sees_nothing`]); and the rays leave every plane behind. `false`
-    /// when it cannot tell.
+    /// from one eye) meets nothing: the rays leave every plane behind
+    /// ([`Plane::missed_by_cone`](crate::plane::Plane::missed_by_cone), asked first: a view of a
+    /// floor fails there), and meet no shape, as the eye buffer tells where the scene has one
+    /// for that eye, else the boxes covering the world's content ([`Accel::cone_sees_nothing`]).
+    /// `false` when it cannot tell.
     pub(crate) fn camera_rays_meet_nothing(&self, corners: &[Ray; 4]) -> bool {
-        match &self.eye_buffer {
-            Some(eye) if eye.eye() == corners[0].origin => {
-                (self.accel).eye_sees_nothing(&self.geometry, eye, corners)
+        let (eye, dirs) = (corners[0].origin, corners.map(|r| r.dir));
+        (self.geometry.planes.iter()).all(|p| p.missed_by_cone(eye, &dirs))
+            && match &self.eye_buffer {
+                Some(buffer) if buffer.eye() == eye => self.accel.eye_sees_nothing(buffer, corners),
+                _ => self.accel.cone_sees_nothing(corners),
             }
-            _ => (self.accel).cone_sees_nothing(&self.geometry, corners),
-        }
     }
 
     /// Phase one: the nearest hit's distance and primitive, through the eye buffer for rays from

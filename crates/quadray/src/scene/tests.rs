@@ -4,6 +4,7 @@ use super::*;
 use crate::geometry::Prototype;
 use crate::geometry::instance::Instance;
 use crate::math::Transform;
+use crate::test_rng::{centred_stream as uniform, corner_rays, square_cone};
 use crate::{Projection, Sphere};
 use glam::{DAffine3, DVec3};
 
@@ -241,6 +242,26 @@ fn buffered_world_with(eye: DVec3, plane: bool) -> Scene {
     .unwrap()
 }
 
+/// Whether `scene` says the rays from `eye` through `cone` ([`square_cone`]) meet nothing; if
+/// it does, 16 rays through random points of the cone are checked to meet nothing in the BVH and
+/// the planes.
+fn said_empty_and_empty(
+    scene: &Scene,
+    eye: DVec3,
+    cone: &impl Fn(f64, f64) -> DVec3,
+    next: &mut impl FnMut() -> f64,
+) -> bool {
+    if !scene.camera_rays_meet_nothing(&corner_rays(eye, cone)) {
+        return false;
+    }
+    for _ in 0..16 {
+        let ray = Ray::new(eye, cone(next() * 2.0, next() * 2.0));
+        let hit = (scene.accel).closest(&scene.geometry, &ray, f64::INFINITY, None);
+        assert_eq!(hit, None, "eye {eye}, ray {ray:?}");
+    }
+    true
+}
+
 /// Cones of camera rays that the eye buffer says meet nothing meet nothing in the BVH and the
 /// planes either: rays through random points of small random quadrilaterals of directions from
 /// the eye, in [`buffered_world`] with its plane and without; the plane hides some cones.
@@ -254,29 +275,11 @@ fn cones_said_to_meet_nothing_meet_nothing() {
         ];
         let (mut empty, mut cones) = ([0, 0], 0);
         for _ in 0..4000 {
-            let centre = DVec3::new(next(), next(), next()).normalize_or(DVec3::Z);
-            let (e1, e2) = crate::math::orthonormal_basis(centre);
             let size = 0.2 * next().abs();
-            let corner = |a: f64, b: f64| centre + (e1 * a + e2 * b) * size;
-            let dirs = [
-                corner(-1.0, -1.0),
-                corner(1.0, -1.0),
-                corner(-1.0, 1.0),
-                corner(1.0, 1.0),
-            ];
-            let corners = dirs.map(|d| Ray::new(eye, d));
+            let cone = square_cone(&mut next, size);
             cones += 1;
             for (scene, empty) in scenes.iter().zip(&mut empty) {
-                if !scene.camera_rays_meet_nothing(&corners) {
-                    continue;
-                }
-                *empty += 1;
-                for _ in 0..16 {
-                    let (a, b) = (next() * 2.0, next() * 2.0);
-                    let ray = Ray::new(eye, corner(a, b));
-                    let hit = (scene.accel).closest(&scene.geometry, &ray, f64::INFINITY, None);
-                    assert_eq!(hit, None, "eye {eye}, ray {ray:?}");
-                }
+                *empty += usize::from(said_empty_and_empty(scene, eye, &cone, &mut next));
             }
         }
         // Without the plane, many cones see nothing; the plane, below the shapes, hides some.
@@ -334,34 +337,16 @@ fn cones_beside_the_world_meet_nothing() {
     for eye in [DVec3::new(0.0, 0.0, 12.0), DVec3::new(-16.0, 9.0, 4.0)] {
         let (mut empty, mut cones) = (0, 0);
         for _ in 0..3000 {
-            let centre = DVec3::new(next(), next(), next()).normalize_or(DVec3::Z);
-            let (e1, e2) = crate::math::orthonormal_basis(centre);
             let size = 0.2 * next().abs() + 0.01;
-            let corner = |a: f64, b: f64| centre + (e1 * a + e2 * b) * size;
-            let corners = [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
-                .map(|(a, b)| Ray::new(eye, corner(a, b)));
+            let cone = square_cone(&mut next, size);
             cones += 1;
-            if !scene.camera_rays_meet_nothing(&corners) {
-                continue;
-            }
-            empty += 1;
-            for _ in 0..16 {
-                let ray = Ray::new(eye, corner(next() * 2.0, next() * 2.0));
-                let hit = (scene.accel).closest(&scene.geometry, &ray, f64::INFINITY, None);
-                assert_eq!(hit, None, "eye {eye}, ray {ray:?}");
-            }
+            empty += usize::from(said_empty_and_empty(&scene, eye, &cone, &mut next));
         }
         assert!(
             empty * 10 > cones && empty * 10 < cones * 9,
             "{empty} of {cones}"
         );
     }
-}
-
-/// A generator of numbers in [−0.5, 0.5).
-fn uniform(seed: u64) -> impl FnMut() -> f64 {
-    let mut unit = crate::test_rng::unit_stream(seed);
-    move || unit() - 0.5
 }
 
 /// Shadow rays answered through the light buffers agree with the BVH's answers, ray for ray, in

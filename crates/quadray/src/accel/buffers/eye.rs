@@ -13,8 +13,6 @@ use super::{Candidate, Cube, Shape, finite_in_f32, relative_box};
 use crate::accel::Accel;
 use crate::geometry::Geometry;
 use crate::math::Ray;
-#[cfg(doc)]
-use crate::plane::Plane;
 use crate::shape::PrimRef;
 use glam::DVec3;
 
@@ -122,17 +120,10 @@ impl EyeBuffer {
 
 impl Accel {
     /// Whether every camera ray in the cone of the four `corners` (rays from the eye of `eye`)
-    /// meets nothing, as [`Accel::closest_from_eye`] would answer each: no shape is seen through
-    /// their cells, and every plane is missed ([`Plane::missed_by_cone`]).
-    pub(crate) fn eye_sees_nothing(
-        &self,
-        g: &Geometry,
-        eye: &EyeBuffer,
-        corners: &[Ray; 4],
-    ) -> bool {
-        corners.iter().all(finite_in_f32)
-            && eye.sees_nothing_within(corners)
-            && (g.planes.iter()).all(|p| p.missed_by_cone(eye.eye, &corners.map(|r| r.dir)))
+    /// meets no shape, as [`Accel::closest_from_eye`] would answer each: no shape is seen through
+    /// their cells (the planes are the caller's to ask).
+    pub(crate) fn eye_sees_nothing(&self, eye: &EyeBuffer, corners: &[Ray; 4]) -> bool {
+        corners.iter().all(finite_in_f32) && eye.sees_nothing_within(corners)
     }
 
     /// The eye buffer of a pinhole camera at `eye`, in a world of few shapes
