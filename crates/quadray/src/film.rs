@@ -2,6 +2,7 @@
 //! per-pixel estimate (mean, variance, error) that adaptive sampling decides by.
 
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 // The sRGB curve, where the film's users have always found it.
 pub use crate::colour::{
@@ -23,7 +24,7 @@ impl Film {
     /// no running estimate, writes its f32 sum over the count instead (its images depend on those
     /// bits).
     pub(crate) fn of_estimates(width: u32, height: u32, estimates: &[PixelEstimate]) -> Film {
-        let pixels = estimates.iter().map(PixelEstimate::mean).collect();
+        let pixels = estimates.par_iter().map(PixelEstimate::mean).collect();
         Film::from_pixels(width, height, pixels).expect("one estimate per pixel")
     }
 
@@ -127,8 +128,17 @@ impl PixelEstimate {
     /// that sees nothing), encoded for display once.
     pub fn add_repeated(&mut self, radiance: Vec3, count: u32) {
         let display = display_channels(radiance);
+        let x = radiance.as_dvec3();
         for _ in 0..count {
-            self.add_encoded(radiance, display);
+            if self.rgb_mean == x && x.is_finite() {
+                // Welford's step for a finite sample equal to the mean is x − m = ±0: the mean
+                // and M2 stay as they are, bit for bit (neither is ever −0.0: the first step's
+                // 0 + x/1 gives +0.0), so only the count and the run sums move.
+                self.count += 1;
+                self.add_to_runs(self.count - 1, display);
+            } else {
+                self.add_encoded(radiance, display);
+            }
         }
     }
 
@@ -143,6 +153,12 @@ impl PixelEstimate {
         let delta = x - self.rgb_mean;
         self.rgb_mean += delta / n;
         self.rgb_m2 += delta * (x - self.rgb_mean);
+        self.add_to_runs(index, display);
+    }
+
+    /// Adds sample `index`'s display channels to the sums of its run.
+    #[inline(always)]
+    fn add_to_runs(&mut self, index: u32, display: [f32; 3]) {
         // Past 8 · 2^j samples the runs double: pairs of runs merge into the first half.
         if index >= ERROR_BATCHES && index.is_power_of_two() {
             let half = ERROR_BATCHES as usize / 2;
@@ -293,21 +309,32 @@ mod tests {
     /// counts that fill, cross and double the error runs.
     #[test]
     fn repeated_samples_add_as_single_ones() {
-        let background = Vec3::new(0.2, 0.3, 0.4);
-        for start in [0, 3, 8] {
-            for count in [1, 2, 7, 8, 9, 16, 40] {
-                let mut one_by_one = PixelEstimate::default();
-                let mut at_once = PixelEstimate::default();
-                for k in 0..start {
-                    let other = Vec3::splat(0.1 * k as f32);
-                    one_by_one.add(other);
-                    at_once.add(other);
+        // Bit for bit: the debug forms tell −0.0 from 0.0, which `==` does not.
+        let same = |a: &PixelEstimate, b: &PixelEstimate| format!("{a:?}") == format!("{b:?}");
+        // A background, a black one, and one with a negative zero (which the mean turns into
+        // +0.0 at the first step, as one by one does).
+        let backgrounds = [
+            Vec3::new(0.2, 0.3, 0.4),
+            Vec3::ZERO,
+            Vec3::new(-0.0, 0.5, 0.0),
+        ];
+        for background in backgrounds {
+            for start in [0, 3, 8] {
+                for count in [1, 2, 7, 8, 9, 16, 40] {
+                    let mut one_by_one = PixelEstimate::default();
+                    let mut at_once = PixelEstimate::default();
+                    for k in 0..start {
+                        let other = Vec3::splat(0.1 * k as f32);
+                        one_by_one.add(other);
+                        at_once.add(other);
+                    }
+                    for _ in 0..count {
+                        one_by_one.add(background);
+                    }
+                    at_once.add_repeated(background, count);
+                    let case = format!("{background}, start {start}, count {count}");
+                    assert!(same(&one_by_one, &at_once), "{case}");
                 }
-                for _ in 0..count {
-                    one_by_one.add(background);
-                }
-                at_once.add_repeated(background, count);
-                assert_eq!(one_by_one, at_once, "start {start}, count {count}");
             }
         }
     }

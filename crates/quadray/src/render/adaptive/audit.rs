@@ -108,7 +108,7 @@ pub(super) fn audit(
         true => drawn * weight / total,
         false => 0.0,
     };
-    let chances: Vec<f64> = (weights.iter())
+    let chances: Vec<f64> = (weights.par_iter())
         .map(|w| {
             let error = part(by_error, w.by_error, totals.0);
             (error + part(by_contrast, w.by_contrast, totals.1) + uniform).min(1.0)
@@ -116,7 +116,7 @@ pub(super) fn audit(
         .collect();
     let set_counts = set_counts(estimates, &weights, &chances);
     let seed = settings.seed ^ AUDIT_SEED;
-    let drawn: Vec<(usize, (u32, u32), f64)> = (chances.iter().enumerate())
+    let drawn: Vec<(usize, (u32, u32), f64)> = (chances.par_iter().enumerate())
         .filter_map(|(i, &p)| {
             let at = window.pixel(i);
             (uniform_draw(seed, at) < p).then_some((i, at, p))
@@ -167,7 +167,7 @@ fn set_counts(estimates: &[PixelEstimate], weights: &[Weights], chances: &[f64])
         floor /= 2;
     }
     let floor = if floor > 1 { floor } else { 0 };
-    (estimates.iter().zip(weights))
+    (estimates.par_iter().zip(weights))
         .map(|(e, w)| count(e, w, floor))
         .collect()
 }

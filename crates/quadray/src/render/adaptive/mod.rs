@@ -175,8 +175,9 @@ struct WindowState {
     targets: Vec<u32>,
     aov_samples: Vec<AovSample>,
     /// For pilot pixels inside the window, the rounds that sample them (bit k: round k), which
-    /// the pilot took already; `None` for the others.
-    pilot_rounds: Vec<Option<u64>>,
+    /// the pilot took already; 0 for the others (the pilot samples each of its pixels in round
+    /// 0, so a pilot pixel's bits are never 0). Half the bytes of an `Option`.
+    pilot_rounds: Vec<u64>,
     /// Each row's twins ([`calibration`]), chosen after the first round when the render has no
     /// plan (the pixel rule, or a time limit): the column and the twin.
     twins: Vec<Vec<(usize, Twin)>>,
@@ -200,7 +201,7 @@ impl WindowState {
             errors: vec![f64::INFINITY; pixels],
             targets: vec![min_spp; pixels],
             aov_samples: context.aov_buffer(),
-            pilot_rounds: vec![None; pixels],
+            pilot_rounds: vec![0; pixels],
             twins: vec![Vec::new(); window.height() as usize],
         };
         for pixel in plan.iter().flat_map(|p| &p.pixels) {
@@ -212,7 +213,11 @@ impl WindowState {
             state.estimates[i] = pixel.estimate;
             state.rays[i] = pixel.rays;
             state.targets[i] = 0;
-            state.pilot_rounds[i] = Some(pixel.rounds);
+            debug_assert!(
+                pixel.rounds & 1 == 1,
+                "the pilot samples its pixels in round 0"
+            );
+            state.pilot_rounds[i] = pixel.rounds;
             if let (Some(aov), Some(slot)) = (pixel.aov, state.aov_samples.get_mut(i)) {
                 *slot = aov;
             }
@@ -226,7 +231,7 @@ impl WindowState {
         let (indices, candidates): (Vec<usize>, Vec<_>) = (self.estimates.iter())
             .zip(&self.pilot_rounds)
             .enumerate()
-            .filter(|(_, (_, pilot))| pilot.is_none())
+            .filter(|(_, (_, pilot))| **pilot == 0)
             .map(|(i, (e, _))| (i, (window.pixel(i), e)))
             .unzip();
         let twins = calibration::choose_twins(context.settings.seed, &candidates);
@@ -288,25 +293,25 @@ impl WindowState {
         let mut targets: Vec<u32> = states
             .par_iter()
             .zip(&self.pilot_rounds)
-            .map(|(s, pilot)| match pilot {
-                Some(_) => 0,
-                None => step.target(s, max_spp),
+            .map(|(s, &pilot)| match pilot {
+                0 => step.target(s, max_spp),
+                _ => 0,
             })
             .collect();
         let own: Vec<bool> = states
             .iter()
             .zip(&self.pilot_rounds)
             .zip(&targets)
-            .map(|((s, pilot), &target)| match pilot {
-                Some(bits) => bits >> round & 1 == 1,
-                None => target > s.count,
+            .map(|((s, &pilot), &target)| match pilot {
+                0 => target > s.count,
+                bits => bits >> round & 1 == 1,
             })
             .collect();
         // Pilot pixels follow neighbours and slivers too, unless the pilot followed neighbours
         // itself: a sparse pilot samples its pixels by their own estimates only, and a pilot
         // pixel whose first samples all missed an edge was left with them.
         let pilot_followed = plan.is_some_and(|p| p.followed);
-        let may_follow = |i: usize| !(pilot_followed && self.pilot_rounds[i].is_some());
+        let may_follow = |i: usize| !(pilot_followed && self.pilot_rounds[i] != 0);
         let follow = (round <= NEIGHBOUR_ROUNDS).then(|| {
             missed::follow_neighbours(&own, self.width, |i, j| {
                 let (count, other) = (states[i].count, states[j].count);

@@ -4,6 +4,7 @@
 use super::calibration::Calibration;
 use super::{Adaptive, ErrorRule};
 use crate::film::PixelEstimate;
+use rayon::prelude::*;
 
 /// Where an adaptive render stands after a round (reported to [`Progress::round_done`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -233,7 +234,7 @@ pub fn estimated_rmse(estimates: &[PixelEstimate], calibration: &Calibration) ->
 /// Each pixel's relative error ([`PixelEstimate::relative_error`]).
 fn relative_errors(estimates: &[PixelEstimate]) -> Vec<f64> {
     estimates
-        .iter()
+        .par_iter()
         .map(PixelEstimate::relative_error)
         .collect()
 }
