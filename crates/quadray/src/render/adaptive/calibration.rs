@@ -413,6 +413,18 @@ mod tests {
             population(),
         );
         assert_eq!(few, Calibration::NONE);
+        // No twins at all: the fallback as it is, whatever the population (the window of a
+        // planned render, which takes the pilot's calibration without a pass over its pixels).
+        let fitted = Calibration::fit(pairs.iter().map(|(a, b)| (a, b)), population());
+        let none = || std::iter::empty::<(&PixelEstimate, &Twin)>();
+        assert_eq!(
+            Calibration::fit_or(none(), population(), Some(&fitted)),
+            fitted
+        );
+        assert_eq!(
+            Calibration::fit_or(none(), population(), None),
+            Calibration::NONE
+        );
     }
 
     /// About the wanted number of twins are chosen in each stratum, each standing for 1/p of

@@ -357,6 +357,11 @@ impl WindowState {
 
     /// The calibration from the window's own twins, backed by `fallback` at counts with too few.
     fn calibration_or(&self, fallback: Option<&Calibration>) -> Calibration {
+        // Without twins the fit is the fallback, whatever the pixels say: a planned render's
+        // window has none, and skips the pass over its pixels each round.
+        if self.twins.iter().all(Vec::is_empty) {
+            return fallback.copied().unwrap_or(Calibration::NONE);
+        }
         let pairs = self.twins.iter().enumerate().flat_map(|(row, twins)| {
             twins
                 .iter()
@@ -383,36 +388,38 @@ impl WindowState {
         adaptive: &Adaptive,
         calibration: &Calibration,
     ) -> RoundSummary {
-        let active: Vec<bool> = self
-            .targets
-            .iter()
-            .zip(&self.estimates)
-            .map(|(&t, e)| t > e.count())
-            .collect();
-        let active = crop(&active, window, inner).iter().filter(|&&a| a).count();
-        let estimates = crop(&self.estimates, window, inner);
-        let errors = crop(&self.errors, window, inner);
-        let pixels = estimates.len().max(1) as f64;
-        let (worst_error, estimated_error) = match adaptive.rule {
-            ErrorRule::Pixel => (
-                errors.iter().copied().fold(0.0, f64::max),
-                estimated_rmse(&estimates, calibration),
-            ),
-            ErrorRule::Image => {
-                let sum: f64 = estimates
-                    .iter()
-                    .zip(errors.iter())
-                    .map(|(e, &s)| calibration.corrected(e.count(), s))
-                    .sum();
-                (f64::NAN, (sum / pixels).sqrt())
+        // The inner window's pixels row by row, in the bordered arrays (no copies).
+        let (dx, w) = ((inner.x0 - window.x0) as usize, inner.width() as usize);
+        let rows = (inner.y0..inner.y1).map(|y| (y - window.y0) as usize * self.width + dx);
+        let pixels_of = |start: usize| start..start + w;
+        let (mut active, mut worst, mut sum) = (0u64, 0.0f64, 0.0f64);
+        for start in rows {
+            let range = pixels_of(start);
+            let (estimates, errors) = (&self.estimates[range.clone()], &self.errors[range.clone()]);
+            active += (self.targets[range].iter().zip(estimates))
+                .filter(|&(&t, e)| t > e.count())
+                .count() as u64;
+            for (e, &error) in estimates.iter().zip(errors) {
+                match adaptive.rule {
+                    ErrorRule::Pixel => {
+                        worst = worst.max(error);
+                        sum += calibration.squared_error(e);
+                    }
+                    ErrorRule::Image => sum += calibration.corrected(e.count(), error),
+                }
             }
+        }
+        let pixels = inner.width() as u64 * inner.height() as u64;
+        let worst_error = match adaptive.rule {
+            ErrorRule::Pixel => worst,
+            ErrorRule::Image => f64::NAN,
         };
         RoundSummary {
             round,
-            active: active as u64,
-            pixels: estimates.len() as u64,
+            active,
+            pixels,
             worst_error,
-            estimated_error,
+            estimated_error: (sum / pixels.max(1) as f64).sqrt(),
             rule: adaptive.rule,
             target_error: adaptive.target_error,
         }
