@@ -78,23 +78,38 @@ const AUDIT_SEED: u32 = 0xA0D1_7ED5;
 /// which helped decide the pixels' counts and so are not independent of where they stopped.
 const AUDIT_SETS: u32 = 0x5A3E_0A7D;
 
-/// The audited MSE of the display values of the window of `context`, whose pixels are
-/// `estimates` (row-major) having traced `rays`, with their squared errors estimated by
-/// `calibration`; each drawn pixel's samples stand for their share of the pixel at
-/// `footprint_spp`. Returns the MSE and the rays the audit traced.
+/// The pixels an audit draws from, row-major.
+pub(super) struct Pixels<'a> {
+    /// Their samples.
+    pub estimates: &'a [PixelEstimate],
+    /// The rays each traced.
+    pub rays: &'a [u64],
+    /// Their batch-means squared errors ([`PixelEstimate::squared_error`]) where the caller
+    /// holds them; computed here otherwise.
+    pub squared_errors: Option<&'a [f64]>,
+}
+
+/// The audited MSE of the display values of the window of `context`, whose `pixels` have their
+/// squared errors estimated by `calibration`; each drawn pixel's samples stand for their share
+/// of the pixel at `footprint_spp`. Returns the MSE and the rays the audit traced.
 pub(super) fn audit(
     context: &SampleContext<'_>,
-    (estimates, rays): (&[PixelEstimate], &[u64]),
+    pixels: Pixels<'_>,
     calibration: &Calibration,
     footprint_spp: u32,
 ) -> (f64, RayCounts) {
+    let Pixels {
+        estimates,
+        rays,
+        squared_errors,
+    } = pixels;
     let pixels = estimates.len();
     if pixels == 0 {
         return (0.0, RayCounts::default());
     }
     let window = context.window;
     let width = (window.x1 - window.x0) as usize;
-    let weights = draw_weights((estimates, rays), calibration, width);
+    let weights = draw_weights((estimates, rays), squared_errors, calibration, width);
     let totals = (weights.iter()).fold((0.0, 0.0), |t, w| (t.0 + w.by_error, t.1 + w.by_contrast));
     // A crop or a tile draws its share of the image's audit (at least a few pixels): auditing
     // every pixel of a 32x32 tile would triple its rays.
@@ -183,14 +198,29 @@ struct Weights {
 }
 
 /// Each pixel's [`Weights`], for the pixels `estimates` (row-major, `width` wide) having traced
-/// `rays`.
+/// `rays`, whose batch-means squared errors are `known` when given.
 fn draw_weights(
     (estimates, rays): (&[PixelEstimate], &[u64]),
+    known: Option<&[f64]>,
     calibration: &Calibration,
     width: usize,
 ) -> Vec<Weights> {
-    let squared_errors: Vec<f64> = estimates.par_iter().map(|e| e.squared_error()).collect();
-    let contrasts = flat_contrasts(estimates, &squared_errors, width);
+    let computed: Vec<f64>;
+    let squared_errors = match known {
+        Some(known) => {
+            debug_assert!(
+                (known.iter().zip(estimates))
+                    .all(|(k, e)| k.to_bits() == e.squared_error().to_bits()),
+                "the squared errors given are the estimates' own"
+            );
+            known
+        }
+        None => {
+            computed = estimates.par_iter().map(|e| e.squared_error()).collect();
+            &computed
+        }
+    };
+    let contrasts = flat_contrasts(estimates, squared_errors, width);
     (estimates.par_iter().zip(rays))
         .zip(squared_errors.par_iter().zip(contrasts))
         .map(|((e, &r), (&squared_error, contrast))| {

@@ -138,10 +138,15 @@ pub(crate) fn render_adaptive(
     }
     let calibration = state.calibration_or(plan.as_ref().map(|p| &p.calibration));
     let inner_context = context.with_window(inner).with_empty_tiles(&empty_tiles);
-    let inner_pixels = (
-        &crop(&state.estimates, window, inner)[..],
-        &crop(&state.rays, window, inner)[..],
-    );
+    // Under the image rule the rounds keep every pixel's batch-means squared error current
+    // (each round's selection recomputes those the round sampled), which the audit's draw needs.
+    let squared_errors =
+        (adaptive.rule == ErrorRule::Image).then(|| crop(&state.errors, window, inner));
+    let inner_pixels = audit::Pixels {
+        estimates: &crop(&state.estimates, window, inner),
+        rays: &crop(&state.rays, window, inner),
+        squared_errors: squared_errors.as_deref(),
+    };
     let (estimated_mse, audit_counts) =
         audit::audit(&inner_context, inner_pixels, &calibration, adaptive.max_spp);
     *rounds.totals.lock().unwrap_or_else(|e| e.into_inner()) += audit_counts;
