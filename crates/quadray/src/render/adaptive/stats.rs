@@ -199,16 +199,22 @@ pub(super) fn sampling_stats(
     estimated_mse: f64,
 ) -> SamplingStats {
     let n = estimates.len().max(1) as f64;
-    let counts = estimates.iter().map(PixelEstimate::count);
+    // One parallel pass for the counts; their sum is of whole numbers, exact in any order.
+    let (min_spp, max_spp, total) = (estimates.par_iter())
+        .map(|e| (e.count(), e.count(), u64::from(e.count())))
+        .reduce(
+            || (u32::MAX, 0, 0),
+            |a, b| (a.0.min(b.0), a.1.max(b.1), a.2 + b.2),
+        );
     let errors = relative_errors(estimates);
     let met = errors
-        .iter()
+        .par_iter()
         .filter(|&&e| e <= adaptive.target_error)
         .count();
     SamplingStats {
-        min_spp: counts.clone().min().unwrap_or(0),
-        max_spp: counts.clone().max().unwrap_or(0),
-        mean_spp: counts.map(|c| c as f64).sum::<f64>() / n,
+        min_spp: if estimates.is_empty() { 0 } else { min_spp },
+        max_spp,
+        mean_spp: total as f64 / n,
         error: Some(ErrorStats {
             rule: adaptive.rule,
             target: adaptive.target_error,
