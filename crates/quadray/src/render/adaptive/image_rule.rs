@@ -134,7 +134,8 @@ pub(super) fn next_step(states: &[PixelState], aim: &Aim) -> Option<Step> {
         let at_max = states.iter().filter(|s| s.count >= aim.max_spp);
         let floor = at_max.map(|s| s.squared_error).sum::<f64>() / states.len().max(1) as f64;
         let goal = target.max(floor + 0.25 * target);
-        solve(highest, |l| predicted_mse(states, aim, l) > goal)
+        let prediction = Prediction::new(states, aim);
+        solve(highest, |l| prediction.mse(l) > goal)
     });
     let step = |lambda: f64| {
         // Round to the nearest power of two where some pixel is taken to √2 times its count or
@@ -211,16 +212,45 @@ impl Budget {
 
 /// The image MSE the threshold `lambda` is predicted to reach: a pixel taken to its
 /// optimal count n' (where its value, falling as n^−α, reaches λ) keeps s (n/n')^α of its squared error s, and since (n/n')^α = λ/v there
-/// that is λ c, its value brought to the threshold times its cost (no power to evaluate).
+/// that is λ c, its value brought to the threshold times its cost (no power to evaluate). Tests
+/// ask it directly; [`next_step`] through a [`Prediction`] made once.
+#[cfg(test)]
 fn predicted_mse(states: &[PixelState], aim: &Aim, lambda: f64) -> f64 {
-    states
-        .iter()
-        .map(|s| match s.count < aim.max_spp && s.value() > lambda {
-            true => lambda * s.cost,
-            false => s.squared_error,
-        })
-        .sum::<f64>()
-        / states.len().max(1) as f64
+    Prediction::new(states, aim).mse(lambda)
+}
+
+/// The pixels as [`Prediction::mse`] reads them in each of [`solve`]'s sixty steps: each one's
+/// value where it is below the maximum count (NaN, which no threshold is below, at it), cost and
+/// squared error, so that a step divides nothing.
+struct Prediction(Vec<(f64, f64, f64)>);
+
+impl Prediction {
+    fn new(states: &[PixelState], aim: &Aim) -> Prediction {
+        Prediction(
+            (states.iter())
+                .map(|s| {
+                    let value = if s.count < aim.max_spp {
+                        s.value()
+                    } else {
+                        f64::NAN
+                    };
+                    (value, s.cost, s.squared_error)
+                })
+                .collect(),
+        )
+    }
+
+    /// The image MSE the threshold `lambda` is predicted to reach (see [`predicted_mse`]'s
+    /// equation), summed in the pixels' order.
+    fn mse(&self, lambda: f64) -> f64 {
+        (self.0.iter())
+            .map(|&(value, cost, squared_error)| match value > lambda {
+                true => lambda * cost,
+                false => squared_error,
+            })
+            .sum::<f64>()
+            / self.0.len().max(1) as f64
+    }
 }
 
 /// The smallest λ in (0, `highest`] for which `enough(λ)` holds, by bisection on log λ (`enough`
@@ -233,6 +263,11 @@ fn solve(highest: f64, enough: impl Fn(f64) -> bool) -> f64 {
     }
     for _ in 0..60 {
         let mid = (low * high).sqrt();
+        // Once the midpoint is an end, no later step moves either (`low` never is enough and
+        // `high` always is): the answer is found.
+        if mid == low || mid == high {
+            break;
+        }
         if enough(mid) {
             high = mid;
         } else {
