@@ -66,10 +66,9 @@ impl<'a> SampleContext<'a> {
         }
     }
 
-    /// The radiance of the camera ray through `(dx, dy)` inside pixel `(x, y)` of the full image,
-    /// for a sample standing for `cone`, which is sample `key` (for the integrator's own samples,
-    /// glossy directions); with `aov`, also the pixel's surface passes from the
-    /// ray's first hit (its albedo averaged over the whole pixel, as one sample gives the pass).
+    /// [`SampleContext::trace_ray`] of the camera ray through `(dx, dy)` inside pixel `(x, y)` of
+    /// the full image (the renderers make their rays in batches first).
+    #[cfg(test)]
     pub fn trace(
         &self,
         pixel: (u32, u32),
@@ -131,7 +130,10 @@ impl<'a> SampleContext<'a> {
         self.scene.camera_rays_meet_nothing(&corners)
     }
 
-    /// [`SampleContext::trace`] of a camera ray made by [`SampleContext::camera_ray`].
+    /// The radiance of camera ray `ray` (made by [`SampleContext::camera_ray`]) for a sample
+    /// standing for `cone`, which is sample `key` (for the integrator's own samples, glossy
+    /// directions); with `aov`, also the pixel's surface passes from the ray's first hit (its
+    /// albedo averaged over the whole pixel, as one sample gives the pass).
     pub fn trace_ray(
         &self,
         ray: &Ray,

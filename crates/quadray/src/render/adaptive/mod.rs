@@ -33,6 +33,7 @@
 use crate::aov::{AovSample, Aovs};
 use crate::film::{Film, PixelEstimate};
 use crate::integrator::RayCounts;
+use crate::math::Ray;
 use crate::render::empty_tiles::EmptyTiles;
 use crate::render::{PixelWindow, Progress, RenderError, Rendered, SampleContext};
 use crate::sampler::{SampleKey, pixel_pattern, progressive_2d};
@@ -500,20 +501,32 @@ fn sample_sequence(
         return;
     }
     let cone = context.sample_cone(footprint_spp);
-    for index in first..count {
-        let first_hit = match aov.as_deref_mut() {
-            Some(aov) if index == 0 => Some(aov),
-            _ => None,
-        };
-        let offset = progressive_2d(index, pattern);
-        let key = SampleKey {
-            pattern,
-            index,
-            count: None,
-        };
-        estimate.add(context.trace((x, y), offset, cone, key, first_hit, counts));
+    for start in (first..count).step_by(RAY_BATCH as usize) {
+        let end = count.min(start + RAY_BATCH);
+        // The batch's camera rays first, as the uniform renderer makes its own: their square
+        // roots and divisions overlap instead of each waiting in line before its trace (a
+        // batch shorter than the array repeats its last ray, unused).
+        let rays: [Ray; RAY_BATCH as usize] = std::array::from_fn(|k| {
+            let index = (start + k as u32).min(end - 1);
+            context.camera_ray((x, y), progressive_2d(index, pattern))
+        });
+        for (index, ray) in (start..end).zip(&rays) {
+            let first_hit = match aov.as_deref_mut() {
+                Some(aov) if index == 0 => Some(aov),
+                _ => None,
+            };
+            let key = SampleKey {
+                pattern,
+                index,
+                count: None,
+            };
+            estimate.add(context.trace_ray(ray, cone, key, first_hit, counts));
+        }
     }
 }
+
+/// Camera rays a pixel's samples make before tracing them ([`sample_sequence`]).
+const RAY_BATCH: u32 = 8;
 
 /// What the rounds left over the bordered window.
 struct Sampled {
