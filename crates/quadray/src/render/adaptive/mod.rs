@@ -256,9 +256,7 @@ impl WindowState {
     /// Chooses round `round`'s pixels by the pixel rule; `Err` with the reason to stop when it
     /// samples none.
     fn select_by_pixel(&mut self, adaptive: &Adaptive, round: u32) -> Result<(), Stop> {
-        update_errors(&mut self.errors, &self.estimates, &self.targets, |e| {
-            e.relative_error()
-        });
+        fill_unknown_errors(&mut self.errors, &self.estimates, self.rule);
         let refine = pixel_rule::select(adaptive, round, &self.estimates, &self.errors, self.width);
         let count = pixel_rule::round_count(adaptive, round);
         self.set_targets(&refine, |_| count);
@@ -279,9 +277,7 @@ impl WindowState {
         round: u32,
     ) -> Result<(), Stop> {
         let adaptive = rounds.adaptive;
-        update_errors(&mut self.errors, &self.estimates, &self.targets, |e| {
-            e.squared_error()
-        });
+        fill_unknown_errors(&mut self.errors, &self.estimates, self.rule);
         let (step, calibration) = match plan {
             Some(plan) => plan
                 .decisions
@@ -437,20 +433,25 @@ impl WindowState {
     }
 }
 
-/// Recomputes `error` of the pixels the last round sampled (a target above 0; pilot pixels,
-/// whose target is 0, are computed once): only they have new estimates.
-fn update_errors(
-    errors: &mut [f64],
-    estimates: &[PixelEstimate],
-    targets: &[u32],
-    error: impl Fn(&PixelEstimate) -> f64 + Sync,
-) {
+/// A pixel's error as `rule` ranks it: its relative error (pixel rule) or its batch-means
+/// squared error (image rule).
+fn error_of(rule: ErrorRule, estimate: &PixelEstimate) -> f64 {
+    match rule {
+        ErrorRule::Pixel => estimate.relative_error(),
+        ErrorRule::Image => estimate.squared_error(),
+    }
+}
+
+/// Computes the error ([`error_of`]) of the pixels that have none yet (infinite: the pilot's, at
+/// the first selection). A round computes those of the pixels it samples as it goes
+/// ([`Rounds::sample`]), while their estimates are in cache; the others' are unchanged.
+fn fill_unknown_errors(errors: &mut [f64], estimates: &[PixelEstimate], rule: ErrorRule) {
     errors
         .par_iter_mut()
-        .zip(estimates.par_iter().zip(targets))
-        .for_each(|(value, (estimate, &target))| {
-            if target > 0 || value.is_infinite() {
-                *value = error(estimate);
+        .zip(estimates.par_iter())
+        .for_each(|(value, estimate)| {
+            if value.is_infinite() {
+                *value = error_of(rule, estimate);
             }
         });
 }

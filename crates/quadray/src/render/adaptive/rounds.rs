@@ -77,20 +77,23 @@ impl Rounds<'_> {
     }
 
     /// Takes `round`'s samples, bringing each pixel to its target, row by row in parallel,
-    /// filling the passes from each pixel's first sample. After round 0 a row started past the
-    /// time limit is skipped and the render marked timed out.
+    /// filling the passes from each pixel's first sample and computing the error of each pixel
+    /// sampled. After round 0 a row started past the time limit is skipped and the render marked
+    /// timed out.
     pub fn sample(&self, round: u32, state: &mut WindowState) {
         let window = self.context.window;
         let ww = window.width() as usize;
+        let rule = state.rule;
         let mut aov_rows = self.context.aov_rows(&mut state.aov_samples);
         state
             .estimates
             .par_chunks_mut(ww)
             .zip(state.rays.par_chunks_mut(ww))
+            .zip(state.errors.par_chunks_mut(ww))
             .zip(state.targets.par_chunks(ww))
             .zip(aov_rows.par_iter_mut())
             .enumerate()
-            .for_each(|(row_index, (((row, rays), targets), aov_row))| {
+            .for_each(|(row_index, ((((row, rays), errors), targets), aov_row))| {
                 let y = window.y0 + row_index as u32;
                 let row_done = || {
                     if (self.inner.y0..self.inner.y1).contains(&y) {
@@ -106,7 +109,8 @@ impl Rounds<'_> {
                     return;
                 }
                 let mut counts = RayCounts::default();
-                for (column, (estimate, pixel_rays)) in row.iter_mut().zip(rays).enumerate() {
+                let pixels = row.iter_mut().zip(rays).zip(errors.iter_mut());
+                for (column, ((estimate, pixel_rays), error)) in pixels.enumerate() {
                     if targets[column] <= estimate.count() {
                         continue;
                     }
@@ -121,6 +125,7 @@ impl Rounds<'_> {
                         &mut counts,
                     );
                     *pixel_rays += counts.total() - before;
+                    *error = super::error_of(rule, estimate);
                 }
                 *self.totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
                 row_done();
