@@ -108,9 +108,8 @@ impl ProgressiveFilm {
         let candidates: Vec<_> = (self.estimates.iter().enumerate())
             .map(|(i, e)| (window.pixel(i), e))
             .collect();
-        let twins = crate::adaptive::choose_twins(self.settings.seed, &candidates);
-        (candidates.iter().zip(twins))
-            .filter_map(|(&(at, _), twin)| Some((at, twin?)))
+        (crate::adaptive::choose_twins(self.settings.seed, &candidates).into_iter())
+            .map(|(k, twin)| (candidates[k].0, twin))
             .collect()
     }
 

@@ -245,11 +245,9 @@ impl WindowState {
             .filter(|(_, (_, pilot))| **pilot == 0)
             .map(|(i, (e, _))| (i, (window.pixel(i), e)))
             .unzip();
-        let twins = calibration::choose_twins(context.settings.seed, &candidates);
-        for (i, twin) in indices.into_iter().zip(twins) {
-            if let Some(twin) = twin {
-                self.twins[i / self.width].push((i % self.width, twin));
-            }
+        for (k, twin) in calibration::choose_twins(context.settings.seed, &candidates) {
+            let i = indices[k];
+            self.twins[i / self.width].push((i % self.width, twin));
         }
     }
 

@@ -129,9 +129,8 @@ pub(super) fn plan(
         counts += sample_round(context, adaptive, &mut pixels, round, targets);
         if round == 0 {
             let candidates: Vec<_> = pixels.iter().map(|p| (p.at, &p.estimate)).collect();
-            let twins = calibration::choose_twins(context.settings.seed, &candidates);
-            for (pixel, twin) in pixels.iter_mut().zip(twins) {
-                pixel.twin = twin.map(Box::new);
+            for (k, twin) in calibration::choose_twins(context.settings.seed, &candidates) {
+                pixels[k].twin = Some(Box::new(twin));
             }
             counts += catch_up_twins(context, adaptive, &mut pixels);
         }
