@@ -141,12 +141,10 @@ pub(crate) fn render_adaptive(
     let inner_context = context.with_window(inner).with_empty_tiles(&empty_tiles);
     // Under the image rule the rounds keep every pixel's batch-means squared error current
     // (each round's selection recomputes those the round sampled), which the audit's draw needs.
-    let squared_errors =
-        (adaptive.rule == ErrorRule::Image).then(|| crop(&state.errors, window, inner));
     let inner_pixels = audit::Pixels {
         estimates: &crop(&state.estimates, window, inner),
         rays: &crop(&state.rays, window, inner),
-        squared_errors: squared_errors.as_deref(),
+        squared_errors: Some(&crop(state.squared_errors(), window, inner)),
     };
     let (estimated_mse, audit_counts) =
         audit::audit(&inner_context, inner_pixels, &calibration, adaptive.max_spp);
@@ -177,6 +175,10 @@ struct WindowState {
     /// Each pixel's relative error after the last round (pixel rule) or its batch-means squared
     /// error (image rule), recomputed for the pixels a round samples.
     errors: Vec<f64>,
+    /// Under the pixel rule, each pixel's batch-means squared error, kept as `errors` is (the
+    /// calibration, the summary, the sliver rounds and the audit read it every round); empty
+    /// under the image rule, whose `errors` it would repeat ([`WindowState::squared_errors`]).
+    squared: Vec<f64>,
     /// The count the next round brings each pixel to (at most its own: not sampled).
     targets: Vec<u32>,
     aov_samples: Vec<AovSample>,
@@ -210,6 +212,12 @@ impl WindowState {
                 .collect(),
             rays: vec![0; pixels],
             errors: (0..pixels).into_par_iter().map(|_| f64::INFINITY).collect(),
+            squared: match context.settings.adaptive.map(|a| a.rule) {
+                Some(ErrorRule::Pixel) => {
+                    (0..pixels).into_par_iter().map(|_| f64::INFINITY).collect()
+                }
+                _ => Vec::new(),
+            },
             targets: (0..pixels).into_par_iter().map(|_| min_spp).collect(),
             aov_samples: context.aov_buffer(),
             pilot_rounds: vec![0; pixels],
@@ -236,6 +244,29 @@ impl WindowState {
         state
     }
 
+    /// Each pixel's batch-means squared error ([`PixelEstimate::squared_error`]), current after
+    /// every round.
+    fn squared_errors(&self) -> &[f64] {
+        match self.rule {
+            ErrorRule::Image => &self.errors,
+            ErrorRule::Pixel => &self.squared,
+        }
+    }
+
+    /// Computes the errors ([`error_of`], and under the pixel rule the squared errors) of the
+    /// pixels that have none yet (infinite: the pilot's, at the first selection). A round
+    /// computes those of the pixels it samples as it goes ([`Rounds::sample`]), while their
+    /// estimates are in cache; the others' are unchanged.
+    fn fill_unknown_errors(&mut self) {
+        let rule = self.rule;
+        fill_unknown(&mut self.errors, &self.estimates, |e| error_of(rule, e));
+        fill_unknown(
+            &mut self.squared,
+            &self.estimates,
+            PixelEstimate::squared_error,
+        );
+    }
+
     /// Chooses the twins among the pixels outside the pilot, after their first round.
     fn choose_twins(&mut self, context: &SampleContext<'_>) {
         let window = context.window;
@@ -254,8 +285,14 @@ impl WindowState {
     /// Chooses round `round`'s pixels by the pixel rule; `Err` with the reason to stop when it
     /// samples none.
     fn select_by_pixel(&mut self, adaptive: &Adaptive, round: u32) -> Result<(), Stop> {
-        fill_unknown_errors(&mut self.errors, &self.estimates, self.rule);
-        let refine = pixel_rule::select(adaptive, round, &self.estimates, &self.errors, self.width);
+        self.fill_unknown_errors();
+        let refine = pixel_rule::select(
+            adaptive,
+            round,
+            &self.estimates,
+            (&self.errors, &self.squared),
+            self.width,
+        );
         let count = pixel_rule::round_count(adaptive, round);
         self.set_targets(&refine, |_| count);
         if refine.contains(&true) {
@@ -275,7 +312,7 @@ impl WindowState {
         round: u32,
     ) -> Result<(), Stop> {
         let adaptive = rounds.adaptive;
-        fill_unknown_errors(&mut self.errors, &self.estimates, self.rule);
+        self.fill_unknown_errors();
         let (step, calibration) = match plan {
             Some(plan) => plan
                 .decisions
@@ -304,7 +341,7 @@ impl WindowState {
             })
             .collect();
         let own: Vec<bool> = states
-            .iter()
+            .par_iter()
             .zip(&self.pilot_rounds)
             .zip(&targets)
             .map(|((s, &pilot), &target)| match pilot {
@@ -372,16 +409,9 @@ impl WindowState {
                 .iter()
                 .map(move |(column, twin)| (&self.estimates[row * self.width + column], twin))
         });
-        // The image rule keeps each pixel's squared error; the pixel rule its relative error.
-        let population: Vec<(u32, f64)> = match self.rule {
-            ErrorRule::Image => (self.estimates.par_iter().zip(&self.errors))
-                .map(|(e, &s)| (e.count(), s))
-                .collect(),
-            ErrorRule::Pixel => (self.estimates.par_iter())
-                .map(|e| (e.count(), e.squared_error()))
-                .collect(),
-        };
-        Calibration::fit_or(pairs, population.into_iter(), fallback)
+        let population =
+            (self.estimates.iter().zip(self.squared_errors())).map(|(e, &s)| (e.count(), s));
+        Calibration::fit_or(pairs, population, fallback)
     }
 
     /// Where the render stands after `round`, over the window's inner pixels.
@@ -400,18 +430,17 @@ impl WindowState {
         let (mut active, mut worst, mut sum) = (0u64, 0.0f64, 0.0f64);
         for start in rows {
             let range = pixels_of(start);
-            let (estimates, errors) = (&self.estimates[range.clone()], &self.errors[range.clone()]);
+            let estimates = &self.estimates[range.clone()];
+            let errors = &self.errors[range.clone()];
+            let squared = &self.squared_errors()[range.clone()];
             active += (self.targets[range].iter().zip(estimates))
                 .filter(|&(&t, e)| t > e.count())
                 .count() as u64;
-            for (e, &error) in estimates.iter().zip(errors) {
-                match adaptive.rule {
-                    ErrorRule::Pixel => {
-                        worst = worst.max(error);
-                        sum += calibration.squared_error(e);
-                    }
-                    ErrorRule::Image => sum += calibration.corrected(e.count(), error),
+            for ((e, &error), &squared) in estimates.iter().zip(errors).zip(squared) {
+                if adaptive.rule == ErrorRule::Pixel {
+                    worst = worst.max(error);
                 }
+                sum += calibration.corrected(e.count(), squared);
             }
         }
         let pixels = inner.width() as u64 * inner.height() as u64;
@@ -440,18 +469,18 @@ fn error_of(rule: ErrorRule, estimate: &PixelEstimate) -> f64 {
     }
 }
 
-/// Computes the error ([`error_of`]) of the pixels that have none yet (infinite: the pilot's, at
-/// the first selection). A round computes those of the pixels it samples as it goes
-/// ([`Rounds::sample`]), while their estimates are in cache; the others' are unchanged.
-fn fill_unknown_errors(errors: &mut [f64], estimates: &[PixelEstimate], rule: ErrorRule) {
-    errors
-        .par_iter_mut()
-        .zip(estimates.par_iter())
-        .for_each(|(value, estimate)| {
-            if value.is_infinite() {
-                *value = error_of(rule, estimate);
-            }
-        });
+/// Sets each infinite value of `values` (none: an empty slice) to `error` of its pixel's
+/// estimate.
+fn fill_unknown(
+    values: &mut [f64],
+    estimates: &[PixelEstimate],
+    error: impl Fn(&PixelEstimate) -> f64 + Sync,
+) {
+    (values.par_iter_mut().zip(estimates.par_iter())).for_each(|(value, e)| {
+        if value.is_infinite() {
+            *value = error(e);
+        }
+    });
 }
 
 /// Brings the pixel at `(x, y)` of the image to `count` samples, each standing for its share of

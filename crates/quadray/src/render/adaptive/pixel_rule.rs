@@ -43,7 +43,7 @@ pub(super) fn select(
     adaptive: &Adaptive,
     round: u32,
     estimates: &[PixelEstimate],
-    errors: &[f64],
+    (errors, squared_errors): (&[f64], &[f64]),
     width: usize,
 ) -> Vec<bool> {
     let count = round_count(adaptive, round);
@@ -52,7 +52,7 @@ pub(super) fn select(
         _ => adaptive.target_error,
     };
     let own: Vec<bool> = estimates
-        .iter()
+        .par_iter()
         .zip(errors)
         .map(|(estimate, &error)| above(adaptive, estimate.count(), error, threshold))
         .collect();
@@ -62,8 +62,7 @@ pub(super) fn select(
     let mut refine = follow_neighbours(&own, width, |i, _| estimates[i].count() < count);
     if round <= SLIVER_ROUNDS {
         // A flat pixel's relative error is 0: its squared error is what says it is flat.
-        let squared_errors: Vec<f64> = estimates.par_iter().map(|e| e.squared_error()).collect();
-        let across = across_flat_edges(estimates, &squared_errors, width);
+        let across = across_flat_edges(estimates, squared_errors, width);
         for ((refine, across), estimate) in refine.iter_mut().zip(across).zip(estimates) {
             *refine |= across && estimate.count() < count;
         }

@@ -85,51 +85,62 @@ impl Rounds<'_> {
         let ww = window.width() as usize;
         let rule = state.rule;
         let mut aov_rows = self.context.aov_rows(&mut state.aov_samples);
+        // The squared errors are kept apart only under the pixel rule (empty otherwise).
+        let mut squared_rows: Vec<Option<&mut [f64]>> = match state.squared.is_empty() {
+            true => (0..window.height()).map(|_| None).collect(),
+            false => state.squared.chunks_mut(ww).map(Some).collect(),
+        };
         state
             .estimates
             .par_chunks_mut(ww)
             .zip(state.rays.par_chunks_mut(ww))
             .zip(state.errors.par_chunks_mut(ww))
+            .zip(squared_rows.par_iter_mut())
             .zip(state.targets.par_chunks(ww))
             .zip(aov_rows.par_iter_mut())
             .enumerate()
-            .for_each(|(row_index, ((((row, rays), errors), targets), aov_row))| {
-                let y = window.y0 + row_index as u32;
-                let row_done = || {
-                    if (self.inner.y0..self.inner.y1).contains(&y) {
-                        self.progress.row_done();
+            .for_each(
+                |(row_index, (((((row, rays), errors), squared), targets), aov_row))| {
+                    let y = window.y0 + row_index as u32;
+                    let row_done = || {
+                        if (self.inner.y0..self.inner.y1).contains(&y) {
+                            self.progress.row_done();
+                        }
+                    };
+                    if self.progress.cancelled() {
+                        return;
                     }
-                };
-                if self.progress.cancelled() {
-                    return;
-                }
-                if round > 0 && self.out_of_time() {
-                    self.timed_out.store(true, Ordering::Relaxed);
+                    if round > 0 && self.out_of_time() {
+                        self.timed_out.store(true, Ordering::Relaxed);
+                        row_done();
+                        return;
+                    }
+                    let mut counts = RayCounts::default();
+                    let pixels = row.iter_mut().zip(rays).zip(errors.iter_mut());
+                    for (column, ((estimate, pixel_rays), error)) in pixels.enumerate() {
+                        if targets[column] <= estimate.count() {
+                            continue;
+                        }
+                        let before = counts.total();
+                        let aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
+                        sample_pixel(
+                            self.context,
+                            (window.x0 + column as u32, y),
+                            estimate,
+                            aov,
+                            (targets[column], self.adaptive.max_spp),
+                            &mut counts,
+                        );
+                        *pixel_rays += counts.total() - before;
+                        *error = super::error_of(rule, estimate);
+                        if let Some(squared) = squared.as_deref_mut() {
+                            squared[column] = estimate.squared_error();
+                        }
+                    }
+                    *self.totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
                     row_done();
-                    return;
-                }
-                let mut counts = RayCounts::default();
-                let pixels = row.iter_mut().zip(rays).zip(errors.iter_mut());
-                for (column, ((estimate, pixel_rays), error)) in pixels.enumerate() {
-                    if targets[column] <= estimate.count() {
-                        continue;
-                    }
-                    let before = counts.total();
-                    let aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
-                    sample_pixel(
-                        self.context,
-                        (window.x0 + column as u32, y),
-                        estimate,
-                        aov,
-                        (targets[column], self.adaptive.max_spp),
-                        &mut counts,
-                    );
-                    *pixel_rays += counts.total() - before;
-                    *error = super::error_of(rule, estimate);
-                }
-                *self.totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
-                row_done();
-            });
+                },
+            );
     }
 
     /// Brings every twin to its pixel's count, row by row in parallel.

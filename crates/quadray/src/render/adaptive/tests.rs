@@ -282,6 +282,7 @@ fn a_round_samples_pixels_above_the_target_and_their_neighbours() {
     let estimates = vec![sampled; width * height];
     let mut errors = vec![0.0; width * height];
     errors[width + 2] = 0.5;
+    let squared: Vec<f64> = estimates.iter().map(|e| e.squared_error()).collect();
     let selected = |refine: &[bool]| {
         (0..height)
             .map(|y| {
@@ -291,20 +292,26 @@ fn a_round_samples_pixels_above_the_target_and_their_neighbours() {
             })
             .collect::<Vec<_>>()
     };
-    let refine = pixel_rule::select(&adaptive, 1, &estimates, &errors, width);
+    let refine = pixel_rule::select(&adaptive, 1, &estimates, (&errors, &squared), width);
     assert_eq!(selected(&refine), [".xxx.", ".xxx.", ".xxx.", "....."]);
     // After the neighbour rounds, only the pixel itself.
-    let refine = pixel_rule::select(&adaptive, NEIGHBOUR_ROUNDS + 1, &estimates, &errors, width);
+    let refine = pixel_rule::select(
+        &adaptive,
+        NEIGHBOUR_ROUNDS + 1,
+        &estimates,
+        (&errors, &squared),
+        width,
+    );
     assert_eq!(selected(&refine), [".....", "..x..", ".....", "....."]);
     // Below the target but not below the first round's margin: refined (with its neighbours)
     // after the first round only.
     errors[width + 2] = 0.1 * (1.0 + FIRST_ROUND_MARGIN) / 2.0;
-    let refine = pixel_rule::select(&adaptive, 1, &estimates, &errors, width);
+    let refine = pixel_rule::select(&adaptive, 1, &estimates, (&errors, &squared), width);
     assert_eq!(selected(&refine), [".xxx.", ".xxx.", ".xxx.", "....."]);
-    let refine = pixel_rule::select(&adaptive, 2, &estimates, &errors, width);
+    let refine = pixel_rule::select(&adaptive, 2, &estimates, (&errors, &squared), width);
     assert!(!refine.contains(&true));
     errors[width + 2] = 0.1 * FIRST_ROUND_MARGIN * 0.9;
-    let refine = pixel_rule::select(&adaptive, 1, &estimates, &errors, width);
+    let refine = pixel_rule::select(&adaptive, 1, &estimates, (&errors, &squared), width);
     assert!(!refine.contains(&true));
     // A pixel at the maximum, above the target again, is not sampled again, nor are its
     // neighbours for its sake.
@@ -313,7 +320,7 @@ fn a_round_samples_pixels_above_the_target_and_their_neighbours() {
         max_spp: 8,
         ..adaptive
     };
-    let refine = pixel_rule::select(&at_max, 1, &estimates, &errors, width);
+    let refine = pixel_rule::select(&at_max, 1, &estimates, (&errors, &squared), width);
     assert!(!refine.contains(&true));
 }
 
