@@ -105,8 +105,8 @@ impl ProgressiveFilm {
     /// The twins of the pixels, chosen by their samples so far.
     fn choose_twins(&self) -> Vec<((u32, u32), Twin)> {
         let window = self.settings.window();
-        let candidates: Vec<_> = (self.estimates.iter().enumerate())
-            .map(|(i, e)| (window.pixel(i), e))
+        let candidates: Vec<_> = (self.estimates.par_iter().enumerate())
+            .map(|(i, e)| (window.pixel(i), crate::adaptive::is_flat(e)))
             .collect();
         (crate::adaptive::choose_twins(self.settings.seed, &candidates).into_iter())
             .map(|(k, twin)| (candidates[k].0, twin))

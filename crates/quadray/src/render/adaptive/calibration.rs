@@ -33,7 +33,6 @@ use crate::film::{ERROR_BATCHES, PixelEstimate, encode_srgb};
 use crate::integrator::RayCounts;
 use crate::render::SampleContext;
 use crate::sampler::pixel_pattern;
-use rayon::prelude::*;
 
 /// What a twin's seed differs from the image's by: any other value gives an independent sample
 /// set.
@@ -159,15 +158,15 @@ impl TwinOdds {
     }
 }
 
-/// The twins of `candidates` (each pixel's position and first samples), as (the candidate's
-/// index, its twin) in the candidates' order: the strata and their odds ([`TwinOdds`]) are those
-/// of the candidates. Only the chosen, about 1500 whatever the image's size: a slot for every
-/// candidate (a twin is 320 bytes) was 42 MB at 480x270, a third of a preview's time.
-pub fn choose_twins(seed: u32, candidates: &[((u32, u32), &PixelEstimate)]) -> Vec<(usize, Twin)> {
-    let flat: Vec<bool> = candidates.par_iter().map(|(_, e)| is_flat(e)).collect();
-    let odds = TwinOdds::of(flat.iter().copied());
-    (candidates.iter().zip(flat).enumerate())
-        .filter_map(|(i, (&(at, _), flat))| Some((i, odds.twin(seed, at, flat)?)))
+/// The twins of `candidates` (each pixel's position and whether its first samples are flat,
+/// [`is_flat`]), as (the candidate's index, its twin) in the candidates' order: the strata and
+/// their odds ([`TwinOdds`]) are those of the candidates. Only the chosen, about 1500 whatever
+/// the image's size: a slot for every candidate (a twin is 320 bytes) was 42 MB at 480x270, a
+/// third of a preview's time.
+pub fn choose_twins(seed: u32, candidates: &[((u32, u32), bool)]) -> Vec<(usize, Twin)> {
+    let odds = TwinOdds::of(candidates.iter().map(|&(_, flat)| flat));
+    (candidates.iter().enumerate())
+        .filter_map(|(i, &(at, flat))| Some((i, odds.twin(seed, at, flat)?)))
         .collect()
 }
 
@@ -177,7 +176,7 @@ pub(super) fn uniform_draw(seed: u32, at: (u32, u32)) -> f64 {
 }
 
 /// Whether a pixel's samples all agree (an unknown error is not flat).
-fn is_flat(estimate: &PixelEstimate) -> bool {
+pub(crate) fn is_flat(estimate: &PixelEstimate) -> bool {
     is_flat_error(estimate.squared_error())
 }
 

@@ -38,7 +38,7 @@ use crate::render::empty_tiles::EmptyTiles;
 use crate::render::{PixelWindow, Progress, RenderError, Rendered, SampleContext};
 use crate::sampler::{SampleKey, pixel_pattern, progressive_2d};
 pub use calibration::Calibration;
-pub(crate) use calibration::{Twin, choose_twins, sample_twin};
+pub(crate) use calibration::{Twin, choose_twins, is_flat, sample_twin};
 use image_rule::PixelState;
 use pilot::{Plan, state_of};
 use rayon::prelude::*;
@@ -270,11 +270,12 @@ impl WindowState {
     /// Chooses the twins among the pixels outside the pilot, after their first round.
     fn choose_twins(&mut self, context: &SampleContext<'_>) {
         let window = context.window;
-        let (indices, candidates): (Vec<usize>, Vec<_>) = (self.estimates.iter())
+        // Flat or not from the squared errors the first round computed.
+        let (indices, candidates): (Vec<usize>, Vec<_>) = (self.squared_errors().iter())
             .zip(&self.pilot_rounds)
             .enumerate()
             .filter(|(_, (_, pilot))| **pilot == 0)
-            .map(|(i, (e, _))| (i, (window.pixel(i), e)))
+            .map(|(i, (&s, _))| (i, (window.pixel(i), calibration::is_flat_error(s))))
             .unzip();
         for (k, twin) in calibration::choose_twins(context.settings.seed, &candidates) {
             let i = indices[k];

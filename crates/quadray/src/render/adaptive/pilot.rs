@@ -128,7 +128,9 @@ pub(super) fn plan(
         let targets = round_targets(adaptive, &pixels, round, step, whole_width);
         counts += sample_round(context, adaptive, &mut pixels, round, targets);
         if round == 0 {
-            let candidates: Vec<_> = pixels.iter().map(|p| (p.at, &p.estimate)).collect();
+            let candidates: Vec<_> = (pixels.par_iter())
+                .map(|p| (p.at, calibration::is_flat(&p.estimate)))
+                .collect();
             for (k, twin) in calibration::choose_twins(context.settings.seed, &candidates) {
                 pixels[k].twin = Some(Box::new(twin));
             }
