@@ -9,7 +9,8 @@
 //! - [`compare`]: image differences (RMSE, largest difference, FLIP);
 //! - [`snippet`]: a located loader error shown with its line and a caret;
 //! - [`showcase`]: the seed's textbook presentation of each quadric kind;
-//! - [`logging`]: `-v`'s log of phases and files on stderr.
+//! - [`logging`]: `-v`'s log of phases and files on stderr;
+//! - [`memory`]: the memory free for a render, to refuse one too large before it starts.
 //!
 //! Dependencies point down: `quadray` (core) ← `quadray-loader` ← this crate ← the CLI and the
 //! viewer.
@@ -17,6 +18,7 @@
 pub mod compare;
 pub mod exr_file;
 pub mod logging;
+pub mod memory;
 pub mod output;
 pub mod passes;
 pub mod scene_file;

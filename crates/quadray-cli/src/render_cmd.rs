@@ -38,6 +38,12 @@ struct Job {
 pub fn run(args: &RenderArgs) -> Result<()> {
     let (loaded, job) = prepare(args)?;
     let settings = job.settings;
+    // A piece renders its bands of rows; anything else the settings' window.
+    let windows = match args.tile {
+        Some(piece) => piece_bands(piece, settings.width, settings.height),
+        None => vec![settings.window()],
+    };
+    check_memory(args, &settings, job.selection, &windows)?;
     let pool = crate::args::thread_pool(args.threads)?;
     let build_start = Instant::now();
     let scene = pool
@@ -49,11 +55,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let names = &loaded.material_names;
         crate::warnings::print(&args.scene, &scene, names, settings.width, settings.height);
     }
-    // A piece renders its bands of rows; anything else the settings' window.
-    let windows = match args.tile {
-        Some(piece) => piece_bands(piece, settings.width, settings.height),
-        None => vec![settings.window()],
-    };
     let render_start = Instant::now();
     let cpu_start = cpu_time::ProcessTime::try_now().ok();
     let parts = render_windows(args, &pool, &scene, &settings, &windows, job.selection)?;
@@ -242,6 +243,53 @@ fn render_windows(
     }
     bar.finish();
     Ok(parts)
+}
+
+/// Refuses a render whose pixels need more memory than the machine has free
+/// ([`quadray::pixel_memory`] against [`quadray_app::memory::available_bytes`]): the process
+/// would be killed, or aborted by a failed allocation, part way instead.
+fn check_memory(
+    args: &RenderArgs,
+    settings: &RenderSettings,
+    selection: AovSelection,
+    windows: &[PixelWindow],
+) -> Result<()> {
+    use quadray_app::memory::{AVAILABLE_MEMORY_VAR, available_bytes, human_bytes};
+    let context = || format!("cannot render {}", args.scene.display());
+    let Some(available) = available_bytes().with_context(context)? else {
+        return Ok(());
+    };
+    // The windows' films are all kept until the output is written.
+    let needed: u64 = windows
+        .iter()
+        .map(|&w| quadray::pixel_memory(settings, selection, w))
+        .sum();
+    if needed <= available {
+        return Ok(());
+    }
+    let pixels: u64 = windows
+        .iter()
+        .map(|w| u64::from(w.width()) * u64::from(w.height()))
+        .sum();
+    let (kind, uniformly) = match settings.adaptive {
+        Some(_) => ("an adaptive render", ", or sample it uniformly (`--spp`)"),
+        None => ("a render", ""),
+    };
+    Err(anyhow::anyhow!(
+        "{kind} of {pixels} pixels needs about {} for them ({} bytes a pixel{}), and {} is free \
+         ({AVAILABLE_MEMORY_VAR} overrides what the system says): render the image in pieces \
+         (`--tile I/N`, then `quadray merge`) or a window (`--crop`), lower the resolution{}",
+        human_bytes(needed),
+        needed / pixels.max(1),
+        if selection.any() {
+            ", with its passes"
+        } else {
+            ""
+        },
+        human_bytes(available),
+        uniformly,
+    ))
+    .context(context())
 }
 
 /// Writes the rendered windows: one piece's bands, or one image (EXR, PNG, or a PNG pass).

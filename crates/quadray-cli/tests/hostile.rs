@@ -366,3 +366,51 @@ fn confinement_keeps_reads_and_writes_inside_the_folder() {
         "{stdout}"
     );
 }
+
+/// A render whose pixels need more memory than is free is refused before it starts, with one
+/// error line naming the scene, what it needs and what to do, exit status 1 and no file left
+/// (the free memory set by `QUADRAY_AVAILABLE_MEMORY`, as a machine's own cannot be relied on);
+/// a render that fits runs, and a malformed setting is a clear error.
+#[test]
+fn renders_larger_than_free_memory_are_refused_before_they_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::scene("defense.toml");
+    let render = |free: &str, extra: &[&str], out: &str| {
+        let mut args = vec!["render", scene.as_str(), "--res", "200x100", "-o", out];
+        args.extend_from_slice(extra);
+        std::process::Command::new(env!("CARGO_BIN_EXE_quadray"))
+            .args(&args)
+            .env("QUADRAY_AVAILABLE_MEMORY", free)
+            .output()
+            .unwrap()
+    };
+    let out = common::tmp(&dir, "a.exr");
+    let out = out.to_string_lossy();
+    // 20 000 pixels adaptively: about 232 bytes each, 4.6 MB, against 1 MB free.
+    let refused = render("1000000", &["--target-error", "0.01"], &out);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{stderr}");
+    let wanted = [
+        "defense.toml",
+        "adaptive render of 20000 pixels",
+        "1 MB is free",
+        "--tile",
+    ];
+    assert_eq!(error_line_problem(&stderr, &wanted), None);
+    assert!(!std::path::Path::new(&*out).exists());
+    // Uniformly, 32 bytes a pixel: 640 kB fits.
+    let fits = render("1000000", &["--spp", "1"], &out);
+    assert!(
+        fits.status.success(),
+        "{}",
+        String::from_utf8_lossy(&fits.stderr)
+    );
+    let bad = render("plenty", &[], &out);
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(1), "{stderr}");
+    let wanted = [
+        "defense.toml",
+        "QUADRAY_AVAILABLE_MEMORY=\"plenty\" is not a whole number",
+    ];
+    assert_eq!(error_line_problem(&stderr, &wanted), None);
+}

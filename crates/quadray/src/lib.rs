@@ -103,7 +103,7 @@ pub use quadric::{
     ClipBox, Coefficients, Quadric, QuadricClass, QuadricError, QuadricKind, QuadricSurface,
 };
 pub use render::{
-    NoProgress, PixelWindow, Progress, RenderError, RenderSettings, Rendered, render,
+    NoProgress, PixelWindow, Progress, RenderError, RenderSettings, Rendered, pixel_memory, render,
     render_with_aovs,
 };
 pub use scene::{MAX_COORDINATE, Scene, SceneDescription, SceneError};
