@@ -48,6 +48,16 @@ impl AovSelection {
         variance: false,
     };
 
+    /// Every pass.
+    pub const ALL: AovSelection = AovSelection {
+        depth: true,
+        normal: true,
+        albedo: true,
+        object_id: true,
+        sample_count: true,
+        variance: true,
+    };
+
     /// Whether any pass is selected.
     pub fn any(&self) -> bool {
         self.depth
@@ -270,17 +280,6 @@ mod tests {
         .unwrap()
     }
 
-    fn all() -> AovSelection {
-        AovSelection {
-            depth: true,
-            normal: true,
-            albedo: true,
-            object_id: true,
-            sample_count: true,
-            variance: true,
-        }
-    }
-
     #[test]
     fn passes_follow_the_geometry() {
         let s = scene(true);
@@ -289,7 +288,8 @@ mod tests {
             height: 41,
             ..RenderSettings::default()
         };
-        let (rendered, aovs) = render_with_aovs(&s, &settings, all(), &NoProgress).unwrap();
+        let (rendered, aovs) =
+            render_with_aovs(&s, &settings, AovSelection::ALL, &NoProgress).unwrap();
         let aovs = aovs.expect("passes were selected");
         // The centre pixel looks straight down at the sphere's top: depth 10 - 1, normal +z.
         let c = aovs.get(20, 20);

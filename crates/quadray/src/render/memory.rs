@@ -61,14 +61,7 @@ mod tests {
         let adaptive_bytes = pixel_memory(&adaptive, none, whole);
         // Measured peaks at 3840x2160: 230 and 30 bytes a pixel.
         assert!(adaptive_bytes >= 3840 * 2160 * 230 && uniform_bytes >= 3840 * 2160 * 30);
-        let all = AovSelection {
-            depth: true,
-            normal: true,
-            albedo: true,
-            object_id: true,
-            sample_count: true,
-            variance: true,
-        };
+        let all = AovSelection::ALL;
         assert!(pixel_memory(&adaptive, all, whole) >= 3840 * 2160 * 306);
         assert!(pixel_memory(&uniform, all, whole) >= 3840 * 2160 * 127);
         let quarter = PixelWindow {
