@@ -4,14 +4,19 @@ use clap::{Args, Parser, Subcommand};
 use quadray::render::{MAX_DEPTH, MAX_SPP};
 use std::path::{Path, PathBuf};
 
-/// The exit statuses, as `--help` lists them (and the README).
+/// The exit statuses and the environment variables, as `--help` lists them (and the README).
 pub const EXIT_STATUS: &str = "\
 Exit status:
   0  success; for compare, the images match
   1  the scene, an image or a file cannot be used (the message says which and where);
      for compare, the images differ
   2  a usage error: an unknown option or a value out of range; for compare, an image
-     cannot be read";
+     cannot be read
+
+Environment:
+  QUADRAY_CONFINE=DIR              as --confine DIR when the flag is not given
+  QUADRAY_AVAILABLE_MEMORY=BYTES   the memory free for a render, in place of what the system
+                                   reports (a render that needs more is refused before it starts)";
 
 /// Most worker threads `-t` accepts.
 pub const MAX_THREADS: usize = 1024;

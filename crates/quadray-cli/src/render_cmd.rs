@@ -247,7 +247,8 @@ fn render_windows(
 
 /// Refuses a render whose pixels need more memory than the machine has free
 /// ([`quadray::pixel_memory`] against [`quadray_app::memory::available_bytes`]): the process
-/// would be killed, or aborted by a failed allocation, part way instead.
+/// would be killed, or aborted by a failed allocation, part way instead. A malformed
+/// `QUADRAY_AVAILABLE_MEMORY` is a usage error, as a bad `QUADRAY_CONFINE` is.
 fn check_memory(
     args: &RenderArgs,
     settings: &RenderSettings,
@@ -255,20 +256,21 @@ fn check_memory(
     windows: &[PixelWindow],
 ) -> Result<()> {
     use quadray_app::memory::{AVAILABLE_MEMORY_VAR, available_bytes, human_bytes};
-    let context = || format!("cannot render {}", args.scene.display());
-    let Some(available) = available_bytes().with_context(context)? else {
+    let available = available_bytes().map_err(|e| StatusError::usage(e.to_string()))?;
+    let Some(available) = available else {
         return Ok(());
     };
-    // The windows' films are all kept until the output is written.
-    let needed: u64 = windows
-        .iter()
+    // The windows render one after another and are written together: every window's film and
+    // passes, and the largest window's working memory.
+    let memory: Vec<_> = (windows.iter())
         .map(|&w| quadray::pixel_memory(settings, selection, w))
-        .sum();
+        .collect();
+    let kept: u64 = memory.iter().map(|m| m.kept).sum();
+    let needed = kept.saturating_add(memory.iter().map(|m| m.working).max().unwrap_or(0));
     if needed <= available {
         return Ok(());
     }
-    let pixels: u64 = windows
-        .iter()
+    let pixels: u64 = (windows.iter())
         .map(|w| u64::from(w.width()) * u64::from(w.height()))
         .sum();
     let (kind, uniformly) = match settings.adaptive {
@@ -289,7 +291,7 @@ fn check_memory(
         human_bytes(available),
         uniformly,
     ))
-    .context(context())
+    .context(format!("cannot render {}", args.scene.display()))
 }
 
 /// Writes the rendered windows: one piece's bands, or one image (EXR, PNG, or a PNG pass).

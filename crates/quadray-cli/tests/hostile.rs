@@ -370,7 +370,9 @@ fn confinement_keeps_reads_and_writes_inside_the_folder() {
 /// A render whose pixels need more memory than is free is refused before it starts, with one
 /// error line naming the scene, what it needs and what to do, exit status 1 and no file left
 /// (the free memory set by `QUADRAY_AVAILABLE_MEMORY`, as a machine's own cannot be relied on);
-/// a render that fits runs, and a malformed setting is a clear error.
+/// a render that fits runs, a piece of the refused one (the way out the error gives) fits, an
+/// empty setting is no setting, and a malformed one is a usage error, as a bad
+/// `QUADRAY_CONFINE` is.
 #[test]
 fn renders_larger_than_free_memory_are_refused_before_they_start() {
     let dir = tempfile::tempdir().unwrap();
@@ -386,31 +388,46 @@ fn renders_larger_than_free_memory_are_refused_before_they_start() {
     };
     let out = common::tmp(&dir, "a.exr");
     let out = out.to_string_lossy();
-    // 20 000 pixels adaptively: about 232 bytes each, 4.6 MB, against 1 MB free.
-    let refused = render("1000000", &["--target-error", "0.01"], &out);
+    // 20 000 pixels adaptively: about 232 bytes each and the pilot, 4.9 MB, against 2 MB free.
+    let adaptive = ["--target-error", "0.01"];
+    let refused = render("2000000", &adaptive, &out);
     let stderr = String::from_utf8_lossy(&refused.stderr);
     assert_eq!(refused.status.code(), Some(1), "{stderr}");
     let wanted = [
         "defense.toml",
         "adaptive render of 20000 pixels",
-        "1 MB is free",
+        "2 MB is free",
         "--tile",
     ];
     assert_eq!(error_line_problem(&stderr, &wanted), None);
     assert!(!std::path::Path::new(&*out).exists());
+    // A quarter of it as a piece: its bands one at a time, about 0.9 MB.
+    let piece = render(
+        "2000000",
+        &[&adaptive[..], &["--tile", "1/4"]].concat(),
+        &out,
+    );
+    assert!(
+        piece.status.success(),
+        "{}",
+        String::from_utf8_lossy(&piece.stderr)
+    );
     // Uniformly, 32 bytes a pixel: 640 kB fits.
-    let fits = render("1000000", &["--spp", "1"], &out);
+    let fits = render("2000000", &["--spp", "1"], &out);
     assert!(
         fits.status.success(),
         "{}",
         String::from_utf8_lossy(&fits.stderr)
     );
+    let unset = render("", &adaptive, &out);
+    assert!(
+        unset.status.success(),
+        "{}",
+        String::from_utf8_lossy(&unset.stderr)
+    );
     let bad = render("plenty", &[], &out);
     let stderr = String::from_utf8_lossy(&bad.stderr);
-    assert_eq!(bad.status.code(), Some(1), "{stderr}");
-    let wanted = [
-        "defense.toml",
-        "QUADRAY_AVAILABLE_MEMORY=\"plenty\" is not a whole number",
-    ];
+    assert_eq!(bad.status.code(), Some(2), "{stderr}");
+    let wanted = ["QUADRAY_AVAILABLE_MEMORY=\"plenty\" is not a whole number of bytes"];
     assert_eq!(error_line_problem(&stderr, &wanted), None);
 }

@@ -1,22 +1,42 @@
 //! What a render holds in memory for its pixels at its peak, so that a caller can refuse a render
 //! the machine cannot hold before it starts, rather than be killed part way.
 //!
-//! The figures are peak resident sizes measured on the quadric grid at 3840x2160 (whose scene
-//! is a few kilobytes, so the pixels are all of it), divided by the pixels and rounded up:
+//! The figures come from peak resident sizes measured on the quadric grid at 3840x2160 (whose
+//! scene is a few kilobytes, so the pixels are all of it), divided by the pixels and rounded up:
 //! 30 bytes a pixel for a uniform render to EXR (the f32 film and the file's encoding), 127 with
-//! every pass, 230 for an adaptive render (each pixel's estimate of 152 bytes and its state
-//! through the rounds and the audit) and 306 for an adaptive render with every pass.
+//! every pass, 230 for an adaptive render (each pixel's estimate of 152 bytes, its state through
+//! the rounds and the audit, and the pilot) and 306 for an adaptive render with every pass.
 
+use super::adaptive::{pilot_pixels, sampled_window};
 use super::{PixelWindow, RenderSettings};
 use crate::aov::AovSelection;
 
-/// Bytes a pixel of any render holds: the f32 RGB film and the output's encoding.
+/// Bytes a pixel of any render holds until its image is written: the f32 RGB film and the
+/// output's encoding.
 const FILM_BYTES: u64 = 32;
-/// Bytes a pixel's passes add, when any is selected: its pass sample and their output.
+/// Bytes a pixel's passes add to what it holds until written, when any is selected.
 const PASS_BYTES: u64 = 96;
-/// Bytes an adaptive render adds to a pixel: its estimate ([`crate::film::PixelEstimate`]), its
-/// rays, errors, target and pilot bits, and the rounds' and the audit's per-pixel arrays.
+/// Bytes an adaptive render holds for each pixel it samples while it renders: its estimate
+/// ([`crate::film::PixelEstimate`]), rays, errors, target and pilot bits, and the rounds' and the
+/// audit's per-pixel arrays.
 const ADAPTIVE_BYTES: u64 = 200;
+/// Bytes an adaptive render of a window smaller than what it samples (a crop, a piece: its
+/// border) adds for each pixel of the window: the copies of their estimates and state it cuts
+/// out of the bordered arrays at the end.
+const CROP_BYTES: u64 = 176;
+/// Bytes a pilot pixel holds (its estimate, passes and round bits; its twin is boxed).
+const PILOT_PIXEL_BYTES: u64 = 240;
+
+/// The memory a render holds for its pixels ([`pixel_memory`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelMemory {
+    /// Bytes held until the image is written: its film and passes. A caller that renders several
+    /// windows one after another and writes them together holds each window's.
+    pub kept: u64,
+    /// Bytes held while the window renders and freed when it is done (an adaptive render's
+    /// estimates, state and pilot; 0 for a uniform one).
+    pub working: u64,
+}
 
 /// About the most memory a render of `window` under `settings` with passes `selection` holds for
 /// its pixels (see the module documentation for the figures); the scene and its acceleration
@@ -25,16 +45,28 @@ pub fn pixel_memory(
     settings: &RenderSettings,
     selection: AovSelection,
     window: PixelWindow,
-) -> u64 {
-    let pixels = u64::from(window.width()) * u64::from(window.height());
-    let mut per_pixel = FILM_BYTES;
-    if selection.any() {
-        per_pixel += PASS_BYTES;
+) -> PixelMemory {
+    let pixels = |w: PixelWindow| u64::from(w.width()) * u64::from(w.height());
+    let kept_per_pixel = FILM_BYTES + if selection.any() { PASS_BYTES } else { 0 };
+    let working = settings.adaptive.map_or(0, |adaptive| {
+        let (width, height) = (settings.width, settings.height);
+        let sampled = sampled_window(window, &adaptive, width, height);
+        let crop = if sampled == window {
+            0
+        } else {
+            pixels(window) * CROP_BYTES
+        };
+        // The pilot covers the whole image, whatever the window.
+        let pilot = match adaptive.is_planned() {
+            true => pilot_pixels(width, height) * PILOT_PIXEL_BYTES,
+            false => 0,
+        };
+        (pixels(sampled) * ADAPTIVE_BYTES).saturating_add(crop + pilot)
+    });
+    PixelMemory {
+        kept: pixels(window).saturating_mul(kept_per_pixel),
+        working,
     }
-    if settings.adaptive.is_some() {
-        per_pixel += ADAPTIVE_BYTES;
-    }
-    pixels.saturating_mul(per_pixel)
 }
 
 #[cfg(test)]
@@ -42,7 +74,8 @@ mod tests {
     use super::*;
     use crate::adaptive::Adaptive;
 
-    /// Adaptive renders and passes cost more a pixel, and a window only its own pixels.
+    /// Adaptive renders and passes cost more a pixel, at least what was measured; a window holds
+    /// its own film, and an adaptive one its border and the whole image's pilot too.
     #[test]
     fn memory_grows_with_what_a_pixel_holds() {
         let uniform = RenderSettings {
@@ -51,25 +84,34 @@ mod tests {
             ..RenderSettings::default()
         };
         let whole = uniform.window();
+        let pixels = 3840 * 2160;
         let none = AovSelection::NONE;
+        let all = AovSelection::ALL;
+        let total = |m: PixelMemory| m.kept + m.working;
         let uniform_bytes = pixel_memory(&uniform, none, whole);
-        assert_eq!(uniform_bytes, 3840 * 2160 * FILM_BYTES);
+        assert_eq!(uniform_bytes.working, 0);
+        assert!(total(uniform_bytes) >= pixels * 30);
+        assert!(total(pixel_memory(&uniform, all, whole)) >= pixels * 127);
         let adaptive = RenderSettings {
             adaptive: Some(Adaptive::default()),
             ..uniform
         };
         let adaptive_bytes = pixel_memory(&adaptive, none, whole);
-        // Measured peaks at 3840x2160: 230 and 30 bytes a pixel.
-        assert!(adaptive_bytes >= 3840 * 2160 * 230 && uniform_bytes >= 3840 * 2160 * 30);
-        let all = AovSelection::ALL;
-        assert!(pixel_memory(&adaptive, all, whole) >= 3840 * 2160 * 306);
-        assert!(pixel_memory(&uniform, all, whole) >= 3840 * 2160 * 127);
+        assert_eq!(adaptive_bytes.kept, uniform_bytes.kept);
+        assert!(total(adaptive_bytes) >= pixels * 230);
+        assert!(total(pixel_memory(&adaptive, all, whole)) >= pixels * 306);
+        // A quarter of the image: a quarter of the film, but a border, copies of its pixels and
+        // the whole image's pilot besides.
         let quarter = PixelWindow {
             x0: 0,
             y0: 0,
             x1: 1920,
             y1: 1080,
         };
-        assert_eq!(4 * pixel_memory(&adaptive, none, quarter), adaptive_bytes);
+        let part = pixel_memory(&adaptive, none, quarter);
+        assert_eq!(4 * part.kept, adaptive_bytes.kept);
+        let pilot = pilot_pixels(3840, 2160) * PILOT_PIXEL_BYTES;
+        let bordered = 1923 * 1083 * ADAPTIVE_BYTES;
+        assert_eq!(part.working, bordered + 1920 * 1080 * CROP_BYTES + pilot);
     }
 }

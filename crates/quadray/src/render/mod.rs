@@ -14,7 +14,7 @@ mod uniform;
 
 pub(crate) use context::SampleContext;
 pub use error::{RenderError, check_resolution};
-pub use memory::pixel_memory;
+pub use memory::{PixelMemory, pixel_memory};
 pub use progress::{NoProgress, Progress};
 // The limits, where the render's users have always found them.
 pub use crate::limits::{MAX_ASPECT, MAX_DEPTH, MAX_PIXELS, MAX_SIDE, MAX_SPP};

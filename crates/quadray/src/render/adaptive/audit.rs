@@ -84,9 +84,9 @@ pub(super) struct Pixels<'a> {
     pub estimates: &'a [PixelEstimate],
     /// The rays each traced.
     pub rays: &'a [u64],
-    /// Their batch-means squared errors ([`PixelEstimate::squared_error`]) where the caller
-    /// holds them; computed here otherwise.
-    pub squared_errors: Option<&'a [f64]>,
+    /// Their batch-means squared errors ([`PixelEstimate::squared_error`]), which the rounds
+    /// keep current.
+    pub squared_errors: &'a [f64],
 }
 
 /// The audited MSE of the display values of the window of `context`, whose `pixels` have their
@@ -203,28 +203,18 @@ struct Weights {
 }
 
 /// Each pixel's [`Weights`], for the pixels `estimates` (row-major, `width` wide) having traced
-/// `rays`, whose batch-means squared errors are `known` when given.
+/// `rays`, whose batch-means squared errors are `squared_errors`.
 fn draw_weights(
     (estimates, rays): (&[PixelEstimate], &[u64]),
-    known: Option<&[f64]>,
+    squared_errors: &[f64],
     calibration: &Calibration,
     width: usize,
 ) -> Vec<Weights> {
-    let computed: Vec<f64>;
-    let squared_errors = match known {
-        Some(known) => {
-            debug_assert!(
-                (known.iter().zip(estimates))
-                    .all(|(k, e)| k.to_bits() == e.squared_error().to_bits()),
-                "the squared errors given are the estimates' own"
-            );
-            known
-        }
-        None => {
-            computed = estimates.par_iter().map(|e| e.squared_error()).collect();
-            &computed
-        }
-    };
+    debug_assert!(
+        (squared_errors.iter().zip(estimates))
+            .all(|(s, e)| s.to_bits() == e.squared_error().to_bits()),
+        "the squared errors given are the estimates' own"
+    );
     let contrasts = flat_contrasts(estimates, squared_errors, width);
     (estimates.par_iter().zip(rays))
         .zip(squared_errors.par_iter().zip(contrasts))

@@ -210,10 +210,8 @@ impl Budget {
     }
 }
 
-/// The image MSE the threshold `lambda` is predicted to reach: a pixel taken to its
-/// optimal count n' (where its value, falling as n^−α, reaches λ) keeps s (n/n')^α of its squared error s, and since (n/n')^α = λ/v there
-/// that is λ c, its value brought to the threshold times its cost (no power to evaluate). Tests
-/// ask it directly; [`next_step`] through a [`Prediction`] made once.
+/// [`Prediction::mse`] of `states` (tests ask it directly; [`next_step`] makes its
+/// [`Prediction`] once).
 #[cfg(test)]
 fn predicted_mse(states: &[PixelState], aim: &Aim, lambda: f64) -> f64 {
     Prediction::new(states, aim).mse(lambda)
@@ -240,8 +238,10 @@ impl Prediction {
         )
     }
 
-    /// The image MSE the threshold `lambda` is predicted to reach (see [`predicted_mse`]'s
-    /// equation), summed in the pixels' order.
+    /// The image MSE the threshold `lambda` is predicted to reach, summed in the pixels' order:
+    /// a pixel taken to its optimal count n' (where its value, falling as n^−α, reaches λ) keeps
+    /// s (n/n')^α of its squared error s, and since (n/n')^α = λ/v there that is λ c, its value
+    /// brought to the threshold times its cost (no power to evaluate).
     fn mse(&self, lambda: f64) -> f64 {
         (self.0.iter())
             .map(|&(value, cost, squared_error)| match value > lambda {
@@ -263,8 +263,8 @@ fn solve(highest: f64, enough: impl Fn(f64) -> bool) -> f64 {
     }
     for _ in 0..60 {
         let mid = (low * high).sqrt();
-        // Once the midpoint is an end, no later step moves either (`low` never is enough and
-        // `high` always is): the answer is found.
+        // Once the midpoint is an end, every later step finds the same midpoint and leaves the
+        // ends as they are (`low` is never enough): the answer is found.
         if mid == low || mid == high {
             break;
         }

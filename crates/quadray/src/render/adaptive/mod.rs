@@ -88,14 +88,7 @@ pub(crate) fn render_adaptive(
     } else {
         None
     };
-    // A pixel's decisions depend on its neighbours', which depend on theirs one round earlier:
-    // sampling a border as wide as the neighbour rounds around the window makes its pixels those
-    // of the whole render.
-    let border = match adaptive.rule {
-        ErrorRule::Image => NEIGHBOUR_ROUNDS,
-        ErrorRule::Pixel => pixel_rule::refinement_rounds(adaptive),
-    };
-    let window = bordered(inner, border, settings.width, settings.height);
+    let window = sampled_window(inner, adaptive, settings.width, settings.height);
     let bordered_context = context.with_window(window);
     let empty_tiles = EmptyTiles::find(&bordered_context);
     let rounds = Rounds {
@@ -139,12 +132,12 @@ pub(crate) fn render_adaptive(
     }
     let calibration = state.calibration_or(plan.as_ref().map(|p| &p.calibration));
     let inner_context = context.with_window(inner).with_empty_tiles(&empty_tiles);
-    // Under the image rule the rounds keep every pixel's batch-means squared error current
-    // (each round's selection recomputes those the round sampled), which the audit's draw needs.
+    // The rounds keep every pixel's batch-means squared error current (each round computes
+    // those of the pixels it samples), which the audit's draw needs.
     let inner_pixels = audit::Pixels {
         estimates: &crop(&state.estimates, window, inner),
         rays: &crop(&state.rays, window, inner),
-        squared_errors: Some(&crop(state.squared_errors(), window, inner)),
+        squared_errors: &crop(state.squared_errors(), window, inner),
     };
     let (estimated_mse, audit_counts) =
         audit::audit(&inner_context, inner_pixels, &calibration, adaptive.max_spp);
@@ -608,6 +601,30 @@ impl Sampled {
 }
 
 /// `window` grown by `border` pixels on every side, within a `width` × `height` image.
+/// The window an adaptive render of `window` of a `width` × `height` image samples: a pixel's
+/// decisions depend on its neighbours', which depend on theirs one round earlier, so a border as
+/// wide as the rounds that follow neighbours (clipped to the image) makes its pixels those of the
+/// whole render.
+pub(crate) fn sampled_window(
+    window: PixelWindow,
+    adaptive: &Adaptive,
+    width: u32,
+    height: u32,
+) -> PixelWindow {
+    let border = match adaptive.rule {
+        ErrorRule::Image => NEIGHBOUR_ROUNDS,
+        ErrorRule::Pixel => pixel_rule::refinement_rounds(adaptive),
+    };
+    bordered(window, border, width, height)
+}
+
+/// How many pixels the pilot of a planned render of a `width` × `height` image holds
+/// ([`pilot`]), whatever window the render covers.
+pub(crate) fn pilot_pixels(width: u32, height: u32) -> u64 {
+    let stride = pilot::stride(width, height);
+    u64::from(width.div_ceil(stride)) * u64::from(height.div_ceil(stride))
+}
+
 fn bordered(window: PixelWindow, border: u32, width: u32, height: u32) -> PixelWindow {
     PixelWindow {
         x0: window.x0.saturating_sub(border),

@@ -173,7 +173,7 @@ impl Adaptive {
     /// Whether the image is sampled to a target or budget decided on the whole image
     /// ([`ErrorRule::Image`]) and without a time limit: its rounds then follow a plan made from
     /// a pilot that every piece of the image computes alike (see `pilot`).
-    pub(super) fn is_planned(&self) -> bool {
+    pub(crate) fn is_planned(&self) -> bool {
         self.rule == ErrorRule::Image && self.time_limit.is_none()
     }
 }
