@@ -93,8 +93,6 @@ pub struct Scene {
     light_buffers: Vec<Option<LightBuffer>>,
     /// The pinhole camera's eye buffer, where the scene has one ([`Accel::eye_buffer`]).
     eye_buffer: Option<EyeBuffer>,
-    /// Whether camera rays ask the eye buffer one by one ([`Accel::eye_answers_rays`]).
-    eye_answers_rays: bool,
     /// Whether any mesh is single-sided: only then do closest hits check for back faces.
     single_sided: bool,
     /// Whether any material has a texture that is filtered over ray cones: only then do rays
@@ -232,7 +230,6 @@ impl Scene {
             Projection::Perspective { .. } => accel.eye_buffer(&d.geometry, d.camera.from),
             Projection::Orthographic { .. } => None,
         };
-        let eye_answers_rays = accel.eye_answers_rays();
         Ok(Scene {
             camera: d.camera,
             background: d.background,
@@ -242,7 +239,6 @@ impl Scene {
             geometry: d.geometry,
             accel,
             light_buffers,
-            eye_answers_rays,
             eye_buffer,
             single_sided,
             filters_textures,
@@ -457,7 +453,7 @@ impl Scene {
     /// the camera's eye.
     #[inline(always)]
     fn closest(&self, ray: &Ray, from: Option<PrimRef>) -> Option<(f64, PrimRef)> {
-        if self.eye_answers_rays
+        if self.accel.eye_answers_rays()
             && from.is_none()
             && let Some(eye) = &self.eye_buffer
         {

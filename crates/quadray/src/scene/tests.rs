@@ -53,6 +53,11 @@ fn scene(single_sided: bool, placement: Option<DAffine3>) -> Scene {
                 .push(Instance::new(0, Transform::new(m).unwrap()));
         }
     }
+    unlit(geometry)
+}
+
+/// `geometry` seen by [`looking_down`], one default material, no lights, a black background.
+fn unlit(geometry: Geometry) -> Scene {
     Scene::new(SceneDescription {
         camera: looking_down(),
         background: Vec3::ZERO,
@@ -324,15 +329,7 @@ fn cones_beside_the_world_meet_nothing() {
         normal: DVec3::Z,
         material: 0,
     });
-    let scene = Scene::new(SceneDescription {
-        camera: looking_down(),
-        background: Vec3::ZERO,
-        environment: None,
-        materials: vec![Material::default()],
-        lights: vec![],
-        geometry,
-    })
-    .unwrap();
+    let scene = unlit(geometry);
     assert!(scene.eye_buffer.is_none());
     for eye in [DVec3::new(0.0, 0.0, 12.0), DVec3::new(-16.0, 9.0, 4.0)] {
         let (mut empty, mut cones) = (0, 0);
