@@ -2,7 +2,8 @@
 //! the twins, and the plan of a round under a time limit.
 
 use super::image_rule::{self, Aim, Budget, PixelState, Step};
-use super::{Adaptive, Stop, WindowState, sample_pixel, sample_twin};
+use super::window::{WindowState, error_of};
+use super::{Adaptive, Stop, sample_pixel, sample_twin};
 use crate::integrator::RayCounts;
 use crate::render::{PixelWindow, Progress, SampleContext};
 use rayon::prelude::*;
@@ -132,7 +133,7 @@ impl Rounds<'_> {
                             &mut counts,
                         );
                         *pixel_rays += counts.total() - before;
-                        *error = super::error_of(rule, estimate);
+                        *error = error_of(rule, estimate);
                         if let Some(squared) = squared.as_deref_mut() {
                             squared[column] = estimate.squared_error();
                         }
