@@ -73,6 +73,7 @@ pub use render::{adaptive, progressive};
 pub mod sampler;
 pub mod scene;
 pub mod shape;
+pub mod simd;
 pub mod sphere;
 pub mod texture;
 pub use texture::image as image_texture;
@@ -80,7 +81,7 @@ pub use texture::image as image_texture;
 mod test_rng;
 pub mod triangle;
 
-pub use accel::{AccelStats, SimdPath, simd_path};
+pub use accel::AccelStats;
 pub use adaptive::{Adaptive, AdaptiveError, SamplingStats};
 pub use aov::{AovSample, AovSelection, Aovs};
 pub use camera::{Camera, CameraError, CameraFrame, Projection};
@@ -108,5 +109,6 @@ pub use render::{
 };
 pub use scene::{MAX_COORDINATE, Scene, SceneDescription, SceneError};
 pub use shape::{LocalPrim, PrimRef, SurfaceGeometry, SurfaceHit};
+pub use simd::{SimdPath, simd_path};
 pub use sphere::Sphere;
 pub use texture::{ImageTexture, Texture, TexturePoint, VertexAttributes};

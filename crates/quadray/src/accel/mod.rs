@@ -40,7 +40,6 @@ mod build;
 mod corner_cone;
 mod level;
 mod mesh_bvh;
-mod simd;
 mod sphere4;
 mod sphere_clusters;
 mod stack;
@@ -53,6 +52,7 @@ use crate::geometry::Geometry;
 use crate::geometry::instance::Placements;
 use crate::math::Ray;
 use crate::shape::{LocalPrim, PrimRef};
+pub use crate::simd::{SimdPath, simd_path};
 use analytic::AnalyticBvh;
 pub use buffers::{EyeBuffer, LightBuffer};
 use build::Bounds;
@@ -60,7 +60,6 @@ pub use build::Layout;
 use glam::DVec3;
 use mesh_bvh::MeshBvh;
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
-pub use simd::{SimdPath, simd_path};
 pub use stats::AccelStats;
 
 /// One leaf item of a level's top.

@@ -5,12 +5,13 @@ use crate::aov::{AovSample, Aovs};
 use crate::film::{Film, PixelEstimate};
 use crate::footprint::RayCone;
 use crate::integrator::RayCounts;
+use crate::math::Ray;
 use crate::render::adaptive::SamplingStats;
 use crate::render::context::SampleContext;
 use crate::render::row_order::{BLOCK_ROWS, row_keys};
 use crate::render::{PixelWindow, Progress, RenderError, Rendered};
 use crate::sampler::{PixelSampler, SampleKey, pixel_pattern};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -184,18 +185,28 @@ fn render_segment(
     let (settings, window, selection) = (context.settings, context.window, context.selection);
     let spp = settings.spp;
     let inv_spp = 1.0 / spp as f32;
-    let mut rays = Vec::with_capacity(BATCH_SAMPLES.max(spp as usize));
+    let batch_samples = BATCH_SAMPLES.max(spp as usize);
+    let (mut positions, mut rays) = (Vec::with_capacity(batch_samples), Vec::new());
+    let mut offsets = vec![(0.0, 0.0); spp as usize];
+    rays.resize(batch_samples, Ray::new(DVec3::ZERO, DVec3::ZERO));
     let batch_pixels = (BATCH_SAMPLES / spp as usize).max(1);
     for (batch, pixels) in pixels.chunks_mut(batch_pixels).enumerate() {
         let first = batch * batch_pixels;
         let x0 = window.x0 + (first_column + first) as u32;
         // The batch's camera rays first: their divisions and square roots do not wait on each
-        // other, where made one before each trace they wait in line.
-        rays.clear();
+        // other, where made one before each trace they wait in line, and they run packed.
+        positions.clear();
         for x in x0..x0 + pixels.len() as u32 {
             sampler.start_pixel(pixel_pattern(x, y, settings.seed));
-            rays.extend((0..spp).map(|s| context.camera_ray((x, y), sampler.sample(s))));
+            sampler.samples(&mut offsets);
+            positions.extend(
+                offsets
+                    .iter()
+                    .map(|&(dx, dy)| [x as f64 + dx, y as f64 + dy]),
+            );
         }
+        let rays = &mut rays[..positions.len()];
+        context.camera_rays(&positions, rays);
         let mut rays = rays.iter();
         for (i, pixel) in pixels.iter_mut().enumerate() {
             let x = x0 + i as u32;
@@ -239,7 +250,7 @@ pub(crate) mod tests {
     use crate::render::{
         NoProgress, PixelWindow, Progress, RenderError, RenderSettings, render_with_aovs,
     };
-    use crate::sampler::{PixelSampler, SampleKey, pixel_pattern};
+    use crate::sampler::{SampleKey, pixel_pattern, sample_2d};
     use crate::scene::Scene;
     use crate::{RayCounts, Sphere, Transform};
     use glam::{DVec3, Vec3};
@@ -317,13 +328,11 @@ pub(crate) mod tests {
         );
         let context = SampleContext::new(scene, settings, AovSelection::NONE).unwrap();
         let cone = context.sample_cone(spp);
-        let mut sampler = PixelSampler::new(spp);
         let mut counts = RayCounts::default();
         let mut varied = 0;
         for y in window.y0..window.y1 {
             for x in window.x0..window.x1 {
                 let pattern = pixel_pattern(x, y, settings.seed);
-                sampler.start_pixel(pattern);
                 let sum: Vec3 = (0..spp)
                     .map(|index| {
                         let key = SampleKey {
@@ -331,7 +340,7 @@ pub(crate) mod tests {
                             index,
                             count: Some(spp),
                         };
-                        let offset = sampler.sample(index);
+                        let offset = sample_2d(index, spp, pattern);
                         context.trace((x, y), offset, cone, key, None, &mut counts)
                     })
                     .sum();

@@ -39,6 +39,7 @@ use crate::render::{PixelWindow, Progress, RenderError, Rendered, SampleContext}
 use crate::sampler::{SampleKey, pixel_pattern, progressive_2d};
 pub use calibration::Calibration;
 pub(crate) use calibration::{Twin, choose_twins, is_flat, sample_twin};
+use glam::DVec3;
 use rounds::Rounds;
 pub use settings::{
     Adaptive, AdaptiveError, DEFAULT_MAX_SPP, DEFAULT_MIN_SPP, ErrorRule, MAX_TIME_LIMIT_SECS,
@@ -209,10 +210,13 @@ fn sample_sequence(
         // The batch's camera rays first, as the uniform renderer makes its own: their square
         // roots and divisions overlap instead of each waiting in line before its trace (a
         // batch shorter than the array repeats its last ray, unused).
-        let rays: [Ray; RAY_BATCH as usize] = std::array::from_fn(|k| {
+        let positions: [[f64; 2]; RAY_BATCH as usize] = std::array::from_fn(|k| {
             let index = (start + k as u32).min(end - 1);
-            context.camera_ray((x, y), progressive_2d(index, pattern))
+            let (dx, dy) = progressive_2d(index, pattern);
+            [x as f64 + dx, y as f64 + dy]
         });
+        let mut rays = [Ray::new(DVec3::ZERO, DVec3::ZERO); RAY_BATCH as usize];
+        context.camera_rays(&positions, &mut rays);
         for (index, ray) in (start..end).zip(&rays) {
             let first_hit = match aov.as_deref_mut() {
                 Some(aov) if index == 0 => Some(aov),

@@ -1,9 +1,9 @@
-//! The compiled traversal paths: the target's baseline and, on x86-64, AVX2 with FMA chosen at
-//! run time.
+//! The compiled paths of the hot loops (the traversal, camera rays, sample points): the target's
+//! baseline and, on x86-64, AVX2 with FMA chosen at run time.
 
 use std::sync::OnceLock;
 
-/// Which compiled traversal path runs on this machine.
+/// Which compiled path runs on this machine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SimdPath {
     /// The target's baseline instruction set (SSE2 on x86-64, NEON on aarch64).
@@ -23,7 +23,7 @@ impl std::fmt::Display for SimdPath {
     }
 }
 
-/// The traversal path chosen for this process: AVX2+FMA where the CPU has them, unless the
+/// The path chosen for this process: AVX2+FMA where the CPU has them, unless the
 /// environment variable `QUADRAY_SIMD=baseline` asks for the baseline.
 pub fn simd_path() -> SimdPath {
     static PATH: OnceLock<SimdPath> = OnceLock::new();

@@ -1,0 +1,110 @@
+//! The pixel sampler's points eight samples at a time in AVX2 registers: Kensler's `permute` and
+//! `randfloat` hashes, the same 32-bit operations lane by lane as [`super::permute_in`] and
+//! [`super::rand_float`], and the same f64 operations as [`super::multi_jittered`] (IEEE, none
+//! fused), so the same points bit for bit.
+
+use super::SampleKeys;
+use std::arch::x86_64::*;
+
+/// Samples `first..first + 8` of a pixel keyed by `keys` whose `count` samples lie in a grid of
+/// `m` columns and `n` rows of strata, all three powers of two (`count` at least 8): Kensler's
+/// correlated multi-jittered points, as [`super::multi_jittered`] makes them one at a time. A
+/// sample's permuted index s gives its column s mod m and row s div m, each permuted over its
+/// range (the table [`super::PixelSampler`] builds otherwise), and its point is
+/// ((column + (row + jx)/n)/m, (s + jy)/count), the divisions by powers of two done as the exact
+/// multiplications [`super::divide`] does.
+#[target_feature(enable = "avx2")]
+pub(super) fn points(
+    first: u32,
+    (count, m, n): (u32, u32, u32),
+    keys: SampleKeys,
+) -> [(f64, f64); 8] {
+    debug_assert!(count >= 8 && [count, m, n].iter().all(|c| c.is_power_of_two()));
+    let index = _mm256_add_epi32(splat(first), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    let s = permute(index, count, keys.order);
+    let column_of = _mm256_and_si256(s, splat(m - 1));
+    let row_of = _mm256_srl_epi32(s, _mm_cvtsi32_si128(m.trailing_zeros() as i32));
+    let (column, row) = (
+        permute(column_of, m, keys.column),
+        permute(row_of, n, keys.row),
+    );
+    let (jx, jy) = (rand_float(s, keys.jitter_x), rand_float(s, keys.jitter_y));
+    let inverse = |d: u32| _mm256_set1_pd(1.0 / d as f64);
+    let mut xy = [[0.0; 8]; 2];
+    for half in 0..2 {
+        let [s, column, row] = [s, column, row].map(|v| exact_f64(v, half));
+        let x = _mm256_add_pd(row, jx[half]);
+        let x = _mm256_add_pd(column, _mm256_mul_pd(x, inverse(n)));
+        let x = _mm256_mul_pd(x, inverse(m));
+        let y = _mm256_mul_pd(_mm256_add_pd(s, jy[half]), inverse(count));
+        // SAFETY: each store writes four f64s inside its eight.
+        unsafe {
+            _mm256_storeu_pd(xy[0][4 * half..].as_mut_ptr(), x);
+            _mm256_storeu_pd(xy[1][4 * half..].as_mut_ptr(), y);
+        }
+    }
+    std::array::from_fn(|k| (xy[0][k], xy[1][k]))
+}
+
+/// Lanes `4·half..4·half + 4` of eight u32s below 2³¹, as f64s (exactly).
+#[target_feature(enable = "avx2")]
+fn exact_f64(lanes: __m256i, half: usize) -> __m256d {
+    let half = match half {
+        0 => _mm256_castsi256_si128(lanes),
+        _ => _mm256_extracti128_si256::<1>(lanes),
+    };
+    _mm256_cvtepi32_pd(half)
+}
+
+/// Eight copies of `value`.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn splat(value: u32) -> __m256i {
+    _mm256_set1_epi32(value as i32)
+}
+
+/// Kensler's `permute` of eight indices in [0, `len`) keyed by `p`, for a power-of-two `len`:
+/// masked to `len`'s bits, the hash lands in range at its first round, so no lane walks again.
+#[target_feature(enable = "avx2")]
+fn permute(i: __m256i, len: u32, p: u32) -> __m256i {
+    let w = splat(len - 1);
+    let mul = |i, k: u32| _mm256_mullo_epi32(i, splat(k));
+    let xor = |i, k: u32| _mm256_xor_si256(i, splat(k));
+    // i ^= (i & w) >> s
+    let fold =
+        |i, bits: __m128i| _mm256_xor_si256(i, _mm256_srl_epi32(_mm256_and_si256(i, w), bits));
+    let by = |s: i32| _mm_cvtsi32_si128(s);
+    let mut i = mul(xor(i, p), 0xe170893d);
+    i = fold(xor(i, p >> 16), by(4));
+    i = mul(xor(i, p >> 8), 0x0929eb3f);
+    i = fold(xor(i, p >> 23), by(1));
+    i = mul(mul(i, 1 | p >> 27), 0x6935fa69);
+    i = mul(fold(i, by(11)), 0x74dcb303);
+    i = mul(fold(i, by(2)), 0x9e501cc3);
+    i = _mm256_and_si256(mul(fold(i, by(2)), 0xc860a3df), w);
+    i = _mm256_xor_si256(i, _mm256_srli_epi32::<5>(i));
+    // remainder(i + p, len), a mask for a power of two.
+    _mm256_and_si256(_mm256_add_epi32(i, splat(p)), w)
+}
+
+/// Kensler's `randfloat` of eight indices keyed by `p`: lanes 0–3, then 4–7, in [0, 1).
+#[target_feature(enable = "avx2")]
+fn rand_float(i: __m256i, p: u32) -> [__m256d; 2] {
+    let shifted = |i, bits: i32| _mm256_xor_si256(i, _mm256_srl_epi32(i, _mm_cvtsi32_si128(bits)));
+    let mul = |i, k: u32| _mm256_mullo_epi32(i, splat(k));
+    let mut i = _mm256_xor_si256(i, splat(p));
+    i = mul(shifted(shifted(i, 17), 10), 0xb36534e5);
+    i = mul(shifted(shifted(i, 12), 21), 0x93fc4795);
+    i = _mm256_xor_si256(i, splat(0xdf6e307f));
+    i = mul(shifted(i, 17), 1 | p >> 18);
+    // The u32 as f64, exactly: flipped to a signed value 2³¹ lower, converted, moved back up.
+    let signed = _mm256_xor_si256(i, splat(0x8000_0000));
+    let half = _mm256_set1_pd(2_147_483_648.0);
+    let scale = _mm256_set1_pd(4_294_967_808.0);
+    let to_unit =
+        |lanes: __m128i| _mm256_div_pd(_mm256_add_pd(_mm256_cvtepi32_pd(lanes), half), scale);
+    [
+        to_unit(_mm256_castsi256_si128(signed)),
+        to_unit(_mm256_extracti128_si256::<1>(signed)),
+    ]
+}
