@@ -277,11 +277,17 @@ impl PixelSampler {
         }
     }
 
-    /// Starts the pixel whose pattern key is `pattern` ([`pixel_pattern`]).
+    /// Starts the pixel whose pattern key is `pattern` ([`pixel_pattern`]). Inlined, so a render
+    /// of one sample a pixel pays nothing for it.
+    #[inline]
     pub fn start_pixel(&mut self, pattern: u32) {
-        if self.count <= 1 {
-            return;
+        if self.count > 1 {
+            self.start_pixel_of_many(pattern);
         }
+    }
+
+    /// [`PixelSampler::start_pixel`] for more than one sample a pixel.
+    fn start_pixel_of_many(&mut self, pattern: u32) {
         self.keys = SampleKeys::of(pattern);
         if self.eight_wide {
             // The eight-wide path permutes each sample's column and row itself.
@@ -301,8 +307,17 @@ impl PixelSampler {
     /// [`sample_2d`]`(s, count, pattern)` (`points` holds the count). Made eight samples at a time in
     /// AVX2 registers where the CPU has them and the count and its grid of strata are powers of
     /// two ([`avx2::points`]): the hashes were a tenth of an 8-spp render of the quadric grid.
+    #[inline]
     pub fn samples(&self, points: &mut [(f64, f64)]) {
         debug_assert_eq!(points.len(), self.count as usize);
+        match self.count {
+            0 | 1 => points.fill((0.5, 0.5)),
+            _ => self.samples_of_many(points),
+        }
+    }
+
+    /// [`PixelSampler::samples`] for more than one sample a pixel.
+    fn samples_of_many(&self, points: &mut [(f64, f64)]) {
         #[cfg(target_arch = "x86_64")]
         if self.eight_wide {
             let grid = (self.count, self.columns, self.rows);
@@ -367,6 +382,18 @@ pub fn progressive_2d(index: u32, pattern: u32) -> (f64, f64) {
     // 2^-32 keeps the coordinates below 1.
     let unit = 1.0 / 4294967296.0;
     (x as f64 * unit, y as f64 * unit)
+}
+
+/// [`progressive_2d`] of the eight points `first..first + 8` of pixel `pattern`'s sequence, eight
+/// at a time in AVX2 registers where the CPU has them (bit for bit the same points).
+#[inline]
+pub fn progressive_2d_eight(first: u32, pattern: u32) -> [(f64, f64); 8] {
+    #[cfg(target_arch = "x86_64")]
+    if simd_path() == SimdPath::Avx2 {
+        // SAFETY: the CPU has AVX2 (checked by `simd_path`).
+        return unsafe { avx2::progressive_points(first, pattern) };
+    }
+    std::array::from_fn(|k| progressive_2d(first + k as u32, pattern))
 }
 
 /// Nested uniform (Owen) scrambling, keyed by `seed`, of the 32-bit binary fraction whose bits
@@ -455,6 +482,25 @@ mod tests {
 
     /// The progressive points are those of the sequence as first written: Sobol's two
     /// dimensions in their own bit order, each reversed, scrambled and reversed back.
+    /// Points made eight at a time are `progressive_2d`'s bit for bit (in AVX2 registers where
+    /// the CPU has them), from the first batch to indices of 17 bits and a seed of every bit.
+    #[test]
+    fn progressive_points_made_eight_at_a_time_are_the_sequence() {
+        for pattern in [0u32, 1, 0x9e37_79b9, 0x8000_0001, u32::MAX] {
+            for first in [0u32, 8, 16, 24, 1000, 4096, 65_528, 131_064] {
+                let eight = progressive_2d_eight(first, pattern);
+                for (index, point) in (first..).zip(eight) {
+                    let expected = progressive_2d(index, pattern);
+                    assert_eq!(
+                        [point.0.to_bits(), point.1.to_bits()],
+                        [expected.0.to_bits(), expected.1.to_bits()],
+                        "pattern {pattern}, index {index}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn progressive_points_match_the_direct_construction() {
         let scramble = |value: u32, seed: u32| {
