@@ -107,7 +107,19 @@ impl Material {
     pub fn specular_lobe(&self, alignment: f32) -> f32 {
         let n = self.shininess;
         if n.fract() == 0.0 && n <= 1024.0 {
-            alignment.powi(n as i32)
+            // `powi`'s own binary powering (compiler-builtins' `__powisf2`, the same products in
+            // the same order), inlined: the library call was 1% of a lit frame.
+            let (mut power, mut base, mut lobe) = (n as u32, alignment, 1.0f32);
+            loop {
+                if power & 1 != 0 {
+                    lobe *= base;
+                }
+                power >>= 1;
+                if power == 0 {
+                    break lobe;
+                }
+                base *= base;
+            }
         } else {
             alignment.powf(n)
         }
@@ -158,6 +170,26 @@ impl Default for Material {
 mod tests {
     use super::*;
     use glam::{DVec3, Vec4};
+
+    /// The inlined powering gives `powi`'s bits: every whole exponent up to 1024, at
+    /// alignments across (0, 1].
+    #[test]
+    fn specular_lobe_is_powi_bit_for_bit() {
+        for n in 0..=1024u16 {
+            let m = Material {
+                shininess: f32::from(n),
+                ..Material::default()
+            };
+            for k in 1..=64u16 {
+                let a = f32::from(k) / 64.0 - f32::from(n % 7) * 1e-4;
+                assert_eq!(
+                    m.specular_lobe(a).to_bits(),
+                    a.powi(i32::from(n)).to_bits(),
+                    "{a}^{n}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn specular_lobe_matches_powf() {
