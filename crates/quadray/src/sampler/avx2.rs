@@ -91,68 +91,6 @@ fn rand_float(i: __m256i, p: u32) -> [__m256d; 2] {
     [0, 1].map(|half| _mm256_div_pd(unsigned_f64(i, half), scale))
 }
 
-/// Points `first..first + 8` of pixel `pattern`'s progressive sequence, as
-/// [`super::progressive_2d`] makes them one at a time: Sobol's first two dimensions, Owen-scrambled
-/// on their reversed bits, reversed back a byte at a time (the bytes swapped, each byte's nibbles
-/// swapped and reversed by a table).
-#[target_feature(enable = "avx2")]
-pub(super) fn progressive_points(first: u32, pattern: u32) -> [(f64, f64); 8] {
-    let index = _mm256_add_epi32(splat(first), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-    // Dimension 1 reversed: the xor of r_k = r_{k-1} ^ (r_{k-1} << 1), r_0 = 1, over the index's
-    // set bits k.
-    let mut y_reversed = _mm256_setzero_si256();
-    let mut direction = 1u32;
-    let last = first + 7;
-    for k in 0..u32::BITS - last.leading_zeros() {
-        let bit = _mm256_and_si256(index, splat(1 << k));
-        let set = _mm256_cmpeq_epi32(bit, splat(1 << k));
-        y_reversed = _mm256_xor_si256(y_reversed, _mm256_and_si256(set, splat(direction)));
-        direction ^= direction << 1;
-    }
-    let x = owen_scramble_reversed(index, pattern.wrapping_mul(0x8da6b343));
-    let y = owen_scramble_reversed(y_reversed, pattern.wrapping_mul(0xd8163841) ^ 0x6c50b47c);
-    let unit = _mm256_set1_pd(1.0 / 4294967296.0);
-    let mut xy = [[0.0; 8]; 2];
-    for (axis, lanes) in xy.iter_mut().zip([x, y]) {
-        for half in 0..2 {
-            let value = _mm256_mul_pd(unsigned_f64(lanes, half), unit);
-            // SAFETY: the store writes four f64s inside the axis's eight.
-            unsafe { _mm256_storeu_pd(axis[4 * half..].as_mut_ptr(), value) };
-        }
-    }
-    std::array::from_fn(|k| (xy[0][k], xy[1][k]))
-}
-
-/// [`super::owen_scramble_reversed`] of eight values keyed by `seed`.
-#[target_feature(enable = "avx2")]
-fn owen_scramble_reversed(reversed: __m256i, seed: u32) -> __m256i {
-    let mut v = _mm256_add_epi32(reversed, splat(seed));
-    for k in [0x6c50b47c, 0xb82f1e52, 0xc7afe638, 0x8d22f6e6u32] {
-        v = _mm256_xor_si256(v, _mm256_mullo_epi32(v, splat(k)));
-    }
-    reverse_bits(v)
-}
-
-/// Each lane's 32 bits in reverse order (`u32::reverse_bits`).
-#[target_feature(enable = "avx2")]
-fn reverse_bits(v: __m256i) -> __m256i {
-    // Bytes reversed within each lane, then the bits within each byte: a nibble's reversal from
-    // a table, the low nibble's moved up and the high one's down.
-    let bytes = _mm256_setr_epi8(
-        3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12, 3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8,
-        15, 14, 13, 12,
-    );
-    let v = _mm256_shuffle_epi8(v, bytes);
-    let nibbles = _mm256_setr_epi8(
-        0x0, 0x8, 0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb, 0x7, 0xf, 0x0, 0x8,
-        0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb, 0x7, 0xf,
-    );
-    let low = _mm256_and_si256(v, _mm256_set1_epi8(0x0f));
-    let high = _mm256_and_si256(_mm256_srli_epi16::<4>(v), _mm256_set1_epi8(0x0f));
-    let low_reversed_up = _mm256_slli_epi16::<4>(_mm256_shuffle_epi8(nibbles, low));
-    _mm256_or_si256(low_reversed_up, _mm256_shuffle_epi8(nibbles, high))
-}
-
 /// Lanes `4·half..4·half + 4` of eight u32s as f64s, exactly: flipped to signed values 2³¹
 /// lower, converted, and moved back up.
 #[target_feature(enable = "avx2")]

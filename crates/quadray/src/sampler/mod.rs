@@ -384,18 +384,6 @@ pub fn progressive_2d(index: u32, pattern: u32) -> (f64, f64) {
     (x as f64 * unit, y as f64 * unit)
 }
 
-/// [`progressive_2d`] of the eight points `first..first + 8` of pixel `pattern`'s sequence, eight
-/// at a time in AVX2 registers where the CPU has them (bit for bit the same points).
-#[inline]
-pub fn progressive_2d_eight(first: u32, pattern: u32) -> [(f64, f64); 8] {
-    #[cfg(target_arch = "x86_64")]
-    if simd_path() == SimdPath::Avx2 {
-        // SAFETY: the CPU has AVX2 (checked by `simd_path`).
-        return unsafe { avx2::progressive_points(first, pattern) };
-    }
-    std::array::from_fn(|k| progressive_2d(first + k as u32, pattern))
-}
-
 /// Nested uniform (Owen) scrambling, keyed by `seed`, of the 32-bit binary fraction whose bits
 /// reversed are `reversed`: each bit is flipped by a hash of the bits above it. It works on the
 /// reversed bits, where Laine and Karras's hash flips each bit by the bits below it.
@@ -482,25 +470,6 @@ mod tests {
 
     /// The progressive points are those of the sequence as first written: Sobol's two
     /// dimensions in their own bit order, each reversed, scrambled and reversed back.
-    /// Points made eight at a time are `progressive_2d`'s bit for bit (in AVX2 registers where
-    /// the CPU has them), from the first batch to indices of 17 bits and a seed of every bit.
-    #[test]
-    fn progressive_points_made_eight_at_a_time_are_the_sequence() {
-        for pattern in [0u32, 1, 0x9e37_79b9, 0x8000_0001, u32::MAX] {
-            for first in [0u32, 8, 16, 24, 1000, 4096, 65_528, 131_064] {
-                let eight = progressive_2d_eight(first, pattern);
-                for (index, point) in (first..).zip(eight) {
-                    let expected = progressive_2d(index, pattern);
-                    assert_eq!(
-                        [point.0.to_bits(), point.1.to_bits()],
-                        [expected.0.to_bits(), expected.1.to_bits()],
-                        "pattern {pattern}, index {index}"
-                    );
-                }
-            }
-        }
-    }
-
     #[test]
     fn progressive_points_match_the_direct_construction() {
         let scramble = |value: u32, seed: u32| {

@@ -36,7 +36,7 @@ use crate::integrator::RayCounts;
 use crate::math::Ray;
 use crate::render::empty_tiles::EmptyTiles;
 use crate::render::{PixelWindow, Progress, RenderError, Rendered, SampleContext};
-use crate::sampler::{SampleKey, pixel_pattern, progressive_2d_eight};
+use crate::sampler::{SampleKey, pixel_pattern, progressive_2d};
 pub use calibration::Calibration;
 pub(crate) use calibration::{Twin, choose_twins, is_flat, sample_twin};
 use glam::DVec3;
@@ -207,12 +207,15 @@ fn sample_sequence(
     let cone = context.sample_cone(footprint_spp);
     for start in (first..count).step_by(RAY_BATCH as usize) {
         let end = count.min(start + RAY_BATCH);
-        // The batch's sample points and camera rays first, as the uniform renderer makes its
-        // own: eight at a time in AVX2 registers, or their square roots and divisions
-        // overlapping, instead of each waiting in line before its trace (a batch shorter than
-        // eight makes points past its end, unused).
-        let positions: [[f64; 2]; RAY_BATCH as usize] =
-            progressive_2d_eight(start, pattern).map(|(dx, dy)| [x as f64 + dx, y as f64 + dy]);
+        // The batch's camera rays first, as the uniform renderer makes its own: their square
+        // roots and divisions overlap (four at a time in AVX2 registers where the CPU has them)
+        // instead of each waiting in line before its trace (a batch shorter than the array
+        // repeats its last ray, unused).
+        let positions: [[f64; 2]; RAY_BATCH as usize] = std::array::from_fn(|k| {
+            let index = (start + k as u32).min(end - 1);
+            let (dx, dy) = progressive_2d(index, pattern);
+            [x as f64 + dx, y as f64 + dy]
+        });
         let mut rays = [Ray::new(DVec3::ZERO, DVec3::ZERO); RAY_BATCH as usize];
         context.camera_rays(&positions, &mut rays);
         for (index, ray) in (start..end).zip(&rays) {

@@ -4,7 +4,6 @@ use super::*;
 use crate::aov::AovSelection;
 use crate::render::MAX_SPP;
 use crate::render::{NoProgress, PixelWindow, RenderSettings, render_with_aovs};
-use crate::sampler::progressive_2d;
 use crate::*;
 use glam::{DVec3, Vec3};
 use std::time::Duration;
