@@ -6,37 +6,71 @@
 use super::SampleKeys;
 use std::arch::x86_64::*;
 
-/// Samples `first..first + 8` of a pixel keyed by `keys` whose `count` samples lie in a grid of
-/// `m` columns and `n` rows of strata, all three powers of two (`count` at least 8): Kensler's
-/// correlated multi-jittered points, as [`super::multi_jittered`] makes them one at a time. A
-/// sample's permuted index s gives its column s mod m and row s div m, each permuted over its
-/// range (the table [`super::PixelSampler`] builds otherwise), and its point is
-/// ((column + (row + jx)/n)/m, (s + jy)/count), the divisions by powers of two done as the exact
-/// multiplications [`super::divide`] does.
+/// How the eight-wide path finds a sample's permuted column and row of strata.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Strata<'a> {
+    /// Permuted in the lanes: the grid's columns and rows are powers of two, so a sample's
+    /// column and row are a mask and a shift of its index, and Kensler's permutation of each
+    /// lands in range at its first round.
+    Hashed,
+    /// Looked up in the pixel's table (the permuted columns, then the permuted rows), for a
+    /// grid that is not: the column and row are the remainder and quotient by the column count.
+    Table(&'a [u32]),
+}
+
+/// Samples `first..first + 8` of a pixel keyed by `keys` whose `count` samples (a power of two,
+/// at least 8) lie in a grid of `m` columns and `n` rows of strata: Kensler's correlated
+/// multi-jittered points, as [`super::multi_jittered`] makes them one at a time. A sample's
+/// permuted index s gives its column s mod m and row s div m, each permuted over its range
+/// ([`Strata`]), and its point is ((column + (row + jx)/n)/m, (s + jy)/count), a division by a
+/// power of two done as the exact multiplication [`super::divide`] does.
 #[target_feature(enable = "avx2")]
 pub(super) fn points(
     first: u32,
     (count, m, n): (u32, u32, u32),
     keys: SampleKeys,
+    strata: Strata<'_>,
 ) -> [(f64, f64); 8] {
-    debug_assert!(count >= 8 && [count, m, n].iter().all(|c| c.is_power_of_two()));
+    debug_assert!(count >= 8 && count.is_power_of_two());
     let index = _mm256_add_epi32(splat(first), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
     let s = permute(index, count, keys.order);
-    let column_of = _mm256_and_si256(s, splat(m - 1));
-    let row_of = _mm256_srl_epi32(s, _mm_cvtsi32_si128(m.trailing_zeros() as i32));
-    let (column, row) = (
-        permute(column_of, m, keys.column),
-        permute(row_of, n, keys.row),
-    );
+    let (column, row) = match strata {
+        Strata::Hashed => {
+            debug_assert!(m.is_power_of_two() && n.is_power_of_two());
+            let column_of = _mm256_and_si256(s, splat(m - 1));
+            let row_of = _mm256_srl_epi32(s, _mm_cvtsi32_si128(m.trailing_zeros() as i32));
+            (
+                permute(column_of, m, keys.column),
+                permute(row_of, n, keys.row),
+            )
+        }
+        Strata::Table(table) => {
+            debug_assert_eq!(table.len(), (m + n) as usize);
+            let (column_of, row_of) = divide_by(s, m);
+            // SAFETY: a column index is below m and a row index below n (s < count ≤ m·n), so
+            // every lane reads inside the table's m + n entries.
+            unsafe {
+                let base = table.as_ptr().cast::<i32>();
+                let row_of = _mm256_add_epi32(row_of, splat(m));
+                (
+                    _mm256_i32gather_epi32::<4>(base, column_of),
+                    _mm256_i32gather_epi32::<4>(base, row_of),
+                )
+            }
+        }
+    };
     let (jx, jy) = (rand_float(s, keys.jitter_x), rand_float(s, keys.jitter_y));
-    let inverse = |d: u32| _mm256_set1_pd(1.0 / d as f64);
+    // x / d as `divide` makes it: by the exact reciprocal for a power of two, else a division.
+    let divided = |x: __m256d, d: u32| match d.is_power_of_two() {
+        true => _mm256_mul_pd(x, _mm256_set1_pd(1.0 / d as f64)),
+        false => _mm256_div_pd(x, _mm256_set1_pd(d as f64)),
+    };
     let mut xy = [[0.0; 8]; 2];
     for half in 0..2 {
         let [s, column, row] = [s, column, row].map(|v| unsigned_f64(v, half));
-        let x = _mm256_add_pd(row, jx[half]);
-        let x = _mm256_add_pd(column, _mm256_mul_pd(x, inverse(n)));
-        let x = _mm256_mul_pd(x, inverse(m));
-        let y = _mm256_mul_pd(_mm256_add_pd(s, jy[half]), inverse(count));
+        let x = divided(_mm256_add_pd(row, jx[half]), n);
+        let x = divided(_mm256_add_pd(column, x), m);
+        let y = divided(_mm256_add_pd(s, jy[half]), count);
         // SAFETY: each store writes four f64s inside its eight.
         unsafe {
             _mm256_storeu_pd(xy[0][4 * half..].as_mut_ptr(), x);
@@ -44,6 +78,18 @@ pub(super) fn points(
         }
     }
     std::array::from_fn(|k| (xy[0][k], xy[1][k]))
+}
+
+/// The remainders and quotients of eight values below 2¹⁶ by `divisor` (below 2⁸): the quotient
+/// by f64 division truncated, which is exact here (a quotient's fraction is at least 1/divisor
+/// short of the next integer, far more than the division's rounding), the remainder from it.
+#[target_feature(enable = "avx2")]
+fn divide_by(values: __m256i, divisor: u32) -> (__m256i, __m256i) {
+    let d = _mm256_set1_pd(divisor as f64);
+    let quotient = |half| _mm256_cvttpd_epi32(_mm256_div_pd(unsigned_f64(values, half), d));
+    let quotients = _mm256_set_m128i(quotient(1), quotient(0));
+    let remainders = _mm256_sub_epi32(values, _mm256_mullo_epi32(quotients, splat(divisor)));
+    (remainders, quotients)
 }
 
 /// Eight copies of `value`.

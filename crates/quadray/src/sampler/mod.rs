@@ -255,8 +255,11 @@ pub struct PixelSampler {
     /// The permuted column of each column index, then the permuted row of each row index.
     strata: Vec<u32>,
     /// Whether [`PixelSampler::samples`] makes eight samples at once in AVX2 registers (on CPUs
-    /// that have them, for counts from 8 on whose count, columns and rows are powers of two).
+    /// that have them, for counts from 8 on that are powers of two).
     eight_wide: bool,
+    /// Whether the grid's columns and rows are powers of two, so that the eight-wide path
+    /// permutes them in its lanes ([`avx2::Strata::Hashed`]) and no table is built.
+    strata_hashed: bool,
 }
 
 impl PixelSampler {
@@ -273,7 +276,8 @@ impl PixelSampler {
             eight_wide: cfg!(target_arch = "x86_64")
                 && simd_path() == SimdPath::Avx2
                 && count >= 8
-                && [count, columns, rows].iter().all(|c| c.is_power_of_two()),
+                && count.is_power_of_two(),
+            strata_hashed: columns.is_power_of_two() && rows.is_power_of_two(),
         }
     }
 
@@ -289,7 +293,7 @@ impl PixelSampler {
     /// [`PixelSampler::start_pixel`] for more than one sample a pixel.
     fn start_pixel_of_many(&mut self, pattern: u32) {
         self.keys = SampleKeys::of(pattern);
-        if self.eight_wide {
+        if self.eight_wide && self.strata_hashed {
             // The eight-wide path permutes each sample's column and row itself.
             return;
         }
@@ -305,8 +309,8 @@ impl PixelSampler {
 
     /// Every sample of the current pixel in order: `points[s]` is, bit for bit,
     /// [`sample_2d`]`(s, count, pattern)` (`points` holds the count). Made eight samples at a time in
-    /// AVX2 registers where the CPU has them and the count and its grid of strata are powers of
-    /// two ([`avx2::points`]): the hashes were a tenth of an 8-spp render of the quadric grid.
+    /// AVX2 registers where the CPU has them and the count is a power of two ([`avx2::points`]):
+    /// the hashes were a tenth of an 8-spp render of the quadric grid.
     #[inline]
     pub fn samples(&self, points: &mut [(f64, f64)]) {
         debug_assert_eq!(points.len(), self.count as usize);
@@ -321,10 +325,14 @@ impl PixelSampler {
         #[cfg(target_arch = "x86_64")]
         if self.eight_wide {
             let grid = (self.count, self.columns, self.rows);
+            let strata = match self.strata_hashed {
+                true => avx2::Strata::Hashed,
+                false => avx2::Strata::Table(&self.strata),
+            };
             let (groups, _) = points.as_chunks_mut::<8>();
             for (first, group) in (0..).step_by(8).zip(groups) {
                 // SAFETY: `eight_wide` is set only where the CPU has AVX2 (`simd_path`).
-                *group = unsafe { avx2::points(first, grid, self.keys) };
+                *group = unsafe { avx2::points(first, grid, self.keys, strata) };
             }
             return;
         }
@@ -518,15 +526,21 @@ mod tests {
         }
     }
 
-    /// A pixel's samples made together are `sample_2d`'s points bit for bit, on both paths: 8,
-    /// 16, 64, 256 and 1024 samples take the eight-wide one where the CPU has AVX2 (asserted
-    /// there), 32 (a 5x7 grid of strata) and the other counts the scalar one.
+    /// A pixel's samples made together are `sample_2d`'s points bit for bit, on both paths: the
+    /// powers of two from 8 take the eight-wide one where the CPU has AVX2 (asserted there), 8,
+    /// 16, 64, 256 and 1024 with their strata permuted in the lanes, 32, 128 and 512 (grids of
+    /// 5x7, 11x12 and 22x24) through the table; the other counts the scalar one.
     #[test]
     fn the_pixel_sampler_gives_sample_2d_s_points() {
         if simd_path() == SimdPath::Avx2 {
-            assert!(PixelSampler::new(8).eight_wide && !PixelSampler::new(32).eight_wide);
+            let (eight, thirty_two) = (PixelSampler::new(8), PixelSampler::new(32));
+            assert!(eight.eight_wide && eight.strata_hashed);
+            assert!(thirty_two.eight_wide && !thirty_two.strata_hashed);
+            assert!(!PixelSampler::new(100).eight_wide);
         }
-        for count in [1u32, 2, 3, 4, 7, 8, 16, 17, 32, 64, 100, 255, 256, 1024] {
+        for count in [
+            1u32, 2, 3, 4, 7, 8, 16, 17, 32, 64, 100, 128, 255, 256, 512, 1024,
+        ] {
             let mut sampler = PixelSampler::new(count);
             let mut points = vec![(0.0, 0.0); count as usize];
             for pattern in [0u32, 1, 0x9e37_79b9, 0x8000_0001, u32::MAX] {
