@@ -46,6 +46,8 @@ pub(super) fn points(
         }
         Strata::Table(table) => {
             debug_assert_eq!(table.len(), (m + n) as usize);
+            // `divide_by`'s range: counts up to 2¹⁶ (`MAX_SPP`), so under 2⁸ columns.
+            debug_assert!(count <= 1 << 16 && m < 1 << 8);
             let (column_of, row_of) = divide_by(s, m);
             // SAFETY: a column index is below m and a row index below n (s < count ≤ m·n), so
             // every lane reads inside the table's m + n entries.
