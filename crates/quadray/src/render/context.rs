@@ -11,6 +11,7 @@ use crate::render::empty_tiles::EmptyTiles;
 use crate::render::{PixelWindow, RenderError, RenderSettings};
 use crate::sampler::SampleKey;
 use crate::scene::Scene;
+#[cfg(target_arch = "x86_64")]
 use crate::simd::{SimdPath, simd_path};
 use glam::{DVec3, Vec3};
 
@@ -92,7 +93,7 @@ impl<'a> SampleContext<'a> {
     /// The camera rays through `at`, each a pixel of the full image plus the sample's offset
     /// inside it (`x + dx`, `y + dy`), into `rays`: bit for bit [`SampleContext::camera_ray`] of
     /// each, made together so that their divisions and square roots overlap, and run four at a
-    /// time where the CPU has AVX2 ([`CameraFrame::rays_at_avx2`]).
+    /// time where the CPU has AVX2 (`CameraFrame::rays_at_avx2`).
     pub fn camera_rays(&self, at: &[[f64; 2]], rays: &mut [Ray]) {
         let size = [self.settings.width as f64, self.settings.height as f64];
         #[cfg(target_arch = "x86_64")]

@@ -377,16 +377,20 @@ pub(crate) mod tests {
             x1: 5 + 45,
             y1: 3 + 19,
         };
-        let settings = RenderSettings {
-            width: 64,
-            height: 48,
-            spp: 3,
-            crop: Some(window),
-            ..RenderSettings::default()
-        };
-        let varied = assert_pixels_are_traced(&scene, &settings, window, [Vec3::ZERO, Vec3::ONE]);
-        // The spheres' edges cross the window: pixels differ, so a misplaced one would show.
-        assert!(varied > 10, "{varied} edge pixels");
+        // 3 samples a pixel take the scalar sampler, 8 the eight-wide one where the CPU has AVX2.
+        for spp in [3, 8] {
+            let settings = RenderSettings {
+                width: 64,
+                height: 48,
+                spp,
+                crop: Some(window),
+                ..RenderSettings::default()
+            };
+            let flat = [Vec3::ZERO, Vec3::ONE];
+            let varied = assert_pixels_are_traced(&scene, &settings, window, flat);
+            // The spheres' edges cross the window: pixels differ, so a misplaced one would show.
+            assert!(varied > 10, "{varied} edge pixels at {spp} spp");
+        }
     }
 
     /// Two spheres and a hyperboloid above a floor, white on a blue-grey background, seen by a

@@ -22,8 +22,8 @@ pub(super) enum Strata<'a> {
 /// at least 8) lie in a grid of `m` columns and `n` rows of strata: Kensler's correlated
 /// multi-jittered points, as [`super::multi_jittered`] makes them one at a time. A sample's
 /// permuted index s gives its column s mod m and row s div m, each permuted over its range
-/// ([`Strata`]), and its point is ((column + (row + jx)/n)/m, (s + jy)/count), a division by a
-/// power of two done as the exact multiplication [`super::divide`] does.
+/// ([`Strata`]), and its point is ((column + (row + jx)/n)/m, (s + jy)/count), each division as
+/// [`super::divide`] does it (by a power of two, the exact multiplication).
 #[target_feature(enable = "avx2")]
 pub(super) fn points(
     first: u32,
@@ -45,9 +45,9 @@ pub(super) fn points(
             )
         }
         Strata::Table(table) => {
-            debug_assert_eq!(table.len(), (m + n) as usize);
-            // `divide_by`'s range: counts up to 2¹⁶ (`MAX_SPP`), so under 2⁸ columns.
-            debug_assert!(count <= 1 << 16 && m < 1 << 8);
+            // The gathers below read inside the table only for a table of m + n entries and a
+            // grid that holds the count; `divide_by` is exact for counts up to 2¹⁶ (`MAX_SPP`).
+            assert!(table.len() == (m + n) as usize && count <= m * n && count <= 1 << 16);
             let (column_of, row_of) = divide_by(s, m);
             // SAFETY: a column index is below m and a row index below n (s < count ≤ m·n), so
             // every lane reads inside the table's m + n entries.

@@ -8,6 +8,7 @@ mod progressive;
 
 pub use progressive::progressive_2d;
 
+use crate::limits::MAX_SPP;
 use crate::simd::{SimdPath, simd_path};
 
 /// A pseudo-random permutation of [0, len) indexed by `i`, keyed by `pattern` (Kensler's `permute`).
@@ -242,10 +243,12 @@ pub fn sample_2d(s: u32, count: u32, pattern: u32) -> (f64, f64) {
     )
 }
 
-/// [`sample_2d`] for every sample of one pixel at a time: the permutations of the pixel's columns
-/// and rows of strata are keyed by the pixel alone, so they are computed once per pixel (m + n
-/// hashes) instead of once per sample (2 · count). The points are bit-identical to
-/// [`sample_2d`]'s. Measured on defense at 64 spp, `sample_2d` alone took 7.5% of the render.
+/// [`sample_2d`] for every sample of one pixel at a time. The permutations of the pixel's columns
+/// and rows of strata are keyed by the pixel alone, so the scalar path computes them once per
+/// pixel (m + n hashes) instead of once per sample (2 · count); the eight-wide path permutes them
+/// in its lanes where the grid is a power of two, and reads the same table otherwise. The points
+/// are bit-identical to [`sample_2d`]'s. Measured on defense at 64 spp, `sample_2d` alone took
+/// 7.5% of the render.
 #[derive(Clone, Debug)]
 pub struct PixelSampler {
     count: u32,
@@ -258,10 +261,10 @@ pub struct PixelSampler {
     /// The permuted column of each column index, then the permuted row of each row index.
     strata: Vec<u32>,
     /// Whether [`PixelSampler::samples`] makes eight samples at once in AVX2 registers (on CPUs
-    /// that have them, for counts from 8 on that are powers of two).
+    /// that have them, for counts from 8 to [`MAX_SPP`] that are powers of two).
     eight_wide: bool,
     /// Whether the grid's columns and rows are powers of two, so that the eight-wide path
-    /// permutes them in its lanes ([`avx2::Strata::Hashed`]) and no table is built.
+    /// permutes them in its lanes (`avx2::Strata::Hashed`) and no table is built.
     strata_hashed: bool,
 }
 
@@ -279,7 +282,8 @@ impl PixelSampler {
             eight_wide: cfg!(target_arch = "x86_64")
                 && simd_path() == SimdPath::Avx2
                 && count >= 8
-                && count.is_power_of_two(),
+                && count.is_power_of_two()
+                && count <= MAX_SPP,
             strata_hashed: columns.is_power_of_two() && rows.is_power_of_two(),
         }
     }
@@ -316,7 +320,7 @@ impl PixelSampler {
     /// the hashes were a tenth of an 8-spp render of the quadric grid.
     #[inline]
     pub fn samples(&self, points: &mut [(f64, f64)]) {
-        debug_assert_eq!(points.len(), self.count as usize);
+        assert_eq!(points.len(), self.count as usize, "one point per sample");
         match self.count {
             0 | 1 => points.fill((0.5, 0.5)),
             _ => self.samples_of_many(points),
