@@ -30,6 +30,50 @@ pub fn display_channels(radiance: Vec3) -> [f32; 3] {
     radiance.to_array().map(encode)
 }
 
+/// [`display_channels`] of eight samples: in AVX2 registers where the CPU has them (a channel of
+/// the eight samples a register, the table's entries gathered), with the same operations as the
+/// one-sample code, so the same bits.
+pub fn display_channels_eight(radiances: &[Vec3; 8]) -> [[f32; 3]; 8] {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::simd_path() == crate::simd::SimdPath::Avx2 {
+        // SAFETY: the CPU has AVX2 (checked by `simd_path`).
+        return unsafe { display_channels_eight_avx2(radiances) };
+    }
+    radiances.map(display_channels)
+}
+
+/// [`display_channels_eight`] in AVX2 registers. Where a step differs from the one-sample code it
+/// gives the same value: the clamp by `max` then `min` turns −0 into +0, whose table entry and
+/// interpolation are the same, and NaN into 0, which the one-sample code makes of it later.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn display_channels_eight_avx2(radiances: &[Vec3; 8]) -> [[f32; 3]; 8] {
+    use std::arch::x86_64::*;
+    let table = &*SRGB_BY_ROOT;
+    let mut channels = [[0.0f32; 8]; 3];
+    for (channel, out) in channels.iter_mut().enumerate() {
+        let lanes: [f32; 8] = std::array::from_fn(|k| radiances[k][channel]);
+        // SAFETY: the loads and stores move the eight f32s of `lanes` and `out`; the gathers
+        // read entries 0..=SRGB_TABLE_STEPS of the table, as the index is clamped below.
+        unsafe {
+            let v = _mm256_loadu_ps(lanes.as_ptr());
+            // `max` returns its second operand where the first is NaN: NaN lanes become 0, as
+            // the one-sample code makes them after the root.
+            let clamped = _mm256_min_ps(_mm256_max_ps(v, _mm256_setzero_ps()), _mm256_set1_ps(1.0));
+            let steps = _mm256_set1_ps(SRGB_TABLE_STEPS as f32);
+            let position = _mm256_mul_ps(_mm256_sqrt_ps(clamped), steps);
+            let last = _mm256_set1_epi32(SRGB_TABLE_STEPS as i32 - 1);
+            let index = _mm256_min_epi32(_mm256_cvttps_epi32(position), last);
+            let t = _mm256_sub_ps(position, _mm256_cvtepi32_ps(index));
+            let low = _mm256_i32gather_ps::<4>(table.as_ptr(), index);
+            let high = _mm256_i32gather_ps::<4>(table.as_ptr().add(1), index);
+            let encoded = _mm256_add_ps(low, _mm256_mul_ps(t, _mm256_sub_ps(high, low)));
+            _mm256_storeu_ps(out.as_mut_ptr(), encoded);
+        }
+    }
+    std::array::from_fn(|k| [channels[0][k], channels[1][k], channels[2][k]])
+}
+
 /// Intervals of the table behind [`display_value`].
 const SRGB_TABLE_STEPS: usize = 1024;
 
@@ -164,6 +208,37 @@ pub fn decode_srgb(encoded: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Eight samples' display channels made together are each sample's made alone, bit for bit
+    /// (in AVX2 registers where the CPU has them): over [0, 1] in fine steps, at the table's own
+    /// points and beside them, and at −0, negatives, values above 1, infinities and NaN.
+    #[test]
+    fn display_channels_of_eight_are_display_channels_of_each() {
+        let mut values: Vec<f32> = (0..=20_000).map(|k| k as f32 / 20_000.0).collect();
+        for i in 0..=SRGB_TABLE_STEPS {
+            let root = i as f32 / SRGB_TABLE_STEPS as f32;
+            let on = root * root;
+            values.extend([on, on.next_up(), on.next_down()]);
+        }
+        values.extend([-0.0, -1e-30, -0.5, -1.0, 1.0, 1.0f32.next_up(), 3.7, 1e30]);
+        values.extend([
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MIN_POSITIVE,
+            1e-45,
+        ]);
+        let n = values.len();
+        for first in (0..n).step_by(8) {
+            let radiances: [Vec3; 8] = std::array::from_fn(|k| {
+                let at = |offset: usize| values[(first + k + offset) % n];
+                Vec3::new(at(0), at(n / 3), at(2 * n / 3))
+            });
+            let together = display_channels_eight(&radiances).map(|c| c.map(f32::to_bits));
+            let alone = radiances.map(|r| display_channels(r).map(f32::to_bits));
+            assert_eq!(together, alone, "{radiances:?}");
+        }
+    }
 
     /// The table-driven 8-bit code equals the direct one on every f32 within 2¹⁶ ulps of each
     /// step (where a rounding boundary lies), at the range's ends, on NaN and infinities, and on

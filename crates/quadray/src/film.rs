@@ -1,6 +1,7 @@
 //! The film: a linear f32 RGB image, its sRGB encoding for 8-bit outputs, and the running
 //! per-pixel estimate (mean, variance, error) that adaptive sampling decides by.
 
+use crate::colour::display_channels_eight;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
@@ -122,6 +123,15 @@ impl PixelEstimate {
     /// Adds one sample's linear radiance (the pixel's next sample in its sequence).
     pub fn add(&mut self, radiance: Vec3) {
         self.add_encoded(radiance, display_channels(radiance));
+    }
+
+    /// [`PixelEstimate::add`] of the first `count` of eight samples in order, their display
+    /// encodings made together ([`display_channels_eight`]; the others are not added).
+    pub fn add_eight(&mut self, radiances: &[Vec3; 8], count: usize) {
+        let display = display_channels_eight(radiances);
+        for (&radiance, &display) in radiances.iter().zip(&display).take(count) {
+            self.add_encoded(radiance, display);
+        }
     }
 
     /// [`PixelEstimate::add`] of `count` samples of the same radiance (the background of a pixel
@@ -307,6 +317,32 @@ mod tests {
     /// Repeated samples of one radiance, added at once, leave the estimate bit for bit as
     /// adding them one by one does, from an empty pixel and from one holding other samples, for
     /// counts that fill, cross and double the error runs.
+    /// Up to eight samples added together ([`PixelEstimate::add_eight`]) leave the estimate that
+    /// adding them one by one does, from an empty pixel and from one holding 13 samples (so the
+    /// error runs double inside the eight).
+    #[test]
+    fn eight_samples_add_as_single_ones() {
+        let sample = |k: u32| {
+            let f = k as f32;
+            Vec3::new(
+                (f * 0.37).sin().abs() * 1.7,
+                (f * 0.11).cos() * 0.5,
+                f * 1e-3 - 0.2,
+            )
+        };
+        for held in [0u32, 13] {
+            for count in 1..=8usize {
+                let mut one_by_one = PixelEstimate::default();
+                (0..held).for_each(|k| one_by_one.add(sample(k)));
+                let mut together = one_by_one;
+                let eight: [Vec3; 8] = std::array::from_fn(|k| sample(held + k as u32));
+                eight[..count].iter().for_each(|&r| one_by_one.add(r));
+                together.add_eight(&eight, count);
+                assert_eq!(together, one_by_one, "{held} held, {count} added");
+            }
+        }
+    }
+
     #[test]
     fn repeated_samples_add_as_single_ones() {
         // Bit for bit: the debug forms tell −0.0 from 0.0, which `==` does not.

@@ -39,7 +39,7 @@ use crate::render::{PixelWindow, Progress, RenderError, Rendered, SampleContext}
 use crate::sampler::{SampleKey, pixel_pattern, progressive_2d};
 pub use calibration::Calibration;
 pub(crate) use calibration::{Twin, choose_twins, is_flat, sample_twin};
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use rounds::Rounds;
 pub use settings::{
     Adaptive, AdaptiveError, DEFAULT_MAX_SPP, DEFAULT_MIN_SPP, ErrorRule, MAX_TIME_LIMIT_SECS,
@@ -218,7 +218,9 @@ fn sample_sequence(
         });
         let mut rays = [Ray::new(DVec3::ZERO, DVec3::ZERO); RAY_BATCH as usize];
         context.camera_rays(&positions, &mut rays);
-        for (index, ray) in (start..end).zip(&rays) {
+        // Traced first, then added in order with their display encodings made together.
+        let mut radiances = [Vec3::ZERO; RAY_BATCH as usize];
+        for ((index, ray), radiance) in (start..end).zip(&rays).zip(&mut radiances) {
             let first_hit = match aov.as_deref_mut() {
                 Some(aov) if index == 0 => Some(aov),
                 _ => None,
@@ -228,8 +230,9 @@ fn sample_sequence(
                 index,
                 count: None,
             };
-            estimate.add(context.trace_ray(ray, cone, key, first_hit, counts));
+            *radiance = context.trace_ray(ray, cone, key, first_hit, counts);
         }
+        estimate.add_eight(&radiances, (end - start) as usize);
     }
 }
 
