@@ -16,7 +16,9 @@ Exit status:
 Environment:
   QUADRAY_CONFINE=DIR              as --confine DIR when the flag is not given
   QUADRAY_AVAILABLE_MEMORY=BYTES   the memory free for a render, in place of what the system
-                                   reports (a render that needs more is refused before it starts)";
+                                   reports (a render that needs more is refused before it starts)
+  QUADRAY_SIMD=baseline            the baseline code (SSE2 on x86-64) where AVX2 code would run:
+                                   the traversal, camera rays, sample points (same images)";
 
 /// Most worker threads `-t` accepts.
 pub const MAX_THREADS: usize = 1024;
