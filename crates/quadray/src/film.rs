@@ -314,12 +314,15 @@ fn batch_means(sums: impl ExactSizeIterator<Item = f64> + Clone, size: u32) -> (
 mod tests {
     use super::*;
 
-    /// Repeated samples of one radiance, added at once, leave the estimate bit for bit as
-    /// adding them one by one does, from an empty pixel and from one holding other samples, for
-    /// counts that fill, cross and double the error runs.
-    /// Up to eight samples added together ([`PixelEstimate::add_eight`]) leave the estimate that
-    /// adding them one by one does, from an empty pixel and from one holding 13 samples (so the
-    /// error runs double inside the eight).
+    /// Whether two estimates are the same bit for bit: their debug forms tell −0.0 from 0.0,
+    /// which `==` does not.
+    fn same_bits(a: &PixelEstimate, b: &PixelEstimate) -> bool {
+        format!("{a:?}") == format!("{b:?}")
+    }
+
+    /// Up to eight samples added together ([`PixelEstimate::add_eight`]) leave the estimate bit
+    /// for bit as adding them one by one does, from an empty pixel and from one holding 13
+    /// samples (so the error runs double inside the eight).
     #[test]
     fn eight_samples_add_as_single_ones() {
         let sample = |k: u32| {
@@ -338,15 +341,17 @@ mod tests {
                 let eight: [Vec3; 8] = std::array::from_fn(|k| sample(held + k as u32));
                 eight[..count].iter().for_each(|&r| one_by_one.add(r));
                 together.add_eight(&eight, count);
-                assert_eq!(together, one_by_one, "{held} held, {count} added");
+                let case = format!("{held} held, {count} added");
+                assert!(same_bits(&together, &one_by_one), "{case}");
             }
         }
     }
 
+    /// Repeated samples of one radiance, added at once, leave the estimate bit for bit as
+    /// adding them one by one does, from an empty pixel and from one holding other samples, for
+    /// counts that fill, cross and double the error runs.
     #[test]
     fn repeated_samples_add_as_single_ones() {
-        // Bit for bit: the debug forms tell −0.0 from 0.0, which `==` does not.
-        let same = |a: &PixelEstimate, b: &PixelEstimate| format!("{a:?}") == format!("{b:?}");
         // A background, a black one, and one with a negative zero (which the mean turns into
         // +0.0 at the first step, as one by one does).
         let backgrounds = [
@@ -369,7 +374,7 @@ mod tests {
                     }
                     at_once.add_repeated(background, count);
                     let case = format!("{background}, start {start}, count {count}");
-                    assert!(same(&one_by_one, &at_once), "{case}");
+                    assert!(same_bits(&one_by_one, &at_once), "{case}");
                 }
             }
         }

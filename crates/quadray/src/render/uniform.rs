@@ -27,6 +27,32 @@ const BATCH_SAMPLES: usize = 16;
 /// loop: narrower ones made it 4-12% slower).
 const TILE: usize = 32;
 
+/// A thread's sampler and the buffers of its batches of camera rays, made once a thread and
+/// reused across its tiles.
+struct Batches {
+    /// The pixels' sample points.
+    sampler: PixelSampler,
+    /// The current pixel's offsets in the unit pixel.
+    offsets: Vec<(f64, f64)>,
+    /// The batch's image positions.
+    positions: Vec<[f64; 2]>,
+    /// The batch's camera rays.
+    rays: Vec<Ray>,
+}
+
+impl Batches {
+    /// The buffers of batches of `spp` samples a pixel.
+    fn new(spp: u32) -> Batches {
+        let samples = BATCH_SAMPLES.max(spp as usize);
+        Batches {
+            sampler: PixelSampler::new(spp),
+            offsets: vec![(0.0, 0.0); spp as usize],
+            positions: Vec::with_capacity(samples),
+            rays: vec![Ray::new(DVec3::ZERO, DVec3::ZERO); samples],
+        }
+    }
+}
+
 /// One image row of a tile: its pixels and, when a pass is selected, their pass samples.
 type TileRow<'a> = (&'a mut [Vec3], Option<&'a mut [AovSample]>);
 
@@ -61,8 +87,8 @@ pub(super) fn render_uniform(
         .collect();
     // The tiles are the parallel work, so a window of a few rows still keeps every thread busy.
     tiles.into_par_iter().for_each_init(
-        || PixelSampler::new(settings.spp),
-        |sampler, tile| {
+        || Batches::new(settings.spp),
+        |batches, tile| {
             if progress.cancelled() {
                 return;
             }
@@ -75,7 +101,7 @@ pub(super) fn render_uniform(
             } else {
                 for (y, (pixels, aovs)) in (y0..).zip(tile.rows) {
                     let segment = (tile.first_column, pixels, aovs);
-                    render_segment(context, y, segment, sampler, cone, &mut counts);
+                    render_segment(context, y, segment, batches, cone, &mut counts);
                 }
             }
             *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
@@ -178,17 +204,19 @@ fn render_segment(
     context: &SampleContext<'_>,
     y: u32,
     (first_column, pixels, mut aovs): (usize, &mut [Vec3], Option<&mut [AovSample]>),
-    sampler: &mut PixelSampler,
+    batches: &mut Batches,
     cone: RayCone,
     counts: &mut RayCounts,
 ) {
     let (settings, window, selection) = (context.settings, context.window, context.selection);
     let spp = settings.spp;
     let inv_spp = 1.0 / spp as f32;
-    let batch_samples = BATCH_SAMPLES.max(spp as usize);
-    let (mut positions, mut rays) = (Vec::with_capacity(batch_samples), Vec::new());
-    let mut offsets = vec![(0.0, 0.0); spp as usize];
-    rays.resize(batch_samples, Ray::new(DVec3::ZERO, DVec3::ZERO));
+    let Batches {
+        sampler,
+        offsets,
+        positions,
+        rays,
+    } = batches;
     let batch_pixels = (BATCH_SAMPLES / spp as usize).max(1);
     for (batch, pixels) in pixels.chunks_mut(batch_pixels).enumerate() {
         let first = batch * batch_pixels;
@@ -198,7 +226,7 @@ fn render_segment(
         positions.clear();
         for x in x0..x0 + pixels.len() as u32 {
             sampler.start_pixel(pixel_pattern(x, y, settings.seed));
-            sampler.samples(&mut offsets);
+            sampler.samples(offsets);
             positions.extend(
                 offsets
                     .iter()
@@ -206,7 +234,7 @@ fn render_segment(
             );
         }
         let rays = &mut rays[..positions.len()];
-        context.camera_rays(&positions, rays);
+        context.camera_rays(positions, rays);
         let mut rays = rays.iter();
         for (i, pixel) in pixels.iter_mut().enumerate() {
             let x = x0 + i as u32;

@@ -48,11 +48,12 @@ impl WindowState {
         let window = context.window;
         let pixels = window.width() as usize * window.height() as usize;
         let min_spp = context.settings.adaptive.map_or(1, |a| a.min_spp);
+        let rule = context
+            .settings
+            .adaptive
+            .map_or(ErrorRule::Image, |a| a.rule);
         let mut state = WindowState {
-            rule: context
-                .settings
-                .adaptive
-                .map_or(ErrorRule::Image, |a| a.rule),
+            rule,
             width: window.width() as usize,
             // Filled in parallel, so that the pages are faulted in on every thread (at 3840x2160
             // the estimates are 1.3 GB); the zeros come from the allocator.
@@ -62,11 +63,9 @@ impl WindowState {
                 .collect(),
             rays: vec![0; pixels],
             errors: (0..pixels).into_par_iter().map(|_| f64::INFINITY).collect(),
-            squared: match context.settings.adaptive.map(|a| a.rule) {
-                Some(ErrorRule::Pixel) => {
-                    (0..pixels).into_par_iter().map(|_| f64::INFINITY).collect()
-                }
-                _ => Vec::new(),
+            squared: match rule {
+                ErrorRule::Pixel => (0..pixels).into_par_iter().map(|_| f64::INFINITY).collect(),
+                ErrorRule::Image => Vec::new(),
             },
             targets: (0..pixels).into_par_iter().map(|_| min_spp).collect(),
             aov_samples: context.aov_buffer(),
@@ -164,19 +163,19 @@ impl WindowState {
         unplanned_step: impl FnOnce(&[PixelState], f64) -> Result<Step, Stop>,
     ) -> Result<(), Stop> {
         self.fill_unknown_errors();
-        let (step, calibration) = match plan {
-            Some(plan) => plan
-                .decisions
-                .get(round as usize - 1)
-                .copied()
-                .ok_or(plan.stop)?,
+        // The pixels' states under the calibration the step was decided with, made once.
+        let (step, states) = match plan {
+            Some(plan) => {
+                let decision = plan.decisions.get(round as usize - 1);
+                let (step, calibration) = decision.copied().ok_or(plan.stop)?;
+                (step, self.states(&calibration))
+            }
             None => {
                 let calibration = self.calibration_or(None);
                 let states = self.states(&calibration);
-                (unplanned_step(&states, calibration.alpha)?, calibration)
+                (unplanned_step(&states, calibration.alpha)?, states)
             }
         };
-        let states = self.states(&calibration);
         let max_spp = adaptive.max_spp;
         // Each pixel's own target; pilot pixels hold their samples already, and count as
         // refined by their own estimate in the rounds that sampled them.
