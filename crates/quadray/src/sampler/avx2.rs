@@ -19,7 +19,7 @@ pub(super) enum Strata<'a> {
 }
 
 /// Samples `first..first + 8` of a pixel keyed by `keys` whose `count` samples (a power of two,
-/// at least 8) lie in a grid of `m` columns and `n` rows of strata: Kensler's correlated
+/// at least 2; lanes past the count hold points of no sample) lie in a grid of `m` columns and `n` rows of strata: Kensler's correlated
 /// multi-jittered points, as [`super::multi_jittered`] makes them one at a time. A sample's
 /// permuted index s gives its column s mod m and row s div m, each permuted over its range
 /// ([`Strata`]), and its point is ((column + (row + jx)/n)/m, (s + jy)/count), each division as
@@ -31,7 +31,7 @@ pub(super) fn points(
     keys: SampleKeys,
     strata: Strata<'_>,
 ) -> [(f64, f64); 8] {
-    debug_assert!(count >= 8 && count.is_power_of_two());
+    debug_assert!(count >= 2 && count.is_power_of_two());
     let index = _mm256_add_epi32(splat(first), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
     let s = permute(index, count, keys.order);
     let (column, row) = match strata {

@@ -261,7 +261,8 @@ pub struct PixelSampler {
     /// The permuted column of each column index, then the permuted row of each row index.
     strata: Vec<u32>,
     /// Whether [`PixelSampler::samples`] makes eight samples at once in AVX2 registers (on CPUs
-    /// that have them, for counts from 8 to [`MAX_SPP`] that are powers of two).
+    /// that have them, for counts from 2 to [`MAX_SPP`] that are powers of two; a count below
+    /// eight keeps the first lanes).
     eight_wide: bool,
     /// Whether the grid's columns and rows are powers of two, so that the eight-wide path
     /// permutes them in its lanes (`avx2::Strata::Hashed`) and no table is built.
@@ -281,7 +282,7 @@ impl PixelSampler {
             strata: vec![0; (columns + rows) as usize],
             eight_wide: cfg!(target_arch = "x86_64")
                 && simd_path() == SimdPath::Avx2
-                && count >= 8
+                && count >= 2
                 && count.is_power_of_two()
                 && count <= MAX_SPP,
             strata_hashed: columns.is_power_of_two() && rows.is_power_of_two(),
@@ -336,10 +337,16 @@ impl PixelSampler {
                 true => avx2::Strata::Hashed,
                 false => avx2::Strata::Table(&self.strata),
             };
-            let (groups, _) = points.as_chunks_mut::<8>();
+            let (groups, rest) = points.as_chunks_mut::<8>();
             for (first, group) in (0..).step_by(8).zip(groups) {
                 // SAFETY: `eight_wide` is set only where the CPU has AVX2 (`simd_path`).
                 *group = unsafe { avx2::points(first, grid, self.keys, strata) };
+            }
+            // Two or four samples: the first lanes of one group.
+            if !rest.is_empty() {
+                // SAFETY: as above.
+                let group = unsafe { avx2::points(0, grid, self.keys, strata) };
+                rest.copy_from_slice(&group[..rest.len()]);
             }
             return;
         }
@@ -467,6 +474,8 @@ mod tests {
             let (eight, thirty_two) = (PixelSampler::new(8), PixelSampler::new(32));
             assert!(eight.eight_wide && eight.strata_hashed);
             assert!(thirty_two.eight_wide && !thirty_two.strata_hashed);
+            assert!([2, 4].map(PixelSampler::new).iter().all(|s| s.eight_wide));
+            assert!(!PixelSampler::new(3).eight_wide);
             assert!(!PixelSampler::new(100).eight_wide);
         }
         for count in [

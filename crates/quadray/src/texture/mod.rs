@@ -197,6 +197,7 @@ fn filtered_checker(q: DVec3, w: DVec3, even: Vec3, odd: Vec3) -> Vec3 {
 
 /// The mean over [x − w, x + w] of the square wave that is +1 on even cells [2k, 2k + 1) and −1 on
 /// odd ones: the change of its integral, a triangle wave, over the interval's width.
+#[inline(always)]
 fn square_wave_mean(x: f64, w: f64) -> f64 {
     if w <= 0.0 {
         // Integer parity, as the point-sampled checker takes it (a float remainder is slower).
