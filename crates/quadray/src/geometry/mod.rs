@@ -199,7 +199,7 @@ impl Geometry {
 
     /// The material of `prim`: its own, unless an instance on `path` replaces it (the outermost
     /// one that does).
-    #[inline]
+    #[inline(always)]
     pub fn material(&self, prim: PrimRef, path: &InstancePath) -> MaterialId {
         let level = if path.is_empty() {
             self.level(0)
@@ -224,6 +224,7 @@ impl Geometry {
 
     /// Texture coordinates at a world-space surface point of `prim`, computed in the primitive's
     /// own space (textures move with an instance); only textured materials ask for them.
+    #[inline(always)]
     pub fn texture_point(&self, prim: PrimRef, path: &InstancePath, point: DVec3) -> TexturePoint {
         // The world's primitives (most hits) skip the empty instance walk.
         let p = if path.is_empty() {
@@ -261,6 +262,7 @@ impl Geometry {
     /// anywhere on it): the vectors carried through the instances' linear maps into the
     /// primitive's own space, the primitive looked up once (a plane's texture frame made once),
     /// for the two axes of a sample's footprint.
+    #[inline(always)]
     pub fn texture_offsets(
         &self,
         prim: PrimRef,
