@@ -19,11 +19,12 @@ pub(super) enum Strata<'a> {
 }
 
 /// Samples `first..first + 8` of a pixel keyed by `keys` whose `count` samples (a power of two,
-/// at least 2; lanes past the count hold points of no sample) lie in a grid of `m` columns and `n` rows of strata: Kensler's correlated
-/// multi-jittered points, as [`super::multi_jittered`] makes them one at a time. A sample's
-/// permuted index s gives its column s mod m and row s div m, each permuted over its range
-/// ([`Strata`]), and its point is ((column + (row + jx)/n)/m, (s + jy)/count), each division as
-/// [`super::divide`] does it (by a power of two, the exact multiplication).
+/// at least 2; lanes past the count hold points of no sample) lie in a grid of `m` columns and
+/// `n` rows of strata: Kensler's correlated multi-jittered points, as [`super::multi_jittered`]
+/// makes them one at a time. A sample's permuted index s gives its column s mod m and row
+/// s div m, each permuted over its range ([`Strata`]), and its point is
+/// ((column + (row + jx)/n)/m, (s + jy)/count), each division as [`super::divide`] does it (by a
+/// power of two, the exact multiplication).
 #[target_feature(enable = "avx2")]
 pub(super) fn points(
     first: u32,

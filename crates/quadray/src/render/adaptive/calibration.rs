@@ -55,7 +55,7 @@ pub const FLAT_TWINS: f64 = 1024.0;
 
 /// A batch-means squared error at or below this is a flat pixel's: far below anything visible
 /// (an RMSE of 1e-6 of the display range) and above the rounding of identical samples.
-const FLAT: f64 = 1e-12;
+pub(super) const FLAT: f64 = 1e-12;
 
 /// Sample counts are powers of two up to `MAX_SPP`: this many of them.
 const LEVELS: usize = 17;

@@ -7,9 +7,11 @@
 //!   [`super::SLIVER_ROUNDS`]): where an edge runs along the border between two pixels whose
 //!   samples all agree, a sliver of it can cross into either and be missed by every sample, so
 //!   the pair's difference is the only sign of it. The audit draws such pixels too
-//!   ([`super::audit`]).
+//!   ([`super::audit`]);
+//! - for the audit alone, quiet pixels between two along their row or column that met a thin
+//!   line ([`feature_contrasts`]).
 
-use super::calibration::is_flat_error;
+use super::calibration::{FLAT, is_flat_error};
 use crate::film::PixelEstimate;
 use rayon::prelude::*;
 
@@ -68,10 +70,12 @@ const LOUDER: f64 = 100.0;
 /// squared error is [`LOUDER`] times i's is found on both sides; its contrast is then the smaller
 /// of the squared differences of those two pixels' mean display values from i's (the larger over
 /// the row and the column), and 0 otherwise. A thin line that pixels along it met, and a few
-/// pixels between them missed with every sample, leaves those quiet between pixels that saw it, and what they missed about as far from their value as the line's pixels' means are
-/// (the kitchen at 480x270, target 0.0005: pixels of 8 and 16 samples in such runs along a few
-/// lines held a third of the image's squared error, with errors estimated near 1e-8). A quiet
-/// pixel beside an ordinary edge has it on one side only.
+/// pixels between them missed with every sample, leaves those quiet between pixels that saw it,
+/// and what they missed about as far from their value as the line's pixels' means are (the
+/// kitchen at 480x270, target 0.0005: pixels of 8 and 16 samples in such runs along a few lines
+/// held a third of the image's squared error, with errors estimated near 1e-8). A quiet pixel
+/// beside an ordinary edge has it on one side only. A flat pixel counts as having the flat
+/// error bound ([`FLAT`]), so a neighbour's rounding does not make it louder.
 pub(super) fn feature_contrasts(
     estimates: &[PixelEstimate],
     squared_errors: &[f64],
@@ -90,7 +94,7 @@ pub(super) fn feature_contrasts(
         .for_each(|(y, out)| {
             for (x, contrast) in out.iter_mut().enumerate() {
                 let i = y * width + x;
-                let (value, loud) = (values[i], LOUDER * squared_errors[i].max(f64::MIN_POSITIVE));
+                let (value, loud) = (values[i], LOUDER * squared_errors[i].max(FLAT));
                 // The mean of the first louder pixel from (x, y) in steps of (dx, dy).
                 let seen = |dx: isize, dy: isize| {
                     (1..=LINE_GAP as isize).find_map(|k| {
