@@ -286,7 +286,7 @@ impl Geometry {
 
     /// Interpolated vertex attributes at world-space `point` on `prim` (texture coordinates and
     /// colours exist only on meshes; other primitives get the defaults).
-    #[inline]
+    #[inline(always)]
     pub fn attributes(&self, prim: PrimRef, path: &InstancePath, point: DVec3) -> VertexAttributes {
         match prim.local {
             LocalPrim::Triangle { mesh, tri } => {
