@@ -338,14 +338,15 @@ impl PixelSampler {
                 false => avx2::Strata::Table(&self.strata),
             };
             let (groups, rest) = points.as_chunks_mut::<8>();
+            let after_groups = 8 * groups.len() as u32;
             for (first, group) in (0..).step_by(8).zip(groups) {
                 // SAFETY: `eight_wide` is set only where the CPU has AVX2 (`simd_path`).
                 *group = unsafe { avx2::points(first, grid, self.keys, strata) };
             }
-            // Two or four samples: the first lanes of one group.
+            // Fewer than eight left (two or four samples): the first lanes of one more group.
             if !rest.is_empty() {
                 // SAFETY: as above.
-                let group = unsafe { avx2::points(0, grid, self.keys, strata) };
+                let group = unsafe { avx2::points(after_groups, grid, self.keys, strata) };
                 rest.copy_from_slice(&group[..rest.len()]);
             }
             return;

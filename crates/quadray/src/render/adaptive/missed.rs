@@ -81,21 +81,17 @@ pub(super) fn feature_contrasts(
     squared_errors: &[f64],
     width: usize,
 ) -> Vec<f64> {
-    let values: Vec<f32> = estimates
-        .par_iter()
-        .map(PixelEstimate::mean_display_value)
-        .collect();
     let width = width.max(1);
-    let height = values.len() / width;
-    let mut contrasts = vec![0.0; values.len()];
+    let height = estimates.len() / width;
+    let mut contrasts = vec![0.0; estimates.len()];
     contrasts
         .par_chunks_mut(width)
         .enumerate()
         .for_each(|(y, out)| {
             for (x, contrast) in out.iter_mut().enumerate() {
                 let i = y * width + x;
-                let (value, loud) = (values[i], LOUDER * squared_errors[i].max(FLAT));
-                // The mean of the first louder pixel from (x, y) in steps of (dx, dy).
+                let loud = LOUDER * squared_errors[i].max(FLAT);
+                // The first louder pixel from (x, y) in steps of (dx, dy).
                 let seen = |dx: isize, dy: isize| {
                     (1..=LINE_GAP as isize).find_map(|k| {
                         let (nx, ny) = (x as isize + k * dx, y as isize + k * dy);
@@ -103,12 +99,17 @@ pub(super) fn feature_contrasts(
                             return Some(None);
                         }
                         let j = ny as usize * width + nx as usize;
-                        (squared_errors[j] > loud).then_some(Some(values[j]))
+                        (squared_errors[j] > loud).then_some(Some(j))
                     })?
                 };
-                let between = |a: Option<f32>, b: Option<f32>| match (a, b) {
+                // Display values are read only here, for the few pixels with a line on both
+                // sides (each is a sum over the pixel's runs).
+                let between = |a: Option<usize>, b: Option<usize>| match (a, b) {
                     (Some(a), Some(b)) => {
-                        f64::min(((a - value) as f64).powi(2), ((b - value) as f64).powi(2))
+                        let value = estimates[i].mean_display_value();
+                        let away =
+                            |j: usize| ((estimates[j].mean_display_value() - value) as f64).powi(2);
+                        f64::min(away(a), away(b))
                     }
                     _ => 0.0,
                 };
