@@ -36,8 +36,13 @@ struct Batches {
     offsets: Vec<(f64, f64)>,
     /// The batch's image positions.
     positions: Vec<[f64; 2]>,
+    /// The pattern keys of the batch's pixels ([`pixel_pattern`]), with more than one sample a
+    /// pixel.
+    patterns: Vec<u32>,
     /// The batch's camera rays.
     rays: Vec<Ray>,
+    /// The radiance each of them brings.
+    radiances: Vec<Vec3>,
 }
 
 impl Batches {
@@ -48,7 +53,9 @@ impl Batches {
             sampler: PixelSampler::new(spp),
             offsets: vec![(0.0, 0.0); spp as usize],
             positions: Vec::with_capacity(samples),
+            patterns: Vec::with_capacity(samples),
             rays: vec![Ray::new(DVec3::ZERO, DVec3::ZERO); samples],
+            radiances: vec![Vec3::ZERO; samples],
         }
     }
 }
@@ -208,14 +215,16 @@ fn render_segment(
     cone: RayCone,
     counts: &mut RayCounts,
 ) {
-    let (settings, window, selection) = (context.settings, context.window, context.selection);
+    let (settings, window) = (context.settings, context.window);
     let spp = settings.spp;
-    let inv_spp = 1.0 / spp as f32;
+    let passes = aovs.is_some() || context.selection.variance;
     let Batches {
         sampler,
         offsets,
         positions,
+        patterns,
         rays,
+        radiances,
     } = batches;
     let batch_pixels = (BATCH_SAMPLES / spp as usize).max(1);
     for (batch, pixels) in pixels.chunks_mut(batch_pixels).enumerate() {
@@ -224,44 +233,105 @@ fn render_segment(
         // The batch's camera rays first: their divisions and square roots do not wait on each
         // other, where made one before each trace they wait in line, and they run packed.
         positions.clear();
-        for x in x0..x0 + pixels.len() as u32 {
-            sampler.start_pixel(pixel_pattern(x, y, settings.seed));
-            sampler.samples(offsets);
-            positions.extend(
-                offsets
-                    .iter()
-                    .map(|&(dx, dy)| [x as f64 + dx, y as f64 + dy]),
-            );
+        let columns = x0..x0 + pixels.len() as u32;
+        if spp == 1 {
+            // The one sample of a pixel is its centre (as `PixelSampler::samples` gives it),
+            // without the sampler's per-pixel calls.
+            positions.extend(columns.map(|x| [x as f64 + 0.5, y as f64 + 0.5]));
+        } else {
+            patterns.clear();
+            for x in columns {
+                let pattern = pixel_pattern(x, y, settings.seed);
+                patterns.push(pattern);
+                sampler.start_pixel(pattern);
+                sampler.samples(offsets);
+                positions.extend(
+                    offsets
+                        .iter()
+                        .map(|&(dx, dy)| [x as f64 + dx, y as f64 + dy]),
+                );
+            }
         }
         let rays = &mut rays[..positions.len()];
         context.camera_rays(positions, rays);
-        let mut rays = rays.iter();
-        for (i, pixel) in pixels.iter_mut().enumerate() {
-            let x = x0 + i as u32;
-            // The pixel's key hashed again rather than kept from the batch above: keeping the
-            // batch's keys made this loop 13-16% slower (grid, bunny frame), through codegen.
-            let pattern = pixel_pattern(x, y, settings.seed);
-            let mut aov = aovs.as_deref_mut().map(|aovs| &mut aovs[first + i]);
-            // The variance pass needs the running estimate; the image keeps its f32 sum.
-            let mut estimate = selection.variance.then(PixelEstimate::default);
-            let mut sum = Vec3::ZERO;
-            for (s, ray) in (0..spp).zip(&mut rays) {
-                let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
-                let key = SampleKey {
-                    pattern,
-                    index: s,
+        if passes {
+            let batch = Batch { x0, y, rays, cone };
+            let aovs = aovs.as_deref_mut().map(|aovs| &mut aovs[first..]);
+            shade_batch(context, &batch, pixels, aovs, counts);
+        } else {
+            let radiances = &mut radiances[..rays.len()];
+            let seed = settings.seed;
+            // A pixel's key is hashed only where a hit's shading asks for it, or kept from above.
+            let key = |i: usize| match spp {
+                1 => SampleKey {
+                    pattern: pixel_pattern(x0 + i as u32, y, seed),
+                    index: 0,
+                    count: Some(1),
+                },
+                _ => SampleKey {
+                    pattern: patterns[i / spp as usize],
+                    index: (i % spp as usize) as u32,
                     count: Some(spp),
-                };
-                let radiance = context.trace_ray(ray, cone, key, first_hit, counts);
-                if let Some(e) = &mut estimate {
-                    e.add(radiance);
-                }
-                sum += radiance;
+                },
+            };
+            let whitted = &settings.whitted;
+            whitted.camera_rays(context.scene, rays, cone, key, counts, radiances);
+            // Each pixel the mean of its samples, summed in order as one at a time would.
+            let inv_spp = 1.0 / spp as f32;
+            for (pixel, samples) in pixels.iter_mut().zip(radiances.chunks_exact(spp as usize)) {
+                *pixel = samples.iter().fold(Vec3::ZERO, |sum, &r| sum + r) * inv_spp;
             }
-            *pixel = sum * inv_spp;
-            if let Some(aov) = aov {
-                aov.fill_sampling(selection, spp, estimate.map(|e| e.variance()));
+        }
+    }
+}
+
+/// A batch's camera rays: `spp` a pixel for the pixels of row `y` from column `x0` on, standing
+/// for `cone` each.
+struct Batch<'r> {
+    x0: u32,
+    y: u32,
+    rays: &'r [Ray],
+    cone: RayCone,
+}
+
+/// Traces the batch's rays into its `pixels` (the mean of each pixel's samples), the pixels'
+/// passes `aovs` when selected, and the running estimates the variance pass needs.
+fn shade_batch(
+    context: &SampleContext<'_>,
+    batch: &Batch<'_>,
+    pixels: &mut [Vec3],
+    mut aovs: Option<&mut [AovSample]>,
+    counts: &mut RayCounts,
+) {
+    let (settings, selection) = (context.settings, context.selection);
+    let spp = settings.spp;
+    let inv_spp = 1.0 / spp as f32;
+    let mut rays = batch.rays.iter();
+    for (i, pixel) in pixels.iter_mut().enumerate() {
+        let x = batch.x0 + i as u32;
+        // The pixel's key hashed again rather than kept from the batch above: keeping the
+        // batch's keys made this loop 13-16% slower (grid, bunny frame), through codegen.
+        let pattern = pixel_pattern(x, batch.y, settings.seed);
+        let mut aov = aovs.as_deref_mut().map(|aovs| &mut aovs[i]);
+        // The variance pass needs the running estimate; the image keeps its f32 sum.
+        let mut estimate = selection.variance.then(PixelEstimate::default);
+        let mut sum = Vec3::ZERO;
+        for (s, ray) in (0..spp).zip(&mut rays) {
+            let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
+            let key = SampleKey {
+                pattern,
+                index: s,
+                count: Some(spp),
+            };
+            let radiance = context.trace_ray(ray, batch.cone, key, first_hit, counts);
+            if let Some(e) = &mut estimate {
+                e.add(radiance);
             }
+            sum += radiance;
+        }
+        *pixel = sum * inv_spp;
+        if let Some(aov) = aov {
+            aov.fill_sampling(selection, spp, estimate.map(|e| e.variance()));
         }
     }
 }
@@ -271,6 +341,7 @@ pub(crate) mod tests {
     use crate::aov::AovSelection;
     use crate::camera::{Camera, Projection};
     use crate::geometry::Geometry;
+    use crate::material::Material;
     use crate::plane::Plane;
     use crate::quadric::{ClipBox, Quadric, QuadricKind, QuadricSurface};
     use crate::render::adaptive::tests::{white_on_black, white_shapes};
@@ -279,7 +350,8 @@ pub(crate) mod tests {
         NoProgress, PixelWindow, Progress, RenderError, RenderSettings, render_with_aovs,
     };
     use crate::sampler::{SampleKey, pixel_pattern, sample_2d};
-    use crate::scene::Scene;
+    use crate::scene::{Scene, SceneDescription};
+    use crate::texture::Texture;
     use crate::{RayCounts, Sphere, Transform};
     use glam::{DVec3, Vec3};
     use std::sync::atomic::{AtomicUsize, Ordering};
@@ -405,8 +477,9 @@ pub(crate) mod tests {
             x1: 5 + 45,
             y1: 3 + 19,
         };
-        // 3 samples a pixel take the scalar sampler, 8 the eight-wide one where the CPU has AVX2.
-        for spp in [3, 8] {
+        // 1 sample a pixel takes the centre without the sampler, 3 the scalar sampler, 8 the
+        // eight-wide one where the CPU has AVX2.
+        for spp in [1, 3, 8] {
             let settings = RenderSettings {
                 width: 64,
                 height: 48,
@@ -414,10 +487,104 @@ pub(crate) mod tests {
                 crop: Some(window),
                 ..RenderSettings::default()
             };
-            let flat = [Vec3::ZERO, Vec3::ONE];
+            // The spheres' edges cross the window: pixels differ, so a misplaced one would show
+            // (at one sample a pixel as white pixels among black ones).
+            let flat = match spp {
+                1 => [Vec3::ZERO; 2],
+                _ => [Vec3::ZERO, Vec3::ONE],
+            };
             let varied = assert_pixels_are_traced(&scene, &settings, window, flat);
-            // The spheres' edges cross the window: pixels differ, so a misplaced one would show.
             assert!(varied > 10, "{varied} edge pixels at {spp} spp");
+        }
+    }
+
+    /// A rough mirror sphere (GGX roughness 0.4) among white spheres outside the view, on black:
+    /// its pixels show the spheres through reflection directions drawn from each sample's key.
+    fn rough_mirror_among_spheres() -> Scene {
+        let mut spheres = vec![Sphere {
+            center: DVec3::ZERO,
+            radius: 1.6,
+            material: 1,
+        }];
+        spheres.extend(
+            [(3.5, 0.0), (-3.5, 0.5), (0.5, 3.0), (-0.5, -3.0)].map(|(x, y)| Sphere {
+                center: DVec3::new(x, y, 1.0),
+                radius: 1.0,
+                material: 0,
+            }),
+        );
+        let camera = Camera {
+            from: DVec3::new(0.0, 0.0, 10.0),
+            to: DVec3::ZERO,
+            up: DVec3::Y,
+            projection: Projection::Orthographic { height: 4.0 },
+        };
+        let white = Material {
+            texture: Texture::Constant(Vec3::ONE),
+            ambient: 1.0,
+            ..Material::default()
+        };
+        let rough_mirror = Material {
+            texture: Texture::Constant(Vec3::splat(0.9)),
+            ambient: 0.0,
+            diffuse: 0.0,
+            specular: 0.0,
+            reflectivity: 1.0,
+            roughness: 0.4,
+            ..Material::default()
+        };
+        Scene::new(SceneDescription {
+            camera,
+            background: Vec3::ZERO,
+            environment: None,
+            materials: vec![white, rough_mirror],
+            lights: vec![],
+            geometry: Geometry {
+                spheres,
+                ..Geometry::default()
+            },
+        })
+        .unwrap()
+    }
+
+    /// A render whose shading draws from each sample's key (glossy reflection directions) holds
+    /// in every pixel the mean of its samples traced one by one with their own keys, at one
+    /// sample a pixel (whose key is hashed only where a hit asks for it) and at several (keys
+    /// kept from the batch); and the keys matter there: another seed gives another image.
+    #[test]
+    fn batched_camera_rays_draw_each_samples_own_key() {
+        let scene = rough_mirror_among_spheres();
+        let window = PixelWindow {
+            x0: 0,
+            y0: 0,
+            x1: 40,
+            y1: 30,
+        };
+        for spp in [1, 2, 3, 8] {
+            let settings = |seed| RenderSettings {
+                width: 40,
+                height: 30,
+                spp,
+                seed,
+                ..RenderSettings::default()
+            };
+            let varied = assert_pixels_are_traced(&scene, &settings(0), window, [Vec3::ZERO; 2]);
+            assert!(varied > 40, "{varied} pixels lit at {spp} spp");
+            let image = |seed| {
+                let (rendered, _) =
+                    render_with_aovs(&scene, &settings(seed), AovSelection::NONE, &NoProgress)
+                        .unwrap();
+                rendered.film
+            };
+            let (a, b) = (image(0), image(7));
+            let differing = (0..30)
+                .flat_map(|y| (0..40).map(move |x| (x, y)))
+                .filter(|&(x, y)| a.get(x, y) != b.get(x, y))
+                .count();
+            assert!(
+                differing > 20,
+                "{differing} pixels differ between seeds at {spp} spp"
+            );
         }
     }
 

@@ -14,18 +14,20 @@ thread_local! {
     static STACK: Cell<Vec<(u32, f32)>> = const { Cell::new(Vec::new()) };
 }
 
-/// This thread's traversal stack, empty, taken out of [`STACK`] (give it back with `STACK.set`).
+/// This thread's [`STACK`] cell, for a traversal to take its stack out of (emptied) and set it
+/// back: a nested traversal would find an empty vector there, though mesh traversals do not
+/// nest.
 ///
 /// Taken rather than lent to a closure (as [`super::stack::with_stack`] does): a closure is
 /// compiled with the target features of the function it is written in, so the traversal in it
 /// ran without AVX2 on the AVX2 path unless inlined, and inlining it through `LocalKey::with`
-/// was not reliable. A mesh traversal never runs inside another, so one stack a thread is enough
-/// (a nested one would start from an empty vector).
+/// was not reliable. The cell is looked up once a traversal: `STACK.take()` and `STACK.set()`
+/// each checked the thread-local's lazy set-up, about 50 instructions a ray together.
 #[inline(always)]
-fn take_stack() -> Vec<(u32, f32)> {
-    let mut stack = STACK.take();
-    stack.clear();
-    stack
+fn stack_cell() -> &'static Cell<Vec<(u32, f32)>> {
+    // SAFETY: a thread-local lives until its thread ends, and `&Cell` is not `Send`, so the
+    // reference cannot leave the thread; it is used within one traversal.
+    STACK.with(|cell| unsafe { &*(cell as *const Cell<Vec<(u32, f32)>>) })
 }
 
 impl MeshBvh {
@@ -132,7 +134,9 @@ impl MeshBvh {
         let mut best: Option<(u32, TriangleHit)> = None;
         // The best hit's block and lane, as block · 4 + lane.
         let mut best_lane = 0u32;
-        let mut stack = take_stack();
+        let cell = stack_cell();
+        let mut stack = cell.take();
+        stack.clear();
         let mut current = 0u32;
         loop {
             if current & LEAF == 0 {
@@ -171,7 +175,7 @@ impl MeshBvh {
                 None => break,
             }
         }
-        STACK.set(stack);
+        cell.set(stack);
         best.map(|(number, hit)| MeshHit {
             id: self.id(number),
             hit,
@@ -221,7 +225,9 @@ impl MeshBvh {
         if self.nodes.is_empty() || !ray.finite {
             return false;
         }
-        let mut stack = take_stack();
+        let cell = stack_cell();
+        let mut stack = cell.take();
+        stack.clear();
         let mut current = 0u32;
         let blocked = 'search: loop {
             if current & LEAF == 0 {
@@ -245,7 +251,7 @@ impl MeshBvh {
                 Some((child, _)) => current = child,
             }
         };
-        STACK.set(stack);
+        cell.set(stack);
         blocked
     }
 }
