@@ -64,6 +64,8 @@ impl ShearedRay {
         };
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
+        // Indexed as arrays: `Vec3`'s own indexing is a match on the index, a branch apiece.
+        let (origin, dir) = (origin.to_array(), dir.to_array());
         // Keep the winding: swapping x and y when z points backwards preserves the triangle orientation.
         if dir[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
