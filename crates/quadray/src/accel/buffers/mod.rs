@@ -85,15 +85,18 @@ impl Cube {
             (2, d.x, d.y)
         };
         let n = self.n;
+        // The largest component and its magnitude, indexed as arrays: `DVec3`'s own indexing is
+        // a match on the axis, a branch apiece.
+        let (largest, magnitude) = (d.to_array()[axis], a.to_array()[axis]);
         // (c / m + 1)·n/2, m the largest component's magnitude, with one division for both
         // coordinates: a few ulps off the quotient, far inside the projection's slack. An
         // infinite scale (m zero, or so small that n/2m overflows) is refused: c·∞ would not be
         // the quotient.
-        let scale = 0.5 * n as f64 / a[axis];
+        let scale = 0.5 * n as f64 / magnitude;
         if !(scale.is_finite() && d.is_finite()) {
             return None;
         }
-        let face = 2 * axis + usize::from(d[axis] < 0.0);
+        let face = 2 * axis + usize::from(largest < 0.0);
         // Clamped in f64 (a quotient rounded below −1 or above 1 stays at the edge), so the
         // conversion needs none of a saturating cast's checks.
         let top = (n - 1) as f64;
