@@ -113,6 +113,8 @@ impl Node4 {
     #[inline(always)]
     pub(super) fn intersect(&self, ray: &BoxRay, t_max: f32) -> (Vec4, u32) {
         let slab = |axis: usize| {
+            // Both rows loaded and swapped: loading the near and far rows by index, as `Node8`
+            // does, made the analytic frames 0.1% more instructions (callgrind).
             let (lo, hi) = (self.bounds[2 * axis], self.bounds[2 * axis + 1]);
             let (near, far) = if ray.negative[axis] {
                 (hi, lo)
@@ -164,12 +166,11 @@ impl Node8 {
         let half = |h: usize| {
             let lanes = |row: usize| Vec4::from_slice(&self.bounds[row][4 * h..4 * h + 4]);
             let slab = |axis: usize| {
-                let (lo, hi) = (lanes(2 * axis), lanes(2 * axis + 1));
-                let (near, far) = if ray.negative[axis] {
-                    (hi, lo)
-                } else {
-                    (lo, hi)
-                };
+                // The near and far rows loaded by index rather than both loaded and swapped: a
+                // branch and two register moves an axis less (3% fewer instructions in a
+                // camera-rays-only kitchen frame).
+                let n = usize::from(ray.negative[axis]);
+                let (near, far) = (lanes(2 * axis + n), lanes(2 * axis + 1 - n));
                 let o = Vec4::splat(ray.origin[axis]);
                 (
                     (near - o) * Vec4::splat(ray.inv_dir[axis]),
@@ -197,17 +198,13 @@ impl Node8 {
     fn intersect_avx2(&self, ray: &BoxRay, t_max: f32) -> ([f32; 8], u32) {
         use std::arch::x86_64::*;
         let rows = self.bounds.as_ptr().cast::<f32>();
-        // SAFETY: rows 2·axis and 2·axis + 1 are the bounds' eight floats at 16·axis and
-        // 16·axis + 8; unaligned loads and stores.
+        // SAFETY: row r (r = 2·axis or 2·axis + 1, below 6) is the bounds' eight floats at 8·r;
+        // unaligned loads and stores.
         unsafe {
             let slab = |axis: usize| {
-                let lo = _mm256_loadu_ps(rows.add(16 * axis));
-                let hi = _mm256_loadu_ps(rows.add(16 * axis + 8));
-                let (near, far) = if ray.negative[axis] {
-                    (hi, lo)
-                } else {
-                    (lo, hi)
-                };
+                let n = usize::from(ray.negative[axis]);
+                let near = _mm256_loadu_ps(rows.add(8 * (2 * axis + n)));
+                let far = _mm256_loadu_ps(rows.add(8 * (2 * axis + 1 - n)));
                 let o = _mm256_set1_ps(ray.origin[axis]);
                 (
                     _mm256_mul_ps(_mm256_sub_ps(near, o), _mm256_set1_ps(ray.inv_dir[axis])),
