@@ -41,6 +41,15 @@ pub(crate) struct BlockHits {
 }
 
 impl BlockHits {
+    /// No lane hit.
+    const NONE: BlockHits = BlockHits {
+        valid: 0,
+        t: [0.0; 4],
+        u: [0.0; 4],
+        v: [0.0; 4],
+        w: [0.0; 4],
+    };
+
     /// The nearest of the lanes set in `mask` (a subset of `valid`).
     #[inline(always)]
     pub(crate) fn nearest(&self, mask: u32) -> Option<LaneHit> {
@@ -128,6 +137,13 @@ impl Tri4 {
         }
         let negative = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
         let positive = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
+        let inside = !(negative & positive);
+        // Most blocks a ray reaches hold no triangle it crosses: they stop here, and those whose
+        // crossings all lie beyond `t_max` before the bound on t's error (which the lanes that
+        // go on compute as before, so their answers are unchanged).
+        if !inside.any() {
+            return BlockHits::NONE;
+        }
         let det = u + v + w;
         let (_, _, sz) = ray.shear_constants();
         let sz = Vec4::splat(sz);
@@ -136,6 +152,10 @@ impl Tri4 {
         let t_scaled = u * az + v * bz + w * cz;
         let inv_det = Vec4::ONE / det;
         let t = t_scaled * inv_det;
+        let candidate: BVec4A = inside & det.cmpne(zero) & t.cmplt(Vec4::splat(t_max));
+        if !candidate.any() {
+            return BlockHits::NONE;
+        }
         // The bound on the error of t, as in the scalar test.
         let max_z = az.abs().max(bz.abs()).max(cz.abs());
         let max_x = ax.abs().max(bx.abs()).max(cx.abs());
@@ -151,8 +171,6 @@ impl Tri4 {
         let delta_t = Vec4::splat(3.0)
             * (g3 * max_e * max_z + delta_e * max_z + delta_z * max_e)
             * inv_det.abs();
-        let inside = !(negative & positive);
-        let candidate: BVec4A = inside & det.cmpne(zero) & t.cmplt(Vec4::splat(t_max));
         let mut valid = candidate & t.cmpgt(delta_t);
         if (candidate & !valid).any() {
             // Rejected by the bound on t's error: still in front of the origin if all three
