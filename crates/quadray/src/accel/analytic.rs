@@ -22,7 +22,8 @@ use super::build::{build_single_leaves, padded_aabb};
 use super::round_up;
 use super::sphere_clusters::{CLUSTER, CLUSTER_FROM, morton_order};
 use super::sphere4::{FilterRay, Sphere4};
-use super::stack::{Stacks, with_stack};
+use super::stack::local_cell;
+use std::cell::Cell;
 use super::wide::{BoxRay, LEAF, LEAF_WEIGHT, Node4, collapse, leaf_blocks, pop_nearer};
 use crate::geometry::Level;
 use crate::math::Ray;
@@ -89,7 +90,7 @@ pub(crate) struct AnalyticBvh {
 
 thread_local! {
     /// The analytic BVHs' traversal stacks of (child reference, entry distance).
-    static STACK: Stacks<(u32, f32)> = const { Stacks::new() };
+    static STACK: Cell<Vec<(u32, f32)>> = const { Cell::new(Vec::new()) };
 }
 
 impl AnalyticBvh {
@@ -202,39 +203,41 @@ impl AnalyticBvh {
         let mut best = None;
         let (boxes, filter) = f32_rays(ray)?;
         let mut limit = round_up(*best_t);
-        with_stack(&STACK, |stack| {
-            let mut current = 0u32;
-            loop {
-                if current & LEAF == 0 {
-                    let node = &self.nodes[current as usize];
-                    let (enter, mask) = node.intersect(&boxes, limit);
-                    // One child entered is taken without the stack, several are pushed far to
-                    // near (one is told by `mask & (mask - 1)`: `count_ones` has no instruction
-                    // on baseline x86-64).
-                    if mask != 0 {
-                        current = if mask & (mask - 1) == 0 {
-                            node.children[mask.trailing_zeros() as usize]
-                        } else {
-                            node.push_ordered(enter.to_array(), mask, stack, |_| {})
-                        };
-                        continue;
-                    }
-                } else {
-                    for block in self.leaf_blocks(current) {
-                        if let Some(hit) = block_closest(block, g, ray, &filter, *best_t, from) {
-                            *best_t = hit.0;
-                            best = Some(hit.1);
-                            limit = round_up(hit.0);
-                        }
-                    }
+        let cell = local_cell(&STACK);
+        let mut stack = cell.take();
+        stack.clear();
+        let mut current = 0u32;
+        loop {
+            if current & LEAF == 0 {
+                let node = &self.nodes[current as usize];
+                let (enter, mask) = node.intersect(&boxes, limit);
+                // One child entered is taken without the stack, several are pushed far to near
+                // (one is told by `mask & (mask - 1)`: `count_ones` has no instruction on
+                // baseline x86-64).
+                if mask != 0 {
+                    current = if mask & (mask - 1) == 0 {
+                        node.children[mask.trailing_zeros() as usize]
+                    } else {
+                        node.push_ordered(enter.to_array(), mask, &mut stack, |_| {})
+                    };
+                    continue;
                 }
-                // Pop the next child that may still hold a nearer hit.
-                match pop_nearer(stack, limit) {
-                    Some(child) => current = child,
-                    None => return,
+            } else {
+                for block in self.leaf_blocks(current) {
+                    if let Some(hit) = block_closest(block, g, ray, &filter, *best_t, from) {
+                        *best_t = hit.0;
+                        best = Some(hit.1);
+                        limit = round_up(hit.0);
+                    }
                 }
             }
-        });
+            // Pop the next child that may still hold a nearer hit.
+            match pop_nearer(&mut stack, limit) {
+                Some(child) => current = child,
+                None => break,
+            }
+        }
+        cell.set(stack);
         best
     }
 
@@ -253,30 +256,33 @@ impl AnalyticBvh {
             return false;
         };
         let limit = round_up(t_max);
-        with_stack(&STACK, |stack| {
-            let mut current = 0u32;
-            loop {
-                if current & LEAF == 0 {
-                    let node = &self.nodes[current as usize];
-                    let (_, mut mask) = node.intersect(&boxes, limit);
-                    while mask != 0 {
-                        let lane = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        stack.push((node.children[lane], 0.0));
-                    }
-                } else {
-                    for block in self.leaf_blocks(current) {
-                        if block_closest(block, g, ray, &filter, t_max, from).is_some() {
-                            return true;
-                        }
-                    }
+        let cell = local_cell(&STACK);
+        let mut stack = cell.take();
+        stack.clear();
+        let mut current = 0u32;
+        let blocked = 'search: loop {
+            if current & LEAF == 0 {
+                let node = &self.nodes[current as usize];
+                let (_, mut mask) = node.intersect(&boxes, limit);
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    stack.push((node.children[lane], 0.0));
                 }
-                match stack.pop() {
-                    None => return false,
-                    Some((child, _)) => current = child,
+            } else {
+                for block in self.leaf_blocks(current) {
+                    if block_closest(block, g, ray, &filter, t_max, from).is_some() {
+                        break 'search true;
+                    }
                 }
             }
-        })
+            match stack.pop() {
+                None => break false,
+                Some((child, _)) => current = child,
+            }
+        };
+        cell.set(stack);
+        blocked
     }
 }
 

@@ -1,7 +1,7 @@
 //! Traversal stacks, reused across rays: obvhs' own stacks are zeroed on every traversal, which
 //! showed up as 5% of all instructions in profiles.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::thread::LocalKey;
 
 /// One thread's stacks of one kind: the first for a traversal, and spares for traversals that
@@ -61,4 +61,20 @@ pub(crate) fn take_stack<T>(key: &'static LocalKey<Stacks<T>>) -> Vec<T> {
 #[inline(always)]
 pub(crate) fn put_stack<T>(key: &'static LocalKey<Stacks<T>>, stack: Vec<T>) {
     key.with(|stacks| stacks.nested.borrow_mut().push(stack));
+}
+
+/// This thread's cell of `key`, for a traversal that never runs inside another of its kind to
+/// take its stack out of (`Cell::take`, then empty it) and set it back (`Cell::set`); a nested
+/// one would find an empty vector there, which is still correct.
+///
+/// Not lent to a closure (as [`with_stack`] lends): a closure is compiled with the target
+/// features of the function it is written in, so the mesh traversal in it ran without AVX2 on
+/// the AVX2 path unless inlined, and inlining through `LocalKey::with` was not reliable. And the
+/// cell is looked up once a traversal: `key.take()` and `key.set()` each checked the
+/// thread-local's lazy set-up, about 50 instructions a ray together.
+#[inline(always)]
+pub(crate) fn local_cell<T>(key: &'static LocalKey<Cell<Vec<T>>>) -> &'static Cell<Vec<T>> {
+    // SAFETY: a thread-local lives until its thread ends, and `&Cell` is not `Send`, so the
+    // reference cannot leave the thread; callers use it within one traversal.
+    key.with(|cell| unsafe { &*(cell as *const Cell<Vec<T>>) })
 }

@@ -3,6 +3,7 @@
 //! function of its own: see [`MeshBvh::closest`]).
 
 use super::{MeshBvh, MeshHit, MeshRay, TriId};
+use crate::accel::stack::local_cell;
 use crate::accel::tri4::{BlockHits, Tri4};
 use crate::accel::wide::{LEAF, leaf_blocks, pop_nearer};
 use crate::mesh::Mesh;
@@ -10,24 +11,9 @@ use crate::triangle::TriangleHit;
 use std::cell::Cell;
 
 thread_local! {
-    /// The traversal stack of (child reference, entry distance), reused across rays.
+    /// The traversal stack of (child reference, entry distance), reused across rays (taken out
+    /// of its cell by each traversal: [`local_cell`]).
     static STACK: Cell<Vec<(u32, f32)>> = const { Cell::new(Vec::new()) };
-}
-
-/// This thread's [`STACK`] cell, for a traversal to take its stack out of (emptied) and set it
-/// back: a nested traversal would find an empty vector there, though mesh traversals do not
-/// nest.
-///
-/// Taken rather than lent to a closure (as [`super::stack::with_stack`] does): a closure is
-/// compiled with the target features of the function it is written in, so the traversal in it
-/// ran without AVX2 on the AVX2 path unless inlined, and inlining it through `LocalKey::with`
-/// was not reliable. The cell is looked up once a traversal: `STACK.take()` and `STACK.set()`
-/// each checked the thread-local's lazy set-up, about 50 instructions a ray together.
-#[inline(always)]
-fn stack_cell() -> &'static Cell<Vec<(u32, f32)>> {
-    // SAFETY: a thread-local lives until its thread ends, and `&Cell` is not `Send`, so the
-    // reference cannot leave the thread; it is used within one traversal.
-    STACK.with(|cell| unsafe { &*(cell as *const Cell<Vec<(u32, f32)>>) })
 }
 
 impl MeshBvh {
@@ -134,7 +120,7 @@ impl MeshBvh {
         let mut best: Option<(u32, TriangleHit)> = None;
         // The best hit's block and lane, as block · 4 + lane.
         let mut best_lane = 0u32;
-        let cell = stack_cell();
+        let cell = local_cell(&STACK);
         let mut stack = cell.take();
         stack.clear();
         let mut current = 0u32;
@@ -225,7 +211,7 @@ impl MeshBvh {
         if self.nodes.is_empty() || !ray.finite {
             return false;
         }
-        let cell = stack_cell();
+        let cell = local_cell(&STACK);
         let mut stack = cell.take();
         stack.clear();
         let mut current = 0u32;
