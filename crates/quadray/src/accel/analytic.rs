@@ -23,12 +23,12 @@ use super::round_up;
 use super::sphere_clusters::{CLUSTER, CLUSTER_FROM, morton_order};
 use super::sphere4::{FilterRay, Sphere4};
 use super::stack::local_cell;
-use std::cell::Cell;
 use super::wide::{BoxRay, LEAF, LEAF_WEIGHT, Node4, collapse, leaf_blocks, pop_nearer};
 use crate::geometry::Level;
 use crate::math::Ray;
 use crate::shape::LocalPrim;
 use obvhs::aabb::Aabb;
+use std::cell::Cell;
 
 /// A leaf block: up to four spheres, or one quadric.
 #[derive(Clone, Copy, Debug)]
