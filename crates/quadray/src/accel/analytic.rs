@@ -89,7 +89,8 @@ pub(crate) struct AnalyticBvh {
 }
 
 thread_local! {
-    /// The analytic BVHs' traversal stacks of (child reference, entry distance).
+    /// The analytic BVHs' traversal stack of (child reference, entry distance), reused across
+    /// rays (taken out of its cell by each traversal: [`local_cell`]).
     static STACK: Cell<Vec<(u32, f32)>> = const { Cell::new(Vec::new()) };
 }
 

@@ -75,6 +75,7 @@ pub(crate) fn put_stack<T>(key: &'static LocalKey<Stacks<T>>, stack: Vec<T>) {
 #[inline(always)]
 pub(crate) fn local_cell<T>(key: &'static LocalKey<Cell<Vec<T>>>) -> &'static Cell<Vec<T>> {
     // SAFETY: a thread-local lives until its thread ends, and `&Cell` is not `Send`, so the
-    // reference cannot leave the thread; callers use it within one traversal.
+    // reference cannot leave the thread; callers use it within one traversal (never from another
+    // thread-local's destructor, when this one may be gone).
     key.with(|cell| unsafe { &*(cell as *const Cell<Vec<T>>) })
 }

@@ -138,9 +138,9 @@ impl Tri4 {
         let negative = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
         let positive = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
         let inside = !(negative & positive);
-        // Most blocks a ray reaches hold no triangle it crosses: they stop here, and those whose
-        // crossings all lie beyond `t_max` before the bound on t's error (which the lanes that
-        // go on compute as before, so their answers are unchanged).
+        // A block none of whose triangles holds the ray stops here, and one whose crossings all
+        // lie at or beyond `t_max` stops below, before the bound on t's error. The lanes that go
+        // on compute everything as before, so their answers are unchanged.
         if !inside.any() {
             return BlockHits::NONE;
         }
