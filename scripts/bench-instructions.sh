@@ -11,7 +11,8 @@
 # Counts the render alone (`quadray::render::render_with_aovs`, one thread) of scenes/reflective.toml,
 # scenes/defense.toml, the harness's quadric grid and lit kitchen (320x180), the kitchen's
 # camera-rays-only frame (640x360, no lights, 1 spp), and the closest-hit queries of `bench rays`
-# on the kitchen's coherent rays (`Accel::closest`'s AVX2 copy). With OTHER_QUADRAY (a quadray
+# on the kitchen's coherent rays (`Accel::closest`'s AVX2 copy); the last two need the files
+# scripts/bench-speed.sh writes under /tmp/quadray-speed. With OTHER_QUADRAY (a quadray
 # binary built with `--features bench`, say from another commit), counts both side by side and
 # checks that their images are byte-identical. Needs valgrind (apt-get install valgrind) and, for
 # the harness scenes and rays, ../shared.
@@ -26,28 +27,9 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 zstd -q -d -f ../shared/assets/meshes/obvhs_kitchen/kitchen.obj.zst -o "$tmp/kitchen.obj"
 python3 scripts/harness_scenes.py ../shared/peers/povray/scenes.json "$tmp"
-# The camera-rays-only kitchen frame of scripts/bench-speed.sh: the lit kitchen's mesh, flat and
-# ambient only, seen from inside.
-cat >"$tmp/frame.toml" <<EOF
-version = 1
-[camera]
-from = [3.0, 1.5, 1.4]
-to = [-3.9, 1.5, -1.7]
-up = [0.0, 1.0, 0.0]
-vfov = 90.0
-[render]
-spp = 1
-max_depth = 1
-[[material]]
-name = "flat"
-color = [0.8, 0.8, 0.8]
-ambient = 1.0
-[[mesh]]
-path = "$tmp/kitchen.obj"
-up = "z"
-material = "flat"
-EOF
-# The kitchen's coherent rays, in the harness's RAYS format: written by scripts/bench-speed.sh.
+# The camera-rays-only kitchen frame and the kitchen's coherent rays (the harness's RAYS format)
+# of scripts/bench-speed.sh, which writes them.
+frame=/tmp/quadray-speed/kitchen.frame.toml
 rays=/tmp/quadray-speed/rays/kitchen.coherent.rays
 
 count() { # binary, toggle, args...: the instructions callgrind counts inside the toggled function
@@ -81,8 +63,15 @@ reflective scenes/reflective.toml 320x180
 defense scenes/defense.toml 320x180
 grid $tmp/grid.toml 320x180
 lit-kitchen $tmp/mesh.toml 320x180
-kitchen-camera-rays-only $tmp/frame.toml 640x360
 EOF
+if [ -f "$frame" ]; then
+  a=$(render "$this" "$frame" 640x360 "$tmp/a.exr")
+  b=""
+  [ -z "$other" ] || b=$(render "$other" "$frame" 640x360 "$tmp/b.exr")
+  row "kitchen camera-rays-only, 640x360" "$a" "$b"
+else
+  echo "note: $frame not found (scripts/bench-speed.sh writes it): the frame skipped" >&2
+fi
 if [ -f "$rays" ]; then
   toggle='quadray::accel::Accel::closest_avx2'
   a=$(count "$this" "$toggle" bench rays "$tmp/kitchen.obj" "$rays" --runs 1 -t 1)

@@ -219,17 +219,8 @@ impl MeshBvh {
             if current & LEAF == 0 {
                 let node = &self.nodes[current as usize];
                 let (_, mask) = node.intersect::<AVX2>(&ray.boxes, t_max);
-                // The entered children pushed in lane order but the last, which is visited next
-                // without the stack (the order popping them all would give).
                 if mask != 0 {
-                    let last = 31 - mask.leading_zeros();
-                    let mut m = mask & !(1 << last);
-                    while m != 0 {
-                        let lane = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        stack.push((node.children[lane], 0.0));
-                    }
-                    current = node.children[last as usize];
+                    current = node.push_all_but_last(mask, &mut stack);
                     continue;
                 }
             } else {

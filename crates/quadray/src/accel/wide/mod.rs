@@ -260,6 +260,21 @@ impl<const N: usize> Node<N> {
         order[n - 1].0
     }
 
+    /// Pushes the children in `mask` (at least one) onto `stack` in lane order but the last,
+    /// and returns the last: the any-hit traversals' order (no child ordering), the one
+    /// popping them all would give, without the last one's push and pop.
+    #[inline(always)]
+    pub(super) fn push_all_but_last(&self, mask: u32, stack: &mut Vec<(u32, f32)>) -> u32 {
+        let last = 31 - mask.leading_zeros();
+        let mut rest = mask & !(1 << last);
+        while rest != 0 {
+            let lane = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            stack.push((self.children[lane], 0.0));
+        }
+        self.children[last as usize]
+    }
+
     /// The box of child `lane`, `None` for an unused slot.
     pub(super) fn child_box(&self, lane: usize) -> Option<(glam::DVec3, glam::DVec3)> {
         let b = &self.bounds;
