@@ -335,7 +335,11 @@ impl Scene {
         // instructions on defense.
         let mut slot = None;
         let path = self.path_in(hit.prim.placement, &mut slot);
-        let attributes = self.geometry.attributes(hit.prim, path, point);
+        let texcoords = match colour {
+            HitColour::Base(material) => material.texture.reads_texcoords(),
+            HitColour::Texture(texture) => texture.reads_texcoords(),
+        };
+        let attributes = self.geometry.attributes(hit.prim, path, point, texcoords);
         let texture_point = |filtered: bool| {
             let centre = self.geometry.texture_point(hit.prim, path, point);
             if filtered && !footprint.is_point() {

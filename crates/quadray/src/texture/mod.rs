@@ -275,6 +275,11 @@ impl Texture {
         matches!(self, Texture::Bands { .. } | Texture::Checker { .. })
     }
 
+    /// Whether the colour reads the hit's texture coordinates (only images do).
+    pub fn reads_texcoords(&self) -> bool {
+        matches!(self, Texture::Image(_))
+    }
+
     /// Whether the colour varies over the surface (a constant needs no texture point).
     pub fn is_constant(&self) -> bool {
         matches!(self, Texture::Constant(_))
