@@ -285,22 +285,22 @@ impl Geometry {
     }
 
     /// Interpolated vertex attributes at world-space `point` on `prim` (texture coordinates and
-    /// colours exist only on meshes; other primitives get the defaults). Without `texcoords` the
-    /// caller will not read the texture coordinates, and a mesh with no vertex colours skips the
-    /// interpolation (the kitchen's texture coordinates cost its lit frame 4% of its
-    /// instructions under a constant colour).
+    /// colours exist only on meshes; other primitives get the defaults). Where `texcoords` says
+    /// the caller will not read the texture coordinates (asked only on meshes), a mesh with no
+    /// vertex colours skips the interpolation (the kitchen's texture coordinates cost its lit
+    /// frame 4% of its instructions under a constant colour).
     #[inline(always)]
     pub fn attributes(
         &self,
         prim: PrimRef,
         path: &InstancePath,
         point: DVec3,
-        texcoords: bool,
+        texcoords: impl FnOnce() -> bool,
     ) -> VertexAttributes {
         match prim.local {
             LocalPrim::Triangle { mesh, tri } => {
                 let mesh = &self.level(path.level(self)).meshes[mesh as usize];
-                let wanted = if texcoords {
+                let wanted = if texcoords() {
                     mesh.has_attributes()
                 } else {
                     mesh.has_colors()

@@ -335,7 +335,7 @@ impl Scene {
         // instructions on defense.
         let mut slot = None;
         let path = self.path_in(hit.prim.placement, &mut slot);
-        let texcoords = match colour {
+        let texcoords = || match colour {
             HitColour::Base(material) => material.texture.reads_texcoords(),
             HitColour::Texture(texture) => texture.reads_texcoords(),
         };
