@@ -113,6 +113,16 @@ enum HitColour<'a> {
     Texture(&'a Texture),
 }
 
+impl HitColour<'_> {
+    /// The texture the colour is read from.
+    fn texture(&self) -> &Texture {
+        match self {
+            HitColour::Base(material) => &material.texture,
+            HitColour::Texture(texture) => texture,
+        }
+    }
+}
+
 /// Back faces of single-sided meshes one closest-hit query passes through at most; a ray that
 /// meets more stops at the next one (none of the Khronos samples comes near).
 const MAX_PASSED_FACES: u32 = 64;
@@ -335,10 +345,7 @@ impl Scene {
         // instructions on defense.
         let mut slot = None;
         let path = self.path_in(hit.prim.placement, &mut slot);
-        let texcoords = || match colour {
-            HitColour::Base(material) => material.texture.reads_texcoords(),
-            HitColour::Texture(texture) => texture.reads_texcoords(),
-        };
+        let texcoords = || colour.texture().reads_texcoords();
         let attributes = self.geometry.attributes(hit.prim, path, point, texcoords);
         let texture_point = |filtered: bool| {
             let centre = self.geometry.texture_point(hit.prim, path, point);
