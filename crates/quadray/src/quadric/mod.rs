@@ -18,6 +18,7 @@
 mod classify;
 mod conditioning;
 mod given;
+mod quadratic;
 #[cfg(test)]
 mod tests;
 mod visible;
@@ -26,12 +27,32 @@ pub use classify::classify;
 pub use conditioning::{ROUNDING_WARNING, RoundingSensitivity};
 pub use given::{ClipBox, Coefficients, QuadricKind, QuadricSurface};
 
+use quadratic::QuadraticPart;
+
 use crate::material::MaterialId;
-use crate::math::{Ray, Transform, discriminant, gamma, orthonormal_basis, slab_interval};
+use crate::math::{Ray, Transform, discriminant, gamma, orthonormal_basis};
 use crate::shape::{SurfaceGeometry, normal_or};
 use crate::texture::TexturePoint;
 use glam::{DAffine3, DMat3, DVec3};
 use std::fmt;
+
+/// The part of (0, `t_max`) in which the ray o + t·d lies in the cube [-1, 1]³: the slab test, its
+/// bounds folded as `f64::max` and `min` would fold them (an axis whose bound is NaN, a ray in the
+/// plane of a face and parallel to it, leaves the others to decide), by one comparison each
+/// instead of those functions' NaN checks. Empty (lo > hi) or NaN when the ray misses.
+#[inline(always)]
+fn unit_cube_interval(o: DVec3, d: DVec3, t_max: f64) -> (f64, f64) {
+    let inv = d.recip();
+    let t0 = (-DVec3::ONE - o) * inv;
+    let t1 = (DVec3::ONE - o) * inv;
+    let (near, far) = (t0.min(t1), t0.max(t1));
+    let (mut lo, mut hi) = (0.0, t_max);
+    for (n, f) in near.to_array().into_iter().zip(far.to_array()) {
+        lo = if n > lo { n } else { lo };
+        hi = if f < hi { f } else { hi };
+    }
+    (lo, hi)
+}
 
 /// What a quadric's equation actually describes, found by diagonalising it (Sylvester's law of inertia).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -141,11 +162,11 @@ pub struct Quadric {
     /// frame as M⁻¹(p − world_origin) − centre_local without rounding the two offsets together.
     centre_local: DVec3,
     /// Normalised local coefficients: f(u) = uᵀAu + 2bᵀu + c.
-    a: DMat3,
+    a: QuadraticPart,
     b: DVec3,
     c: f64,
     /// Entry-wise absolute values of `a` and `b`, for rounding-error bounds.
-    abs_a: DMat3,
+    abs_a: QuadraticPart,
     abs_b: DVec3,
     /// Upper bound on how much the local-to-world map stretches lengths.
     stretch: f64,
@@ -213,7 +234,6 @@ impl Quadric {
         let box_to_object = DAffine3::from_mat3_translation(h, centre);
         let local =
             Transform::new(transform.to_world * box_to_object).ok_or(QuadricError::BadTransform)?;
-        let abs = |m: DMat3| DMat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
         let mut q = Quadric {
             surface,
             clip,
@@ -224,10 +244,10 @@ impl Quadric {
             local,
             world_origin: transform.to_world.translation,
             centre_local: centre / half,
-            a,
+            a: QuadraticPart::new(a),
             b,
             c,
-            abs_a: abs(a),
+            abs_a: QuadraticPart::new(a).abs(),
             abs_b: b.abs(),
             height: (-1.0, 1.0),
         };
@@ -273,7 +293,7 @@ impl Quadric {
 
     /// The normalised local coefficients (A, b, c) of f(u) = uᵀAu + 2bᵀu + c, largest magnitude one.
     pub fn local_coefficients(&self) -> (DMat3, DVec3, f64) {
-        (self.a, self.b, self.c)
+        (self.a.matrix(), self.b, self.c)
     }
 
     /// The ray in the local frame, computed exactly as [`Quadric::intersect`] computes it (the ray
@@ -299,7 +319,7 @@ impl Quadric {
     /// The implicit function in the normalised local frame.
     #[inline]
     fn eval_local(&self, u: DVec3) -> f64 {
-        u.dot(self.a * u) + 2.0 * self.b.dot(u) + self.c
+        u.dot(self.a.times(u)) + 2.0 * self.b.dot(u) + self.c
     }
 
     /// Nearest t in (0, `t_max`) where the ray meets the clipped surface.
@@ -315,14 +335,12 @@ impl Quadric {
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
         let Ray { origin: o, dir: d } = self.local_ray(ray);
-        let (t_in, t_out) = slab_interval(o, d, -DVec3::ONE, DVec3::ONE);
-        let lo = t_in.max(0.0);
-        let hi = t_out.min(t_max);
+        let (lo, hi) = unit_cube_interval(o, d, t_max);
         // Also rejects NaN bounds (a zero direction).
         if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
             return None;
         }
-        let ad = self.a * d;
+        let ad = self.a.times(d);
         let a = d.dot(ad);
         if from_self {
             let beta = ad.dot(o) + self.b.dot(d);
@@ -367,7 +385,7 @@ impl Quadric {
     pub fn surface(&self, ray: &Ray, t: f64) -> SurfaceGeometry {
         let point = ray.at(t);
         let u = self.to_local_point(point);
-        let half_grad = self.a * u + self.b;
+        let half_grad = self.a.times(u) + self.b;
         let geometric_normal = normal_or(self.local.normal_to_world * half_grad, -ray.dir);
         let error = self.point_error(point, u, half_grad);
         SurfaceGeometry {
@@ -417,7 +435,7 @@ impl Quadric {
     pub fn curvature(&self, point: DVec3) -> f64 {
         let u = self.to_local_point(point);
         let l = self.local.from_world.matrix3;
-        let half_grad = l.transpose() * (self.a * u + self.b);
+        let half_grad = l.transpose() * (self.a.times(u) + self.b);
         let length = half_grad.length();
         if length.is_nan() || length <= 0.0 {
             return 0.0;
@@ -425,9 +443,9 @@ impl Quadric {
         let (e1, e2) = orthonormal_basis(half_grad / length);
         let (l1, l2) = (l * e1, l * e2);
         let (m11, m12, m22) = (
-            l1.dot(self.a * l1) / length,
-            l1.dot(self.a * l2) / length,
-            l2.dot(self.a * l2) / length,
+            l1.dot(self.a.times(l1)) / length,
+            l1.dot(self.a.times(l2)) / length,
+            l2.dot(self.a.times(l2)) / length,
         );
         // Eigenvalues of the symmetric 2×2: mean ± radius; the larger magnitude is |mean| + radius.
         let mean = 0.5 * (m11 + m22);
@@ -444,7 +462,7 @@ impl Quadric {
     /// over. The rounding of the world point and of the frame map is added. Doubled for safety.
     fn point_error(&self, point: DVec3, u: DVec3, half_grad: DVec3) -> f64 {
         let au = u.abs();
-        let magnitude = au.dot(self.abs_a * au) + 2.0 * self.abs_b.dot(au) + self.c.abs();
+        let magnitude = au.dot(self.abs_a.times(au)) + 2.0 * self.abs_b.dot(au) + self.c.abs();
         let residual = self.eval_local(u).abs() + gamma(12) * magnitude;
         let grad_world = 2.0 * (self.local.normal_to_world * half_grad).length();
         let first_order = residual / grad_world;

@@ -363,3 +363,37 @@ fn curvature_is_the_larger_principal_curvature() {
     let cone = quadric(QuadricKind::Cone, 1.0, 1.0, 1.0, 1.0);
     assert_eq!(cone.curvature(DVec3::ZERO), 0.0);
 }
+
+/// The cube interval folds its bounds as `f64::max` and `min` of the slab test's do: the same
+/// interval (a zero's sign aside), on random rays and on rays in the plane of a face (a NaN bound), along
+/// axes, with zero components of either sign, and for every `t_max` kind.
+#[test]
+fn cube_interval_folds_bounds_as_max_and_min_do() {
+    let reference = |o: DVec3, d: DVec3, t_max: f64| {
+        let (t_in, t_out) = crate::math::slab_interval(o, d, -DVec3::ONE, DVec3::ONE);
+        (t_in.max(0.0), t_out.min(t_max))
+    };
+    let mut next = crate::test_rng::centred_stream(0x5eed_cafe);
+    let mut coordinate = |pick: u64| match pick % 6 {
+        0 => 1.0,
+        1 => -1.0,
+        2 => 0.0,
+        3 => -0.0,
+        _ => next() * 6.0,
+    };
+    let mut state = 0x1234_5678_u64;
+    for _ in 0..20_000 {
+        let mut pick = || crate::test_rng::xorshift(&mut state);
+        let o = DVec3::new(coordinate(pick()), coordinate(pick()), coordinate(pick()));
+        let d = DVec3::new(coordinate(pick()), coordinate(pick()), coordinate(pick()));
+        for t_max in [f64::INFINITY, 0.5, 3.0, 0.0] {
+            let (lo, hi) = unit_cube_interval(o, d, t_max);
+            let (want_lo, want_hi) = reference(o, d, t_max);
+            let same = |x: f64, y: f64| x == y || (x.is_nan() && y.is_nan());
+            assert!(
+                same(lo, want_lo) && same(hi, want_hi),
+                "o {o}, d {d}, t_max {t_max}: {lo}..{hi}, want {want_lo}..{want_hi}"
+            );
+        }
+    }
+}

@@ -20,7 +20,7 @@ impl Quadric {
                 hi = hi.max(z);
             }
         };
-        let (a, b) = (self.a, self.b);
+        let (a, b) = (self.a.matrix(), self.b);
         let inside = |p: DVec3| p.abs().max_element() <= 1.0 + 1e-12;
         let grid = |i: usize| -1.0 + 2.0 * i as f64 / (N - 1) as f64;
         // Roots along the vertical line through (x, y).
