@@ -56,6 +56,9 @@ pub struct VariantQuadric {
     a: DMat3,
     b: DVec3,
     c: f64,
+    /// A's diagonal when A is diagonal (the named kinds), so every variant multiplies by A as
+    /// production does: three products instead of a matrix product.
+    diagonal: Option<DVec3>,
     a32: Mat3,
     b32: Vec3,
     c32: f32,
@@ -68,7 +71,11 @@ impl VariantQuadric {
     pub fn new(quadric: Quadric) -> Self {
         let (a, b, c) = quadric.local_coefficients();
         let from = quadric.local_frame().from_world;
+        let off = [
+            a.x_axis.y, a.x_axis.z, a.y_axis.x, a.y_axis.z, a.z_axis.x, a.z_axis.y,
+        ];
         VariantQuadric {
+            diagonal: off.iter().all(|&x| x == 0.0).then(|| a.diagonal()),
             a32: a.as_mat3(),
             b32: b.as_vec3(),
             c32: c as f32,
@@ -100,16 +107,34 @@ impl VariantQuadric {
         }
     }
 
+    /// A·v, as production computes it.
+    #[inline]
+    fn a_times(&self, v: DVec3) -> DVec3 {
+        match self.diagonal {
+            Some(diagonal) => diagonal * v,
+            None => self.a * v,
+        }
+    }
+
+    /// A·v in f32.
+    #[inline]
+    fn a32_times(&self, v: Vec3) -> Vec3 {
+        match self.diagonal {
+            Some(diagonal) => diagonal.as_vec3() * v,
+            None => self.a32 * v,
+        }
+    }
+
     #[inline]
     fn eval(&self, u: DVec3) -> f64 {
-        u.dot(self.a * u) + 2.0 * self.b.dot(u) + self.c
+        u.dot(self.a_times(u)) + 2.0 * self.b.dot(u) + self.c
     }
 
     /// Textbook roots in f64: a = dᵀAd, β = dᵀ(Ao + b), γ = f(o), (−β ∓ √(β² − aγ))/a.
     #[inline]
     fn naive_f64(&self, ray: &Ray, t_max: f64) -> Option<f64> {
         let Ray { origin: o, dir: d } = self.quadric.local_ray(ray);
-        let ad = self.a * d;
+        let ad = self.a_times(d);
         let a = d.dot(ad);
         let beta = ad.dot(o) + self.b.dot(d);
         let gamma = self.eval(o);
@@ -139,10 +164,10 @@ impl VariantQuadric {
     fn naive_f32(&self, ray: &Ray, t_max: f64) -> Option<f64> {
         let o = self.m32 * ray.origin.as_vec3() + self.t32;
         let d = self.m32 * ray.dir.as_vec3();
-        let ad = self.a32 * d;
+        let ad = self.a32_times(d);
         let a = d.dot(ad);
         let beta = ad.dot(o) + self.b32.dot(d);
-        let gamma = o.dot(self.a32 * o) + 2.0 * self.b32.dot(o) + self.c32;
+        let gamma = o.dot(self.a32_times(o)) + 2.0 * self.b32.dot(o) + self.c32;
         let t_max = t_max as f32;
         let inside = |t: f32| t > 0.0 && t <= t_max && (o + d * t).abs().max_element() <= 1.0;
         if a == 0.0 {
@@ -175,7 +200,7 @@ impl VariantQuadric {
         if lo.is_nan() || hi.is_nan() || lo > hi {
             return None;
         }
-        let ad = self.a * d;
+        let ad = self.a_times(d);
         let a = d.dot(ad);
         let beta = ad.dot(o) + self.b.dot(d);
         let gamma = self.eval(o);
@@ -200,7 +225,7 @@ impl VariantQuadric {
         let base = o + d * lo;
         let p = base + d * (t - lo);
         let g = self.eval(p);
-        let slope = 2.0 * d.dot(self.a * p + self.b);
+        let slope = 2.0 * d.dot(self.a_times(p) + self.b);
         let step = g / slope;
         let t2 = t - step;
         let guard = (hi - lo).abs() * (1.0 / 1048576.0);
