@@ -39,7 +39,7 @@ use std::fmt;
 /// The part of (0, `t_max`) in which the ray o + t·d lies in the cube [-1, 1]³: the slab test, its
 /// bounds folded as `f64::max` and `min` would fold them (an axis whose bound is NaN, a ray in the
 /// plane of a face and parallel to it, leaves the others to decide), by one comparison each
-/// instead of those functions' NaN checks. Empty (lo > hi) or NaN when the ray misses.
+/// instead of those functions' NaN checks. Empty (lo > hi) where the ray misses the cube.
 #[inline(always)]
 fn unit_cube_interval(o: DVec3, d: DVec3, t_max: f64) -> (f64, f64) {
     let inv = d.recip();

@@ -3,8 +3,8 @@
 //!
 //! The nine named kinds are diagonal in their object frame, and the local frame only scales and
 //! shifts the object frame (the clip box becomes [-1, 1]³), so their A stays diagonal: A·v is
-//! then three products instead of nine and six sums. A product A·v is the intersector's costliest
-//! step after the frame change (twice a test, with the re-origin's evaluation of f).
+//! then three products instead of nine and six sums. The intersector takes A·v twice a test (of
+//! the direction, and in f at the re-origined point), and the surface record once more.
 
 use glam::{DMat3, DVec3};
 
@@ -61,6 +61,7 @@ impl QuadraticPart {
 mod tests {
     use super::*;
 
+    /// A diagonal is recognised and multiplies as the matrix does; a general matrix stays one.
     #[test]
     fn diagonal_products_equal_the_general_ones() {
         let diagonal = DMat3::from_diagonal(DVec3::new(1.0, -0.25, 0.0));

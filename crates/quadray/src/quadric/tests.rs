@@ -365,8 +365,8 @@ fn curvature_is_the_larger_principal_curvature() {
 }
 
 /// The cube interval folds its bounds as `f64::max` and `min` of the slab test's do: the same
-/// interval (a zero's sign aside), on random rays and on rays in the plane of a face (a NaN bound), along
-/// axes, with zero components of either sign, and for every `t_max` kind.
+/// interval (a zero's sign aside) on random rays, on rays in the plane of a face (a NaN bound),
+/// along axes and with zero components of either sign, for infinite, short and zero `t_max`.
 #[test]
 fn cube_interval_folds_bounds_as_max_and_min_do() {
     let reference = |o: DVec3, d: DVec3, t_max: f64| {
