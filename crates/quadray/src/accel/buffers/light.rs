@@ -24,6 +24,8 @@ pub struct LightBuffer {
     light: DVec3,
     /// How far a shadow ray's end may miss the light for the buffer to answer (world units).
     reach: f64,
+    /// |light|∞, a term of every lookup's rounding bound.
+    light_magnitude: f64,
     /// Where each cell's shapes start in `candidates` (one entry more than cells).
     starts: Vec<u32>,
     candidates: Vec<Shape>,
@@ -48,6 +50,7 @@ impl LightBuffer {
         LightBuffer {
             light,
             reach,
+            light_magnitude: light.abs().max_element(),
             starts,
             candidates,
         }
@@ -67,7 +70,7 @@ impl LightBuffer {
         // The rounding of `end`: three operations, each within half an ulp of its largest term.
         let rounding = (ray.origin.abs().max_element()
             + (ray.dir * t_max).abs().max_element()
-            + self.light.abs().max_element())
+            + self.light_magnitude)
             * (4.0 * f64::EPSILON);
         // Also refuses a NaN end (the comparison fails).
         let within = end.abs().max_element() + rounding <= self.reach;
