@@ -28,12 +28,78 @@ pub(super) enum Strata<'a> {
 #[target_feature(enable = "avx2")]
 pub(super) fn points(
     first: u32,
-    (count, m, n): (u32, u32, u32),
+    grid: (u32, u32, u32),
     keys: SampleKeys,
     strata: Strata<'_>,
 ) -> [(f64, f64); 8] {
-    debug_assert!(count >= 2 && count.is_power_of_two());
     let index = _mm256_add_epi32(splat(first), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    points_of_lanes(index, grid, LaneKeys::splat(keys), strata)
+}
+
+/// The points of `8 / count` whole pixels (`count` 2 or 4), `count` lanes each: lane k holds
+/// sample k mod count of the pixel whose pattern key ([`super::pixel_pattern`]) is
+/// `patterns[k / count]`, as [`points`] gives it for that pixel alone, bit for bit. At two or four
+/// samples a pixel [`points`] would fill only the first lanes; this fills them all.
+#[target_feature(enable = "avx2")]
+pub(super) fn points_of_pixels(
+    patterns: &[u32],
+    (count, m, n): (u32, u32, u32),
+) -> [(f64, f64); 8] {
+    assert!(matches!(count, 2 | 4) && patterns.len() == (8 / count) as usize);
+    let lane_pattern = |k: usize| patterns[k / count as usize] as i32;
+    let pattern: [i32; 8] = std::array::from_fn(lane_pattern);
+    // SAFETY: an unaligned load of eight i32s from an array of eight.
+    let pattern = unsafe { _mm256_loadu_si256(pattern.as_ptr().cast()) };
+    let index = _mm256_and_si256(_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), splat(count - 1));
+    points_of_lanes(index, (count, m, n), LaneKeys::of(pattern), Strata::Hashed)
+}
+
+/// The keys of [`SampleKeys`], lane by lane.
+#[derive(Clone, Copy)]
+struct LaneKeys {
+    order: __m256i,
+    column: __m256i,
+    row: __m256i,
+    jitter_x: __m256i,
+    jitter_y: __m256i,
+}
+
+impl LaneKeys {
+    /// One pixel's keys in every lane.
+    #[target_feature(enable = "avx2")]
+    fn splat(keys: SampleKeys) -> LaneKeys {
+        LaneKeys {
+            order: splat(keys.order),
+            column: splat(keys.column),
+            row: splat(keys.row),
+            jitter_x: splat(keys.jitter_x),
+            jitter_y: splat(keys.jitter_y),
+        }
+    }
+
+    /// The keys of each lane's pattern, as [`SampleKeys::of`] makes them.
+    #[target_feature(enable = "avx2")]
+    fn of(pattern: __m256i) -> LaneKeys {
+        let key = |k: u32| _mm256_mullo_epi32(pattern, splat(k));
+        LaneKeys {
+            order: key(super::ORDER_KEY),
+            column: key(super::COLUMN_KEY),
+            row: key(super::ROW_KEY),
+            jitter_x: key(super::JITTER_X_KEY),
+            jitter_y: key(super::JITTER_Y_KEY),
+        }
+    }
+}
+
+/// [`points`] of the sample indices `index`, lane by lane keyed by `keys`.
+#[target_feature(enable = "avx2")]
+fn points_of_lanes(
+    index: __m256i,
+    (count, m, n): (u32, u32, u32),
+    keys: LaneKeys,
+    strata: Strata<'_>,
+) -> [(f64, f64); 8] {
+    debug_assert!(count >= 2 && count.is_power_of_two());
     let s = permute(index, count, keys.order);
     let (column, row) = match strata {
         Strata::Hashed => {
@@ -102,40 +168,48 @@ fn splat(value: u32) -> __m256i {
     _mm256_set1_epi32(value as i32)
 }
 
-/// Kensler's `permute` of eight indices in [0, `len`) keyed by `p`, for a power-of-two `len`:
-/// masked to `len`'s bits, the hash lands in range at its first round, so no lane walks again.
+/// Kensler's `permute` of eight indices in [0, `len`) keyed lane by lane by `p`, for a
+/// power-of-two `len`: masked to `len`'s bits, the hash lands in range at its first round, so no
+/// lane walks again.
 #[target_feature(enable = "avx2")]
-fn permute(i: __m256i, len: u32, p: u32) -> __m256i {
+fn permute(i: __m256i, len: u32, p: __m256i) -> __m256i {
     let w = splat(len - 1);
     let mul = |i, k: u32| _mm256_mullo_epi32(i, splat(k));
-    let xor = |i, k: u32| _mm256_xor_si256(i, splat(k));
+    let xor = _mm256_xor_si256;
+    // p >> bits, lane by lane.
+    let p_shr = |bits: i32| _mm256_srl_epi32(p, _mm_cvtsi32_si128(bits));
     // i ^= (i & w) >> s
     let fold =
         |i, bits: __m128i| _mm256_xor_si256(i, _mm256_srl_epi32(_mm256_and_si256(i, w), bits));
     let by = |s: i32| _mm_cvtsi32_si128(s);
     let mut i = mul(xor(i, p), 0xe170893d);
-    i = fold(xor(i, p >> 16), by(4));
-    i = mul(xor(i, p >> 8), 0x0929eb3f);
-    i = fold(xor(i, p >> 23), by(1));
-    i = mul(mul(i, 1 | p >> 27), 0x6935fa69);
+    i = fold(xor(i, p_shr(16)), by(4));
+    i = mul(xor(i, p_shr(8)), 0x0929eb3f);
+    i = fold(xor(i, p_shr(23)), by(1));
+    i = mul(
+        _mm256_mullo_epi32(i, _mm256_or_si256(splat(1), p_shr(27))),
+        0x6935fa69,
+    );
     i = mul(fold(i, by(11)), 0x74dcb303);
     i = mul(fold(i, by(2)), 0x9e501cc3);
     i = _mm256_and_si256(mul(fold(i, by(2)), 0xc860a3df), w);
     i = _mm256_xor_si256(i, _mm256_srli_epi32::<5>(i));
     // remainder(i + p, len), a mask for a power of two.
-    _mm256_and_si256(_mm256_add_epi32(i, splat(p)), w)
+    _mm256_and_si256(_mm256_add_epi32(i, p), w)
 }
 
-/// Kensler's `randfloat` of eight indices keyed by `p`: lanes 0–3, then 4–7, in [0, 1).
+/// Kensler's `randfloat` of eight indices keyed lane by lane by `p`: lanes 0–3, then 4–7, in
+/// [0, 1).
 #[target_feature(enable = "avx2")]
-fn rand_float(i: __m256i, p: u32) -> [__m256d; 2] {
+fn rand_float(i: __m256i, p: __m256i) -> [__m256d; 2] {
     let shifted = |i, bits: i32| _mm256_xor_si256(i, _mm256_srl_epi32(i, _mm_cvtsi32_si128(bits)));
     let mul = |i, k: u32| _mm256_mullo_epi32(i, splat(k));
-    let mut i = _mm256_xor_si256(i, splat(p));
+    let mut i = _mm256_xor_si256(i, p);
     i = mul(shifted(shifted(i, 17), 10), 0xb36534e5);
     i = mul(shifted(shifted(i, 12), 21), 0x93fc4795);
     i = _mm256_xor_si256(i, splat(0xdf6e307f));
-    i = mul(shifted(i, 17), 1 | p >> 18);
+    let p_shr_18 = _mm256_srli_epi32::<18>(p);
+    i = _mm256_mullo_epi32(shifted(i, 17), _mm256_or_si256(splat(1), p_shr_18));
     let scale = _mm256_set1_pd(4_294_967_808.0);
     [0, 1].map(|half| _mm256_div_pd(unsigned_f64(i, half), scale))
 }

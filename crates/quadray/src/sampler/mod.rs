@@ -328,6 +328,46 @@ impl PixelSampler {
         }
     }
 
+    /// Every sample of each pixel whose pattern key is in `patterns`, pixel after pixel:
+    /// `points[count·i + s]` is sample s of pixel i, [`PixelSampler::samples`] of that pixel bit
+    /// for bit. At two or four samples a pixel on the eight-wide path, the samples of four or two
+    /// pixels share the eight lanes of one call (one pixel's would fill two or four of them);
+    /// otherwise pixel by pixel. Starts each pixel in turn, as [`PixelSampler::start_pixel`].
+    pub fn samples_of_pixels(&mut self, patterns: &[u32], points: &mut [(f64, f64)]) {
+        let count = self.count as usize;
+        assert_eq!(points.len(), patterns.len() * count, "count points a pixel");
+        #[cfg(target_arch = "x86_64")]
+        let (patterns, points) = self.samples_in_groups(patterns, points);
+        for (&pattern, pixel) in patterns.iter().zip(points.chunks_exact_mut(count.max(1))) {
+            self.start_pixel(pattern);
+            self.samples(pixel);
+        }
+    }
+
+    /// The first part of [`PixelSampler::samples_of_pixels`]: the pixels that fill whole groups
+    /// of eight lanes, where several pixels share them (two or four samples a pixel on the
+    /// eight-wide path); returns the pixels left and their points.
+    #[cfg(target_arch = "x86_64")]
+    fn samples_in_groups<'p, 'q>(
+        &self,
+        patterns: &'p [u32],
+        points: &'q mut [(f64, f64)],
+    ) -> (&'p [u32], &'q mut [(f64, f64)]) {
+        let count = self.count as usize;
+        if !(self.eight_wide && self.strata_hashed && count < 8) {
+            return (patterns, points);
+        }
+        let grid = (self.count, self.columns, self.rows);
+        let pixels = 8 / count;
+        let whole = patterns.len() / pixels * pixels;
+        let groups = patterns[..whole].chunks_exact(pixels);
+        for (group, lanes) in groups.zip(points.as_chunks_mut::<8>().0) {
+            // SAFETY: `eight_wide` is set only where the CPU has AVX2 (`simd_path`).
+            *lanes = unsafe { avx2::points_of_pixels(group, grid) };
+        }
+        (&patterns[whole..], &mut points[whole * count..])
+    }
+
     /// [`PixelSampler::samples`] for more than one sample a pixel.
     fn samples_of_many(&self, points: &mut [(f64, f64)]) {
         #[cfg(target_arch = "x86_64")]
@@ -461,6 +501,37 @@ mod tests {
                     value / divisor,
                     "{value} / {divisor}"
                 );
+            }
+        }
+    }
+
+    /// Samples of several pixels made at once (four or two pixels to a group of lanes at two or four
+    /// samples a pixel on the AVX2 path, the rest one by one) are each pixel's own points, bit for
+    /// bit, for runs of pixels that fill whole groups and runs that leave some over.
+    #[test]
+    fn several_pixels_at_once_get_each_pixels_own_points() {
+        let patterns: Vec<u32> = (0..11u32)
+            .map(|i| pixel_pattern(i, 7 * i + 3, 5))
+            .chain([0, u32::MAX, 0x8000_0001])
+            .collect();
+        for count in [1u32, 2, 3, 4, 8, 16, 32] {
+            let mut sampler = PixelSampler::new(count);
+            // Runs of 1 to 14 pixels: whole groups of lanes and what is left after them.
+            for pixels in 1..=patterns.len() {
+                let patterns = &patterns[..pixels];
+                let mut points = vec![(0.0, 0.0); pixels * count as usize];
+                sampler.samples_of_pixels(patterns, &mut points);
+                for (i, &pattern) in patterns.iter().enumerate() {
+                    for s in 0..count {
+                        let point = points[i * count as usize + s as usize];
+                        let expected = sample_2d(s, count, pattern);
+                        assert_eq!(
+                            [point.0.to_bits(), point.1.to_bits()],
+                            [expected.0.to_bits(), expected.1.to_bits()],
+                            "count {count}, {pixels} pixels, pixel {i}, sample {s}"
+                        );
+                    }
+                }
             }
         }
     }

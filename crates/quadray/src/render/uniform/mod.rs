@@ -28,7 +28,7 @@ const BATCH_SAMPLES: usize = 16;
 struct Batches {
     /// The pixels' sample points.
     sampler: PixelSampler,
-    /// The current pixel's offsets in the unit pixel.
+    /// The batch's pixels' offsets in the unit pixel, pixel after pixel.
     offsets: Vec<(f64, f64)>,
     /// The batch's image positions.
     positions: Vec<[f64; 2]>,
@@ -47,7 +47,7 @@ impl Batches {
         let samples = BATCH_SAMPLES.max(spp as usize);
         Batches {
             sampler: PixelSampler::new(spp),
-            offsets: vec![(0.0, 0.0); spp as usize],
+            offsets: vec![(0.0, 0.0); samples],
             positions: Vec::with_capacity(samples),
             patterns: Vec::with_capacity(samples),
             rays: vec![Ray::new(DVec3::ZERO, DVec3::ZERO); samples],
@@ -151,11 +151,10 @@ fn render_segment(
             positions.extend(columns.map(|x| [x as f64 + 0.5, y as f64 + 0.5]));
         } else {
             patterns.clear();
-            for x in columns {
-                let pattern = pixel_pattern(x, y, settings.seed);
-                patterns.push(pattern);
-                sampler.start_pixel(pattern);
-                sampler.samples(offsets);
+            patterns.extend(columns.clone().map(|x| pixel_pattern(x, y, settings.seed)));
+            let offsets = &mut offsets[..patterns.len() * spp as usize];
+            sampler.samples_of_pixels(patterns, offsets);
+            for (x, offsets) in columns.zip(offsets.chunks_exact(spp as usize)) {
                 positions.extend(
                     offsets
                         .iter()
