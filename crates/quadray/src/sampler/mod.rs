@@ -332,7 +332,8 @@ impl PixelSampler {
     /// `points[count·i + s]` is sample s of pixel i, [`PixelSampler::samples`] of that pixel bit
     /// for bit. At two or four samples a pixel on the eight-wide path, the samples of four or two
     /// pixels share the eight lanes of one call (one pixel's would fill two or four of them);
-    /// otherwise pixel by pixel. Starts each pixel in turn, as [`PixelSampler::start_pixel`].
+    /// otherwise pixel by pixel. Which pixel the sampler is left on is not said:
+    /// [`PixelSampler::samples`] wants [`PixelSampler::start_pixel`] first, as always.
     pub fn samples_of_pixels(&mut self, patterns: &[u32], points: &mut [(f64, f64)]) {
         let count = self.count as usize;
         assert_eq!(points.len(), patterns.len() * count, "count points a pixel");
@@ -505,9 +506,9 @@ mod tests {
         }
     }
 
-    /// Samples of several pixels made at once (four or two pixels to a group of lanes at two or four
-    /// samples a pixel on the AVX2 path, the rest one by one) are each pixel's own points, bit for
-    /// bit, for runs of pixels that fill whole groups and runs that leave some over.
+    /// Samples of several pixels made at once (four or two pixels to a group of lanes at two or
+    /// four samples a pixel on the AVX2 path, the rest one by one) are each pixel's own points,
+    /// bit for bit, for runs of pixels that fill whole groups and runs that leave some over.
     #[test]
     fn several_pixels_at_once_get_each_pixels_own_points() {
         let patterns: Vec<u32> = (0..11u32)
