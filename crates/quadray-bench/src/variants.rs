@@ -71,11 +71,8 @@ impl VariantQuadric {
     pub fn new(quadric: Quadric) -> Self {
         let (a, b, c) = quadric.local_coefficients();
         let from = quadric.local_frame().from_world;
-        let off = [
-            a.x_axis.y, a.x_axis.z, a.y_axis.x, a.y_axis.z, a.z_axis.x, a.z_axis.y,
-        ];
         VariantQuadric {
-            diagonal: off.iter().all(|&x| x == 0.0).then(|| a.diagonal()),
+            diagonal: quadric.local_diagonal(),
             a32: a.as_mat3(),
             b32: b.as_vec3(),
             c32: c as f32,

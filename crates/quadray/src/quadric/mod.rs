@@ -231,6 +231,7 @@ impl Quadric {
         if !class.is_renderable() {
             return Err(QuadricError::Degenerate(class));
         }
+        let quadratic = QuadraticPart::new(a);
         let box_to_object = DAffine3::from_mat3_translation(h, centre);
         let local =
             Transform::new(transform.to_world * box_to_object).ok_or(QuadricError::BadTransform)?;
@@ -244,10 +245,10 @@ impl Quadric {
             local,
             world_origin: transform.to_world.translation,
             centre_local: centre / half,
-            a: QuadraticPart::new(a),
+            a: quadratic,
             b,
             c,
-            abs_a: QuadraticPart::new(a).abs(),
+            abs_a: quadratic.abs(),
             abs_b: b.abs(),
             height: (-1.0, 1.0),
         };
@@ -294,6 +295,15 @@ impl Quadric {
     /// The normalised local coefficients (A, b, c) of f(u) = uᵀAu + 2bᵀu + c, largest magnitude one.
     pub fn local_coefficients(&self) -> (DMat3, DVec3, f64) {
         (self.a.matrix(), self.b, self.c)
+    }
+
+    /// The diagonal of the local A when A is diagonal (the named kinds), which
+    /// [`Quadric::intersect`] multiplies by as three products; `None` for a general A.
+    pub fn local_diagonal(&self) -> Option<DVec3> {
+        match self.a {
+            QuadraticPart::Diagonal(d) => Some(d),
+            QuadraticPart::General(_) => None,
+        }
     }
 
     /// The ray in the local frame, computed exactly as [`Quadric::intersect`] computes it (the ray
