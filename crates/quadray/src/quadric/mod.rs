@@ -36,16 +36,22 @@ use crate::texture::TexturePoint;
 use glam::{DAffine3, DMat3, DVec3};
 use std::fmt;
 
-/// The part of (0, `t_max`) in which the ray o + t·d lies in the cube [-1, 1]³: the slab test, its
-/// bounds folded as `f64::max` and `min` would fold them (an axis whose bound is NaN, a ray in the
-/// plane of a face and parallel to it, leaves the others to decide), by one comparison each
-/// instead of those functions' NaN checks. Empty (lo > hi) where the ray misses the cube.
+/// The slab test of the ray o + t·d against the cube [-1, 1]³: per axis, the t at which it enters
+/// and leaves the axis's slab (NaN for a ray in the plane of a face and parallel to it).
 #[inline(always)]
-fn unit_cube_interval(o: DVec3, d: DVec3, t_max: f64) -> (f64, f64) {
+fn unit_cube_slabs(o: DVec3, d: DVec3) -> (DVec3, DVec3) {
     let inv = d.recip();
     let t0 = (-DVec3::ONE - o) * inv;
     let t1 = (DVec3::ONE - o) * inv;
-    let (near, far) = (t0.min(t1), t0.max(t1));
+    (t0.min(t1), t0.max(t1))
+}
+
+/// The part of (0, `t_max`) in which a ray lies in the cube of its `slabs` ([`unit_cube_slabs`]):
+/// their bounds folded as `f64::max` and `min` would fold them (an axis whose bound is NaN leaves
+/// the others to decide), by one comparison each instead of those functions' NaN checks. Empty
+/// (lo > hi) where the ray misses the cube.
+#[inline(always)]
+fn unit_cube_interval((near, far): (DVec3, DVec3), t_max: f64) -> (f64, f64) {
     let (mut lo, mut hi) = (0.0, t_max);
     for (n, f) in near.to_array().into_iter().zip(far.to_array()) {
         lo = if n > lo { n } else { lo };
@@ -345,7 +351,8 @@ impl Quadric {
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
         let Ray { origin: o, dir: d } = self.local_ray(ray);
-        let (lo, hi) = unit_cube_interval(o, d, t_max);
+        let slabs = unit_cube_slabs(o, d);
+        let (lo, hi) = unit_cube_interval(slabs, t_max);
         // Also rejects NaN bounds (a zero direction).
         if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
             return None;
@@ -364,7 +371,12 @@ impl Quadric {
         let mut gamma_ = self.eval_local(o);
         let (bb, ag) = (beta * beta, a * gamma_);
         if (bb - ag).abs() * 1024.0 < bb + ag.abs() {
-            let s = (-beta / a).clamp(0.0, hi - lo);
+            // Clamped to the box, not to t_max (its exit ≥ hi ≥ lo): the roots then do not
+            // depend on t_max, so a root below t_max is the one an unbounded test finds, whatever
+            // order a traversal tests shapes in and whatever limit it has reached
+            // (`roots_do_not_depend_on_the_limit`).
+            let exit = unit_cube_interval(slabs, f64::INFINITY).1;
+            let s = (-beta / a).clamp(0.0, exit - lo);
             if s > 0.0 {
                 o += d * s;
                 base += s;

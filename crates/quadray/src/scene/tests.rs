@@ -391,7 +391,8 @@ fn light_buffers_answer_as_the_bvh() {
 
 /// Rays from the eye answered through the eye buffer find the BVH's nearest hit, ray for ray, in
 /// [`buffered_world`] seen from outside, from among the shapes and from inside a sphere's box:
-/// rays in every direction, and rays aimed at the shapes.
+/// rays in every direction, and rays aimed at the shapes, some of them through cells that list
+/// several shapes.
 #[test]
 fn the_eye_buffer_answers_as_the_bvh() {
     let mut next = uniform(0x0ddb_1a5e_55ee_d001);
@@ -405,7 +406,7 @@ fn the_eye_buffer_answers_as_the_bvh() {
             .eye_buffer
             .as_ref()
             .expect("a pinhole camera in a few shapes");
-        let (mut answered, mut hits, mut rays) = (0, 0, 0);
+        let (mut answered, mut several, mut hits, mut rays) = (0, 0, 0, 0);
         for k in 0..40_000 {
             let dir = if k % 2 == 0 {
                 DVec3::new(next(), next(), next())
@@ -418,14 +419,17 @@ fn the_eye_buffer_answers_as_the_bvh() {
                 .closest(&scene.geometry, &ray, f64::INFINITY, None);
             let got = scene.accel.closest_from_eye(&scene.geometry, buffer, &ray);
             assert_eq!(got, want, "eye {eye}, ray {ray:?}");
-            answered += usize::from(buffer.answers(&ray));
+            let listed = buffer.listed(&ray);
+            answered += usize::from(listed.is_some());
+            several += usize::from(listed.is_some_and(|n| n > 1));
             hits += usize::from(want.is_some());
             rays += 1;
         }
-        // Most rays are answered by the buffer, and many hit something.
+        // Most rays are answered by the buffer, some of them by testing several shapes, and many
+        // hit something.
         assert!(
-            answered * 2 > rays && hits * 4 > rays,
-            "{answered}, {hits} of {rays}"
+            answered * 2 > rays && several * 50 > rays && hits * 4 > rays,
+            "{answered} ({several} by several shapes), {hits} of {rays}"
         );
     }
 }

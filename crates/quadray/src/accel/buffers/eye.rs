@@ -1,13 +1,17 @@
-//! The eye buffer: for rays from a pinhole camera's eye, the one shape each direction can meet,
-//! where there is at most one. Such a ray tests that shape and the planes; a ray that two shapes or
-//! more may meet traverses the BVH, so hits tied at equal distances resolve as they always did.
-//! (Testing several listed shapes here would not give the BVH's bits either: a quadric's t
-//! depends in its last bits on the limit it is tested with, since its tangency step is clamped
-//! to it, and the BVH lowers that limit in its own order.)
+//! The eye buffer: for rays from a pinhole camera's eye, the few shapes each direction can meet.
+//! Such a ray tests those shapes and the planes; a ray that more shapes may meet, or a mesh or an
+//! instance among others, traverses the BVH.
 //!
-//! Why the one shape is the only one. A hit at `p = e + t·d` on a ray from the eye `e` lies in its
-//! shape's padded box, and `p − e = t·d` has the direction `d` looked up, so the shape is listed
-//! in its cell.
+//! Why the listed shapes are the only ones. A hit at `p = e + t·d` on a ray from the eye `e` lies
+//! in its shape's padded box, and `p − e = t·d` has the direction `d` looked up, so the shape is
+//! listed in its cell.
+//!
+//! Why testing them in the list's order gives the BVH's answer. A sphere's or a quadric's hit
+//! below a limit is the hit its test finds with no limit, bit for bit (the quadric's step towards
+//! tangency is clamped to its box, not to the limit: `roots_do_not_depend_on_the_limit`), so the
+//! nearest of the listed shapes' unbounded hits is the hit the BVH finds in whatever order it
+//! tests them. Two shapes hit at exactly the same distance are left to the BVH, whose order
+//! decides such ties. A mesh or an instance is listed only alone.
 
 use super::{Candidate, Cube, Shape, finite_in_f32, relative_box};
 use crate::accel::Accel;
@@ -15,61 +19,105 @@ use crate::geometry::Geometry;
 use crate::math::Ray;
 use crate::shape::PrimRef;
 use glam::DVec3;
+use std::collections::HashMap;
 
 /// The eye buffer's cube: 128² cells a face, about 0.7° each, so most cells of a view of a few
-/// shapes see one shape or none.
+/// shapes list one shape or none.
 const CUBE: Cube = Cube { n: 128 };
 /// A cell no shape is seen through.
 const NO_SHAPE: u8 = u8::MAX;
-/// A cell two shapes or more are seen through.
+/// A cell the BVH answers for: more than [`MAX_LISTED`] shapes are seen through it, or a mesh
+/// or an instance among others, or its list would be one too many.
 const MANY_SHAPES: u8 = u8::MAX - 1;
+/// Most shapes a cell lists.
+const MAX_LISTED: u32 = 4;
 
-/// For rays from one point, the one shape each direction can meet, where there is at most one.
+/// For rays from one point, the few shapes each direction can meet.
 #[derive(Clone, Debug)]
 pub struct EyeBuffer {
     /// The eye.
     eye: DVec3,
+    /// The distinct lists cells hold, one after another: list `k` is
+    /// `shapes[starts[k]..starts[k + 1]]`.
     shapes: Vec<Shape>,
-    /// Per cell: an index into `shapes`, [`NO_SHAPE`] or [`MANY_SHAPES`].
+    starts: Vec<u16>,
+    /// Per cell: a list's index, [`NO_SHAPE`] or [`MANY_SHAPES`].
     cells: Vec<u8>,
 }
 
 impl EyeBuffer {
-    /// The buffer of the eye at `eye` over at most [`MANY_SHAPES`] `shapes`.
+    /// The buffer of the eye at `eye` over at most 64 `shapes`.
     fn new(eye: DVec3, reach: f64, shapes: Vec<Candidate>) -> EyeBuffer {
-        assert!(shapes.len() < MANY_SHAPES as usize, "a few shapes");
-        let mut cells = vec![NO_SHAPE; CUBE.len()];
+        assert!(shapes.len() <= 64, "a few shapes");
+        // Each cell's shapes as a set of bits, then each distinct set as a list.
+        let mut seen = vec![0u64; CUBE.len()];
         for (k, candidate) in shapes.iter().enumerate() {
             let (lo, hi) = relative_box(candidate, eye, reach);
-            CUBE.for_cells_seeing(lo, hi, |cell| {
-                cells[cell] = if cells[cell] == NO_SHAPE {
-                    k as u8
-                } else {
-                    MANY_SHAPES
-                };
-            });
+            CUBE.for_cells_seeing(lo, hi, |cell| seen[cell] |= 1 << k);
         }
-        let shapes = shapes.iter().map(|c| c.shape).collect();
-        EyeBuffer { eye, shapes, cells }
+        let items = (shapes.iter().enumerate())
+            .filter(|(_, c)| matches!(c.shape, Shape::Item(_)))
+            .fold(0u64, |set, (k, _)| set | 1 << k);
+        // Lists run from the shape whose box is nearest the eye, so that the farther ones are
+        // mostly refused by their box test once a nearer hit is found.
+        let mut by_distance: Vec<usize> = (0..shapes.len()).collect();
+        let distance = |c: &Candidate| {
+            let (lo, hi) = relative_box(c, eye, reach);
+            lo.max(-hi).max(DVec3::ZERO).length_squared()
+        };
+        by_distance.sort_by(|&i, &j| distance(&shapes[i]).total_cmp(&distance(&shapes[j])));
+        let (mut listed, mut starts) = (Vec::new(), vec![0u16]);
+        let mut lists: HashMap<u64, u8> = HashMap::new();
+        let mut list_of = |set: u64| {
+            let count = set.count_ones();
+            if set == 0 {
+                return NO_SHAPE;
+            }
+            if count > MAX_LISTED || (count > 1 && set & items != 0) {
+                return MANY_SHAPES;
+            }
+            if let Some(&k) = lists.get(&set) {
+                return k;
+            }
+            if lists.len() == MANY_SHAPES as usize {
+                return MANY_SHAPES;
+            }
+            let k = lists.len() as u8;
+            let members = by_distance.iter().filter(|&&i| set >> i & 1 == 1);
+            listed.extend(members.map(|&i| shapes[i].shape));
+            starts.push(listed.len() as u16);
+            lists.insert(set, k);
+            k
+        };
+        let cells = seen.into_iter().map(&mut list_of).collect();
+        EyeBuffer {
+            eye,
+            shapes: listed,
+            starts,
+            cells,
+        }
     }
 
-    /// Whether the buffer answers for this ray (else the BVH does).
+    /// How many shapes the buffer tests for this ray, or `None` where the BVH answers.
     #[cfg(test)]
-    pub(crate) fn answers(&self, ray: &Ray) -> bool {
-        self.seen(ray).is_some()
+    pub(crate) fn listed(&self, ray: &Ray) -> Option<usize> {
+        self.seen(ray).map(<[Shape]>::len)
     }
 
-    /// For a ray: `Some(None)` when it starts at the eye and can meet no shape, `Some(Some(shape))`
-    /// when only that one, `None` when the BVH must tell.
+    /// For a ray: the shapes it can meet (none, when it starts at the eye and can meet none), or
+    /// `None` when the BVH must tell.
     #[inline]
-    fn seen(&self, ray: &Ray) -> Option<Option<Shape>> {
+    fn seen(&self, ray: &Ray) -> Option<&[Shape]> {
         if ray.origin != self.eye {
             return None;
         }
         match self.cells[CUBE.cell(ray.dir)?] {
-            NO_SHAPE => Some(None),
+            NO_SHAPE => Some(&[]),
             MANY_SHAPES => None,
-            k => Some(Some(self.shapes[k as usize])),
+            k => {
+                let (first, last) = (self.starts[k as usize], self.starts[k as usize + 1]);
+                Some(&self.shapes[first as usize..last as usize])
+            }
         }
     }
 
@@ -130,7 +178,9 @@ impl Accel {
     /// ([`Accel::buffered_shapes`]) on either path: camera rays ask it one by one only on the
     /// baseline path ([`Accel::eye_answers_rays`]), tiles of pixels on both.
     pub(crate) fn eye_buffer(&self, g: &Geometry, eye: DVec3) -> Option<EyeBuffer> {
-        let shapes = self.buffered_shapes(g).filter(|_| eye.is_finite())?;
+        // A cell's shapes are the bits of a u64.
+        let shapes =
+            (self.buffered_shapes(g)).filter(|shapes| eye.is_finite() && shapes.len() <= 64)?;
         Some(EyeBuffer::new(eye, self.reach(eye), shapes))
     }
 
@@ -143,7 +193,7 @@ impl Accel {
     }
 
     /// [`Accel::closest`] for a ray spawned on nothing: through `eye` when the ray starts there
-    /// and meets at most one shape, else through the BVH.
+    /// and its cell lists the shapes it can meet, else through the BVH.
     #[inline(never)]
     pub(crate) fn closest_from_eye(
         &self,
@@ -151,25 +201,129 @@ impl Accel {
         eye: &EyeBuffer,
         ray: &Ray,
     ) -> Option<(f64, PrimRef)> {
-        let Some(seen) = eye.seen(ray).filter(|_| finite_in_f32(ray)) else {
-            return self.closest_impl::<false>(g, ray, f64::INFINITY, None);
-        };
-        let mut best_t = f64::INFINITY;
-        let mut best = None;
-        match seen {
-            None => {}
-            Some(Shape::Analytic(shape)) => {
-                if let Some(t) = g.level(0).intersect(shape, ray, best_t, false) {
-                    best_t = t;
-                    best = Some(PrimRef::world(shape));
+        if let Some(seen) = eye.seen(ray).filter(|_| finite_in_f32(ray)) {
+            let mut best_t = f64::INFINITY;
+            let mut best = None;
+            let answered = match *seen {
+                [] => true,
+                [Shape::Analytic(shape)] => {
+                    if let Some(t) = g.level(0).intersect(shape, ray, best_t, false) {
+                        best_t = t;
+                        best = Some(PrimRef::world(shape));
+                    }
+                    true
                 }
-            }
-            Some(Shape::Item(item)) => {
-                self.closest_world_item(g, item, ray, &mut best_t, &mut best);
+                [Shape::Item(item)] => {
+                    self.closest_world_item(g, item, ray, &mut best_t, &mut best);
+                    true
+                }
+                ref shapes => nearest_listed(g, shapes, ray, &mut best_t, &mut best),
+            };
+            if answered {
+                // The planes after the shapes, as `Accel::closest` tests them.
+                self.closest_plane(g, ray, None, &mut best_t, &mut best);
+                return best.map(|p| (best_t, p));
             }
         }
-        // The planes after the shapes, as `Accel::closest` tests them.
-        self.closest_plane(g, ray, None, &mut best_t, &mut best);
-        best.map(|p| (best_t, p))
+        self.closest_impl::<false>(g, ray, f64::INFINITY, None)
+    }
+}
+
+/// Lowers `best_t` to the nearest hit of `ray` on the spheres and quadrics `shapes` and sets
+/// `best` to its shape; `false` when a shape is not a sphere or a quadric, or two are hit at
+/// exactly the same distance (the BVH's order decides such ties). Each is tested with a limit
+/// just past `best_t`: their hits below a limit are their unbounded hits, so a hit at `best_t`
+/// itself (a tie) is still found, and a box beyond it is refused by its slab test.
+#[inline(never)]
+fn nearest_listed(
+    g: &Geometry,
+    shapes: &[Shape],
+    ray: &Ray,
+    best_t: &mut f64,
+    best: &mut Option<PrimRef>,
+) -> bool {
+    let level = g.level(0);
+    for &shape in shapes {
+        let Shape::Analytic(shape) = shape else {
+            return false;
+        };
+        match level.intersect(shape, ray, best_t.next_up(), false) {
+            Some(t) if t < *best_t => {
+                *best_t = t;
+                *best = Some(PrimRef::world(shape));
+            }
+            Some(t) if t == *best_t => return false,
+            _ => {}
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shape::LocalPrim;
+    use obvhs::aabb::Aabb;
+
+    /// Every cell lists exactly the shapes whose boxes are seen through it, nearest box first, up
+    /// to the cap on distinct lists, past which cells go to the BVH: 64 long boxes scattered
+    /// around the eye, whose lists hold more entries than a byte can count.
+    #[test]
+    fn cells_list_the_shapes_seen_through_them() {
+        let mut next = crate::test_rng::centred_stream(0x5eed_e7e5);
+        let candidates: Vec<Candidate> = (0..64)
+            .map(|k| {
+                // Sticks along the three axes in turn, which cross each other in view.
+                let centre = DVec3::new(next(), next(), next()) * 20.0;
+                let mut half = DVec3::splat(0.1);
+                half[k as usize % 3] = 8.0;
+                Candidate {
+                    bounds: Aabb {
+                        min: (centre - half).as_vec3a(),
+                        max: (centre + half).as_vec3a(),
+                    },
+                    shape: Shape::Analytic(LocalPrim::Sphere(k)),
+                }
+            })
+            .collect();
+        let (eye, reach) = (DVec3::new(0.5, -0.25, 0.125), 1e-6);
+        let buffer = EyeBuffer::new(eye, reach, candidates.clone());
+        let mut seen = vec![0u64; CUBE.len()];
+        for (k, candidate) in candidates.iter().enumerate() {
+            let (lo, hi) = relative_box(candidate, eye, reach);
+            CUBE.for_cells_seeing(lo, hi, |cell| seen[cell] |= 1 << k);
+        }
+        let distance = |shape: &Shape| {
+            let k = candidates.iter().position(|c| c.shape == *shape).unwrap();
+            let (lo, hi) = relative_box(&candidates[k], eye, reach);
+            (k, lo.max(-hi).max(DVec3::ZERO).length_squared())
+        };
+        let mut many = 0;
+        for (cell, &set) in seen.iter().enumerate() {
+            match buffer.cells[cell] {
+                NO_SHAPE => assert_eq!(set, 0, "cell {cell}"),
+                // Too many shapes, or a list past the cap.
+                MANY_SHAPES => {
+                    assert_ne!(set, 0, "cell {cell}");
+                    many += 1;
+                }
+                k => {
+                    let (first, last) = (buffer.starts[k as usize], buffer.starts[k as usize + 1]);
+                    let list = &buffer.shapes[first as usize..last as usize];
+                    let listed: Vec<_> = list.iter().map(distance).collect();
+                    let set_listed = listed.iter().fold(0u64, |s, &(k, _)| s | 1 << k);
+                    assert_eq!(set_listed, set, "cell {cell}");
+                    assert!(listed.len() as u32 <= MAX_LISTED);
+                    assert!(listed.windows(2).all(|w| w[0].1 <= w[1].1), "cell {cell}");
+                }
+            }
+        }
+        // The distinct lists reached the cap, and hold more entries than 255.
+        assert_eq!(buffer.starts.len() - 1, MANY_SHAPES as usize);
+        assert!(
+            buffer.shapes.len() > 255 && many > 0,
+            "{}",
+            buffer.shapes.len()
+        );
     }
 }
