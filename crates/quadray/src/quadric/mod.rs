@@ -338,7 +338,8 @@ impl Quadric {
         u.dot(self.a.times(u)) + 2.0 * self.b.dot(u) + self.c
     }
 
-    /// Nearest t in (0, `t_max`) where the ray meets the clipped surface.
+    /// Nearest t in (0, `t_max`] where the ray meets the clipped surface (the end included,
+    /// where a sphere's test excludes it).
     ///
     /// `from_self` marks a ray spawned on this quadric: its origin is on the surface, so γ = 0 and
     /// the roots are 0 and −2β/a; the second is a genuine re-hit (a concave mirror) and is kept.

@@ -197,8 +197,8 @@ fn filtered_checker(q: DVec3, w: DVec3, even: Vec3, odd: Vec3) -> Vec3 {
 }
 
 /// [`square_wave_mean`] of the x and the y axis, bit for bit: in the two lanes of SSE2 registers
-/// on x86-64 where both extents are positive and the coordinates within ±2⁵¹ (a plane's checker,
-/// and most of any other's), else one by one.
+/// on x86-64 where both extents are positive and the footprint's bounds within ±2⁵² (a plane's
+/// checker, and most of any other's), else one by one.
 #[inline(always)]
 fn square_wave_means_xy(q: DVec3, w: DVec3) -> [f64; 2] {
     #[cfg(target_arch = "x86_64")]
@@ -217,7 +217,8 @@ mod sse2 {
     /// half is NaN or beyond ±2⁵¹, the range of the floor below.
     #[inline(always)]
     pub(super) fn square_wave_means(x: [f64; 2], w: [f64; 2]) -> Option<[f64; 2]> {
-        // SAFETY: SSE2 is part of x86-64's baseline.
+        // SAFETY: SSE2 is enabled on every x86-64 target (its baseline), all these intrinsics
+        // ask; the unaligned loads and the store read and write two-element arrays whole.
         unsafe {
             let (x, w) = (_mm_loadu_pd(x.as_ptr()), _mm_loadu_pd(w.as_ptr()));
             let (upper, lower) = (_mm_add_pd(x, w), _mm_sub_pd(x, w));
@@ -261,8 +262,8 @@ mod sse2 {
     /// out +0. That leaves m = v − 2·⌊v/2⌋ above as it is: v/2 is −0 only for a tiny negative v
     /// (never −0 itself, x ± w with w > 0), and v − 2·(±0) is v.
     #[inline(always)]
-    unsafe fn floor(v: __m128d) -> __m128d {
-        // SAFETY: SSE2 is part of x86-64's baseline.
+    fn floor(v: __m128d) -> __m128d {
+        // SAFETY: SSE2 is enabled on every x86-64 target (its baseline), all these intrinsics ask.
         unsafe {
             let magic = _mm_set1_pd(6_755_399_441_055_744.0);
             let rounded = _mm_sub_pd(_mm_add_pd(v, magic), magic);

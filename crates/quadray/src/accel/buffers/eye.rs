@@ -46,20 +46,21 @@ pub struct EyeBuffer {
 }
 
 impl EyeBuffer {
-    /// The buffer of the eye at `eye` over at most 64 `shapes`.
+    /// The buffer of the eye at `eye` over at most 128 `shapes` (a world's 64 spheres and
+    /// quadrics and its few other top items, [`Accel::buffered_shapes`]).
     fn new(eye: DVec3, reach: f64, shapes: Vec<Candidate>) -> EyeBuffer {
-        assert!(shapes.len() <= 64, "a few shapes");
+        assert!(shapes.len() <= 128, "a few shapes");
         // Each cell's shapes as a set of bits, then each distinct set as a list.
-        let mut seen = vec![0u64; CUBE.len()];
+        let mut seen = vec![0u128; CUBE.len()];
         for (k, candidate) in shapes.iter().enumerate() {
             let (lo, hi) = relative_box(candidate, eye, reach);
             CUBE.for_cells_seeing(lo, hi, |cell| seen[cell] |= 1 << k);
         }
         let items = (shapes.iter().enumerate())
             .filter(|(_, c)| matches!(c.shape, Shape::Item(_)))
-            .fold(0u64, |set, (k, _)| set | 1 << k);
-        // Lists run from the shape whose box is nearest the eye, so that the farther ones are
-        // mostly refused by their box test once a nearer hit is found.
+            .fold(0u128, |set, (k, _)| set | 1 << k);
+        // Lists run from the shape whose box is nearest the eye, so that a farther quadric is
+        // mostly refused by its slab test once a nearer hit is found.
         let mut by_distance: Vec<usize> = (0..shapes.len()).collect();
         let distance = |c: &Candidate| {
             let (lo, hi) = relative_box(c, eye, reach);
@@ -67,8 +68,8 @@ impl EyeBuffer {
         };
         by_distance.sort_by(|&i, &j| distance(&shapes[i]).total_cmp(&distance(&shapes[j])));
         let (mut listed, mut starts) = (Vec::new(), vec![0u16]);
-        let mut lists: HashMap<u64, u8> = HashMap::new();
-        let mut list_of = |set: u64| {
+        let mut lists: HashMap<u128, u8> = HashMap::new();
+        let mut list_of = |set: u128| {
             let count = set.count_ones();
             if set == 0 {
                 return NO_SHAPE;
@@ -178,9 +179,9 @@ impl Accel {
     /// ([`Accel::buffered_shapes`]) on either path: camera rays ask it one by one only on the
     /// baseline path ([`Accel::eye_answers_rays`]), tiles of pixels on both.
     pub(crate) fn eye_buffer(&self, g: &Geometry, eye: DVec3) -> Option<EyeBuffer> {
-        // A cell's shapes are the bits of a u64.
+        // A cell's shapes are the bits of a u128 (`buffered_shapes` gives at most 72).
         let shapes =
-            (self.buffered_shapes(g)).filter(|shapes| eye.is_finite() && shapes.len() <= 64)?;
+            (self.buffered_shapes(g)).filter(|shapes| eye.is_finite() && shapes.len() <= 128)?;
         Some(EyeBuffer::new(eye, self.reach(eye), shapes))
     }
 
@@ -233,7 +234,7 @@ impl Accel {
 /// `best` to its shape; `false` when a shape is not a sphere or a quadric, or two are hit at
 /// exactly the same distance (the BVH's order decides such ties). Each is tested with a limit
 /// just past `best_t`: their hits below a limit are their unbounded hits, so a hit at `best_t`
-/// itself (a tie) is still found, and a box beyond it is refused by its slab test.
+/// itself (a tie) is still found, and a quadric's box beyond it is refused by its slab test.
 #[inline(never)]
 fn nearest_listed(
     g: &Geometry,
@@ -244,6 +245,7 @@ fn nearest_listed(
 ) -> bool {
     let level = g.level(0);
     for &shape in shapes {
+        // Lists of several never hold an item (`EyeBuffer::new`); were one there, the BVH answers.
         let Shape::Analytic(shape) = shape else {
             return false;
         };
@@ -288,7 +290,7 @@ mod tests {
             .collect();
         let (eye, reach) = (DVec3::new(0.5, -0.25, 0.125), 1e-6);
         let buffer = EyeBuffer::new(eye, reach, candidates.clone());
-        let mut seen = vec![0u64; CUBE.len()];
+        let mut seen = vec![0u128; CUBE.len()];
         for (k, candidate) in candidates.iter().enumerate() {
             let (lo, hi) = relative_box(candidate, eye, reach);
             CUBE.for_cells_seeing(lo, hi, |cell| seen[cell] |= 1 << k);
@@ -311,7 +313,7 @@ mod tests {
                     let (first, last) = (buffer.starts[k as usize], buffer.starts[k as usize + 1]);
                     let list = &buffer.shapes[first as usize..last as usize];
                     let listed: Vec<_> = list.iter().map(distance).collect();
-                    let set_listed = listed.iter().fold(0u64, |s, &(k, _)| s | 1 << k);
+                    let set_listed = listed.iter().fold(0u128, |s, &(k, _)| s | 1 << k);
                     assert_eq!(set_listed, set, "cell {cell}");
                     assert!(listed.len() as u32 <= MAX_LISTED);
                     assert!(listed.windows(2).all(|w| w[0].1 <= w[1].1), "cell {cell}");

@@ -13,7 +13,8 @@
 //! round by far less than `reach`. Rays the argument does not cover go to the BVH.
 //!
 //! - [`LightBuffer`]: shadow rays ending at a point light, blocked or not.
-//! - [`EyeBuffer`]: rays from a pinhole camera's eye, where at most one shape can be met.
+//! - [`EyeBuffer`]: rays from a pinhole camera's eye, where at most four spheres and quadrics, or
+//!   one mesh or instance, can be met.
 //!
 //! Both are built only for worlds of a few shapes ([`Accel::buffered_shapes`]), where the BVH's
 //! per-ray set-up and node tests cost more than the shapes themselves; light buffers on the
