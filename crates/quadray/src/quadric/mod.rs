@@ -322,6 +322,11 @@ impl Quadric {
         )
     }
 
+    /// A world point in the local frame, as [`Quadric::local_ray`] maps a ray's origin.
+    pub fn local_point(&self, p: DVec3) -> DVec3 {
+        self.to_local_point(p)
+    }
+
     /// World point to local frame as L·(p − T) − c/h, with L the local-from-world linear map, T the
     /// placement's own translation and c/h the box centre in local units. Subtracting T first keeps
     /// the error relative to |p − T| (the distance from the object), where the affine form L·p + t
@@ -351,7 +356,27 @@ impl Quadric {
     /// gets along the line, so Δ ≈ −aγ carries no cancellation (quadric-numerics.md §2, Wald).
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f64, from_self: bool) -> Option<f64> {
-        let Ray { origin: o, dir: d } = self.local_ray(ray);
+        self.intersect_local(self.local_ray(ray), t_max, from_self)
+    }
+
+    /// [`Quadric::intersect`] from `eye_local`, a point's image in the local frame
+    /// ([`Quadric::local_point`]), along world direction `dir`: the same bits, for rays from one
+    /// point (a camera's eye) that share the origin's map.
+    #[inline]
+    pub fn intersect_from_local_point(
+        &self,
+        eye_local: DVec3,
+        dir: DVec3,
+        t_max: f64,
+    ) -> Option<f64> {
+        let local = Ray::new(eye_local, self.local.from_world.matrix3 * dir);
+        self.intersect_local(local, t_max, false)
+    }
+
+    /// [`Quadric::intersect`] of the ray in the local frame ([`Quadric::local_ray`]).
+    #[inline(always)]
+    fn intersect_local(&self, local: Ray, t_max: f64, from_self: bool) -> Option<f64> {
+        let Ray { origin: o, dir: d } = local;
         let slabs = unit_cube_slabs(o, d);
         let (lo, hi) = unit_cube_interval(slabs, t_max);
         // Also rejects NaN bounds (a zero direction).

@@ -15,9 +15,9 @@
 
 use super::{Candidate, Cube, Shape, finite_in_f32, relative_box};
 use crate::accel::Accel;
-use crate::geometry::Geometry;
+use crate::geometry::{Geometry, Level};
 use crate::math::Ray;
-use crate::shape::PrimRef;
+use crate::shape::{LocalPrim, PrimRef};
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -43,12 +43,15 @@ pub struct EyeBuffer {
     starts: Vec<u16>,
     /// Per cell: a list's index, [`NO_SHAPE`] or [`MANY_SHAPES`].
     cells: Vec<u8>,
+    /// The eye in each world quadric's local frame ([`crate::quadric::Quadric::local_point`]), mapped once for
+    /// all the rays from it.
+    eye_local: Vec<DVec3>,
 }
 
 impl EyeBuffer {
     /// The buffer of the eye at `eye` over at most 128 `shapes` (a world's 64 spheres and
     /// quadrics and its few other top items, [`Accel::buffered_shapes`]).
-    fn new(eye: DVec3, reach: f64, shapes: Vec<Candidate>) -> EyeBuffer {
+    fn new(eye: DVec3, reach: f64, shapes: Vec<Candidate>, eye_local: Vec<DVec3>) -> EyeBuffer {
         assert!(shapes.len() <= 128, "a few shapes");
         // Each cell's shapes as a set of bits, then each distinct set as a list.
         let mut seen = vec![0u128; CUBE.len()];
@@ -96,6 +99,7 @@ impl EyeBuffer {
             shapes: listed,
             starts,
             cells,
+            eye_local,
         }
     }
 
@@ -106,10 +110,12 @@ impl EyeBuffer {
     }
 
     /// For a ray: the shapes it can meet (none, when it starts at the eye and can meet none), or
-    /// `None` when the BVH must tell.
+    /// `None` when the BVH must tell. The ray starts at the eye bit for bit (a zero's sign
+    /// included), so the eye's local points are its origin's.
     #[inline]
     fn seen(&self, ray: &Ray) -> Option<&[Shape]> {
-        if ray.origin != self.eye {
+        let bits = |p: DVec3| p.to_array().map(f64::to_bits);
+        if bits(ray.origin) != bits(self.eye) {
             return None;
         }
         match self.cells[CUBE.cell(ray.dir)?] {
@@ -165,6 +171,54 @@ impl EyeBuffer {
                 .all(|&c| c == NO_SHAPE)
         })
     }
+
+    /// Phase one of a sphere or quadric for a ray from the eye: a quadric's test starts from the
+    /// eye's local point mapped once (the same bits as [`Level::intersect`]).
+    #[inline(always)]
+    fn intersect(&self, level: Level<'_>, shape: LocalPrim, ray: &Ray, t_max: f64) -> Option<f64> {
+        match shape {
+            LocalPrim::Quadric(i) => level.quadrics[i as usize].intersect_from_local_point(
+                self.eye_local[i as usize],
+                ray.dir,
+                t_max,
+            ),
+            _ => level.intersect(shape, ray, t_max, false),
+        }
+    }
+
+    /// Lowers `best_t` to the nearest hit of `ray` on the spheres and quadrics `shapes` and sets
+    /// `best` to its shape; `false` when a shape is not a sphere or a quadric, or two are hit at
+    /// exactly the same distance (the BVH's order decides such ties). Each is tested with a limit
+    /// just past `best_t`: their hits below a limit are their unbounded hits, so a hit at
+    /// `best_t` itself (a tie) is still found, and a quadric's box beyond it is refused by its
+    /// slab test.
+    #[inline(never)]
+    fn nearest_listed(
+        &self,
+        g: &Geometry,
+        shapes: &[Shape],
+        ray: &Ray,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) -> bool {
+        let level = g.level(0);
+        for &shape in shapes {
+            // Lists of several never hold an item (`EyeBuffer::new`); were one there, the BVH
+            // answers.
+            let Shape::Analytic(shape) = shape else {
+                return false;
+            };
+            match self.intersect(level, shape, ray, best_t.next_up()) {
+                Some(t) if t < *best_t => {
+                    *best_t = t;
+                    *best = Some(PrimRef::world(shape));
+                }
+                Some(t) if t == *best_t => return false,
+                _ => {}
+            }
+        }
+        true
+    }
 }
 
 impl Accel {
@@ -182,7 +236,13 @@ impl Accel {
         // A cell's shapes are the bits of a u128 (`buffered_shapes` gives at most 72).
         let shapes =
             (self.buffered_shapes(g)).filter(|shapes| eye.is_finite() && shapes.len() <= 128)?;
-        Some(EyeBuffer::new(eye, self.reach(eye), shapes))
+        let eye_local = g.level(0).quadrics.iter().map(|q| q.local_point(eye));
+        Some(EyeBuffer::new(
+            eye,
+            self.reach(eye),
+            shapes,
+            eye_local.collect(),
+        ))
     }
 
     /// Whether camera rays ask the eye buffer one by one ([`Accel::closest_from_eye`]): on the
@@ -208,7 +268,7 @@ impl Accel {
             let answered = match *seen {
                 [] => true,
                 [Shape::Analytic(shape)] => {
-                    if let Some(t) = g.level(0).intersect(shape, ray, best_t, false) {
+                    if let Some(t) = eye.intersect(g.level(0), shape, ray, best_t) {
                         best_t = t;
                         best = Some(PrimRef::world(shape));
                     }
@@ -218,7 +278,7 @@ impl Accel {
                     self.closest_world_item(g, item, ray, &mut best_t, &mut best);
                     true
                 }
-                ref shapes => nearest_listed(g, shapes, ray, &mut best_t, &mut best),
+                ref shapes => eye.nearest_listed(g, shapes, ray, &mut best_t, &mut best),
             };
             if answered {
                 // The planes after the shapes, as `Accel::closest` tests them.
@@ -230,41 +290,9 @@ impl Accel {
     }
 }
 
-/// Lowers `best_t` to the nearest hit of `ray` on the spheres and quadrics `shapes` and sets
-/// `best` to its shape; `false` when a shape is not a sphere or a quadric, or two are hit at
-/// exactly the same distance (the BVH's order decides such ties). Each is tested with a limit
-/// just past `best_t`: their hits below a limit are their unbounded hits, so a hit at `best_t`
-/// itself (a tie) is still found, and a quadric's box beyond it is refused by its slab test.
-#[inline(never)]
-fn nearest_listed(
-    g: &Geometry,
-    shapes: &[Shape],
-    ray: &Ray,
-    best_t: &mut f64,
-    best: &mut Option<PrimRef>,
-) -> bool {
-    let level = g.level(0);
-    for &shape in shapes {
-        // Lists of several never hold an item (`EyeBuffer::new`); were one there, the BVH answers.
-        let Shape::Analytic(shape) = shape else {
-            return false;
-        };
-        match level.intersect(shape, ray, best_t.next_up(), false) {
-            Some(t) if t < *best_t => {
-                *best_t = t;
-                *best = Some(PrimRef::world(shape));
-            }
-            Some(t) if t == *best_t => return false,
-            _ => {}
-        }
-    }
-    true
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shape::LocalPrim;
     use obvhs::aabb::Aabb;
 
     /// Every cell lists exactly the shapes whose boxes are seen through it, nearest box first, up
@@ -289,7 +317,7 @@ mod tests {
             })
             .collect();
         let (eye, reach) = (DVec3::new(0.5, -0.25, 0.125), 1e-6);
-        let buffer = EyeBuffer::new(eye, reach, candidates.clone());
+        let buffer = EyeBuffer::new(eye, reach, candidates.clone(), Vec::new());
         let mut seen = vec![0u128; CUBE.len()];
         for (k, candidate) in candidates.iter().enumerate() {
             let (lo, hi) = relative_box(candidate, eye, reach);
