@@ -322,18 +322,13 @@ impl Quadric {
         )
     }
 
-    /// A world point in the local frame, as [`Quadric::local_ray`] maps a ray's origin.
-    pub fn local_point(&self, p: DVec3) -> DVec3 {
-        self.to_local_point(p)
-    }
-
     /// World point to local frame as L·(p − T) − c/h, with L the local-from-world linear map, T the
     /// placement's own translation and c/h the box centre in local units. Subtracting T first keeps
     /// the error relative to |p − T| (the distance from the object), where the affine form L·p + t
     /// would leave an error relative to |p| (the distance from the world origin), and keeping c/h apart
     /// avoids rounding the object's position to the ulp of a far-away world translation.
     #[inline]
-    fn to_local_point(&self, p: DVec3) -> DVec3 {
+    pub(crate) fn to_local_point(&self, p: DVec3) -> DVec3 {
         self.local.from_world.matrix3 * (p - self.world_origin) - self.centre_local
     }
 
@@ -360,10 +355,10 @@ impl Quadric {
     }
 
     /// [`Quadric::intersect`] from `eye_local`, a point's image in the local frame
-    /// ([`Quadric::local_point`]), along world direction `dir`: the same bits, for rays from one
-    /// point (a camera's eye) that share the origin's map.
+    /// ([`Quadric::to_local_point`]), along world direction `dir`: the same bits, for rays from
+    /// one point (a camera's eye) that share the origin's map.
     #[inline]
-    pub fn intersect_from_local_point(
+    pub(crate) fn intersect_from_local_point(
         &self,
         eye_local: DVec3,
         dir: DVec3,
