@@ -15,16 +15,20 @@ use super::calibration::{FLAT, is_flat_error};
 use crate::film::PixelEstimate;
 use rayon::prelude::*;
 
+/// The band height of a window read whole, in one band ([`flat_contrasts`]).
+pub(super) const WHOLE: usize = usize::MAX;
+
 /// The least difference of display values between two flat 4-neighbours that the rounds follow.
 pub const SLIVER_CONTRAST: f32 = 0.02;
 
-/// Each pixel's flat contrast: for a flat pixel of `estimates` (row-major, `width` wide), whose
-/// batch-means squared errors are `squared_errors`, the largest squared difference of display
-/// values with its flat 4-neighbours; 0 for the others.
+/// Each pixel's flat contrast: for a flat pixel of `estimates` (row-major, `width` wide, in
+/// bands of `band` rows: [`WHOLE`], or rows read apart, across whose borders no neighbour
+/// counts), whose batch-means squared errors are `squared_errors`, the largest squared
+/// difference of display values with its flat 4-neighbours; 0 for the others.
 pub(super) fn flat_contrasts(
     estimates: &[PixelEstimate],
     squared_errors: &[f64],
-    width: usize,
+    (width, band): (usize, usize),
 ) -> Vec<f64> {
     let flat: Vec<Option<f32>> = (estimates.par_iter().zip(squared_errors))
         .map(|(e, &s)| is_flat_error(s).then(|| e.mean_display_value()))
@@ -38,8 +42,10 @@ pub(super) fn flat_contrasts(
         .enumerate()
         .for_each(|(y, out)| {
             let row = rows[y];
-            let up = y.checked_sub(1).map(|y| rows[y]);
-            let down = rows.get(y + 1).copied();
+            let up = (y % band != 0).then(|| rows[y - 1]);
+            let down = ((y + 1) % band != 0)
+                .then(|| rows.get(y + 1).copied())
+                .flatten();
             for (x, contrast) in out.iter_mut().enumerate() {
                 let Some(value) = row[x] else { continue };
                 let left = x.checked_sub(1).and_then(|x| row[x]);
@@ -75,11 +81,12 @@ const LOUDER: f64 = 100.0;
 /// kitchen at 480x270, target 0.0005: pixels of 8 and 16 samples in such runs along a few lines
 /// held a third of the image's squared error, with errors estimated near 1e-8). A quiet pixel
 /// beside an ordinary edge has it on one side only. A flat pixel counts as having the flat
-/// error bound ([`FLAT`]), so a neighbour's rounding does not make it louder.
+/// error bound ([`FLAT`]), so a neighbour's rounding does not make it louder. The window's rows
+/// come in bands of `band` rows as for [`flat_contrasts`].
 pub(super) fn feature_contrasts(
     estimates: &[PixelEstimate],
     squared_errors: &[f64],
-    width: usize,
+    (width, band): (usize, usize),
 ) -> Vec<f64> {
     let width = width.max(1);
     let height = estimates.len() / width;
@@ -90,12 +97,15 @@ pub(super) fn feature_contrasts(
         .for_each(|(y, out)| {
             for (x, contrast) in out.iter_mut().enumerate() {
                 let i = y * width + x;
+                // The rows of this pixel's band.
+                let rows = (y - y % band) as isize
+                    ..(y - y % band).saturating_add(band).min(height) as isize;
                 let loud = LOUDER * squared_errors[i].max(FLAT);
                 // The first louder pixel from (x, y) in steps of (dx, dy).
                 let seen = |dx: isize, dy: isize| {
                     (1..=LINE_GAP as isize).find_map(|k| {
                         let (nx, ny) = (x as isize + k * dx, y as isize + k * dy);
-                        if nx < 0 || ny < 0 || nx as usize >= width || ny as usize >= height {
+                        if nx < 0 || nx as usize >= width || !rows.contains(&ny) {
                             return Some(None);
                         }
                         let j = ny as usize * width + nx as usize;
@@ -129,7 +139,7 @@ pub(super) fn across_flat_edges(
     width: usize,
 ) -> Vec<bool> {
     let least = (SLIVER_CONTRAST as f64).powi(2);
-    (flat_contrasts(estimates, squared_errors, width).into_iter())
+    (flat_contrasts(estimates, squared_errors, (width, WHOLE)).into_iter())
         .map(|c| c > least)
         .collect()
 }
@@ -192,7 +202,7 @@ mod tests {
         let marked = across_flat_edges(&estimates, &errors, 3);
         let expected = [true, false, false, true, true, false, true, false, false];
         assert_eq!(marked, expected);
-        let contrasts = flat_contrasts(&estimates, &errors, 3);
+        let contrasts = flat_contrasts(&estimates, &errors, (3, WHOLE));
         assert!((contrasts[3] - 1.0).abs() < 1e-6);
         assert_eq!(contrasts[5], 0.0);
     }
@@ -212,7 +222,7 @@ mod tests {
             estimates.extend([quiet, centre, quiet]);
         }
         let errors: Vec<f64> = estimates.iter().map(|e| e.squared_error()).collect();
-        let contrasts = feature_contrasts(&estimates, &errors, 3);
+        let contrasts = feature_contrasts(&estimates, &errors, (3, WHOLE));
         let (v_quiet, v_line) = (quiet.mean_display_value(), line.mean_display_value());
         let expected = ((v_line - v_quiet) as f64).powi(2);
         for (y, c) in column.chars().enumerate() {
@@ -226,5 +236,24 @@ mod tests {
             assert_eq!(contrasts[3 * y], 0.0);
             assert_eq!(contrasts[3 * y + 2], 0.0);
         }
+    }
+
+    /// Rows read in bands are apart: a neighbour across a band's border counts for neither
+    /// contrast, as one beyond the window's side does not.
+    #[test]
+    fn no_neighbour_counts_across_a_band() {
+        let (black, white) = (pixel(&[0.0; 8]), pixel(&[1.0; 8]));
+        // One column: white above black, the border between rows 0 and 1.
+        let estimates = [white, black, black];
+        let errors = estimates.map(|e| e.squared_error());
+        assert!(flat_contrasts(&estimates, &errors, (1, WHOLE))[1] > 0.9);
+        assert_eq!(flat_contrasts(&estimates, &errors, (1, 1))[1], 0.0);
+        // A quiet pixel between two that met a line, the second across a band's border.
+        let quiet = pixel(&[0.8; 8]);
+        let line = pixel(&[0.8, 0.8, 0.8, 0.0, 0.8, 0.8, 0.8, 0.8]);
+        let estimates = [line, quiet, line];
+        let errors = estimates.map(|e| e.squared_error());
+        assert!(feature_contrasts(&estimates, &errors, (1, WHOLE))[1] > 0.0);
+        assert_eq!(feature_contrasts(&estimates, &errors, (1, 2))[1], 0.0);
     }
 }

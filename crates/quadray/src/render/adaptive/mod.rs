@@ -98,8 +98,10 @@ pub(crate) fn render_adaptive(
         started: Instant::now(),
         totals: Mutex::new(RayCounts::default()),
         timed_out: AtomicBool::new(false),
+        deadline_nanos: Rounds::initial_deadline(adaptive),
     };
     let mut state = WindowState::new(rounds.context, plan.as_ref());
+    let inner_context = context.with_window(inner).with_empty_tiles(&empty_tiles);
     let mut round = 0u32;
     let stop = loop {
         rounds.sample(round, &mut state);
@@ -112,6 +114,11 @@ pub(crate) fn render_adaptive(
         if progress.cancelled() {
             return Err(RenderError::Cancelled);
         }
+        rounds.keep_time_for_audit(
+            &state,
+            &inner_context,
+            plan.as_ref().map(|p| &p.calibration),
+        );
         let next = match adaptive.rule {
             ErrorRule::Pixel => state.select_by_pixel(adaptive, round + 1),
             ErrorRule::Image => {
@@ -134,16 +141,13 @@ pub(crate) fn render_adaptive(
         *rounds.totals.lock().unwrap_or_else(|e| e.into_inner()) += plan.counts;
     }
     let calibration = state.calibration_or(plan.as_ref().map(|p| &p.calibration));
-    let inner_context = context.with_window(inner).with_empty_tiles(&empty_tiles);
-    // The rounds keep every pixel's batch-means squared error current (each round computes
-    // those of the pixels it samples), which the audit's draw needs.
-    let inner_pixels = audit::Pixels {
-        estimates: &crop(&state.estimates, window, inner),
-        rays: &crop(&state.rays, window, inner),
-        squared_errors: &crop(state.squared_errors(), window, inner),
-    };
-    let (estimated_mse, audit_counts) =
-        audit::audit(&inner_context, inner_pixels, &calibration, adaptive.max_spp);
+    let inner_pixels = InnerPixels::of(&state, window, inner);
+    let (estimated_mse, audit_counts) = audit::audit(
+        &inner_context,
+        inner_pixels.pixels(),
+        &calibration,
+        adaptive.max_spp,
+    );
     *rounds.totals.lock().unwrap_or_else(|e| e.into_inner()) += audit_counts;
     let sampled = Sampled {
         estimated_mse,
@@ -238,6 +242,35 @@ fn sample_sequence(
 
 /// Camera rays a pixel's samples make before tracing them ([`sample_sequence`]).
 const RAY_BATCH: u32 = 8;
+
+/// The pixels of the inner window, as the audit reads them ([`audit::Pixels`]), out of the
+/// bordered window's state. The rounds keep every pixel's batch-means squared error current
+/// (each round computes those of the pixels it samples), which the audit's draw needs.
+struct InnerPixels<'a> {
+    estimates: Cow<'a, [PixelEstimate]>,
+    rays: Cow<'a, [u64]>,
+    squared_errors: Cow<'a, [f64]>,
+}
+
+impl<'a> InnerPixels<'a> {
+    /// The pixels of `inner` out of `state`, over the bordered `window`.
+    fn of(state: &'a WindowState, window: PixelWindow, inner: PixelWindow) -> InnerPixels<'a> {
+        InnerPixels {
+            estimates: crop(&state.estimates, window, inner),
+            rays: crop(&state.rays, window, inner),
+            squared_errors: crop(state.squared_errors(), window, inner),
+        }
+    }
+
+    /// The pixels as the audit takes them.
+    fn pixels(&self) -> audit::Pixels<'_> {
+        audit::Pixels {
+            estimates: &self.estimates,
+            rays: &self.rays,
+            squared_errors: &self.squared_errors,
+        }
+    }
+}
 
 /// What the rounds left over the bordered window.
 struct Sampled {
