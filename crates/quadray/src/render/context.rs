@@ -184,6 +184,21 @@ impl<'a> SampleContext<'a> {
         }
     }
 
+    /// [`SampleContext::trace_ray`] without passes for each ray of `rays` into `radiances`, ray
+    /// `i` being sample `key(i)`: one call for a pixel's batch of samples instead of one a
+    /// sample (the uniform renderer's [`crate::integrator::Whitted::camera_rays`]).
+    pub fn trace_rays(
+        &self,
+        rays: &[Ray],
+        cone: RayCone,
+        key: impl Fn(usize) -> SampleKey,
+        counts: &mut RayCounts,
+        radiances: &mut [Vec3],
+    ) {
+        let whitted = &self.settings.whitted;
+        whitted.camera_rays(self.scene, rays, cone, key, counts, radiances);
+    }
+
     /// One pass sample per pixel of the window when any pass is selected, else nothing.
     pub fn aov_buffer(&self) -> Vec<AovSample> {
         let pixels = self.window.width() as usize * self.window.height() as usize;

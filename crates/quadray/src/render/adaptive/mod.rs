@@ -224,19 +224,34 @@ fn sample_sequence(
         context.camera_rays(&positions, &mut rays);
         // Traced first, then added in order with their display encodings made together.
         let mut radiances = [Vec3::ZERO; RAY_BATCH as usize];
-        for ((index, ray), radiance) in (start..end).zip(&rays).zip(&mut radiances) {
-            let first_hit = match aov.as_deref_mut() {
-                Some(aov) if index == 0 => Some(aov),
-                _ => None,
-            };
-            let key = SampleKey {
-                pattern,
-                index,
-                count: None,
-            };
-            *radiance = context.trace_ray(ray, cone, key, first_hit, counts);
+        let key = |index: u32| SampleKey {
+            pattern,
+            index,
+            count: None,
+        };
+        let traced = (end - start) as usize;
+        match aov.as_deref_mut() {
+            // The pixel's first sample fills its passes.
+            Some(aov) if start == 0 => {
+                radiances[0] = context.trace_ray(&rays[0], cone, key(0), Some(aov), counts);
+                let rest = 1..traced;
+                let keys = |k: usize| key(k as u32 + 1);
+                context.trace_rays(
+                    &rays[rest.clone()],
+                    cone,
+                    keys,
+                    counts,
+                    &mut radiances[rest],
+                );
+            }
+            // One call for the batch, as the uniform renderer traces its own.
+            _ => {
+                let keys = |k: usize| key(start + k as u32);
+                let (rays, radiances) = (&rays[..traced], &mut radiances[..traced]);
+                context.trace_rays(rays, cone, keys, counts, radiances);
+            }
         }
-        estimate.add_eight(&radiances, (end - start) as usize);
+        estimate.add_eight(&radiances, traced);
     }
 }
 
