@@ -95,11 +95,11 @@ pub(super) fn feature_contrasts(
         .par_chunks_mut(width)
         .enumerate()
         .for_each(|(y, out)| {
+            // The rows of this row's band.
+            let first = y - y % band;
+            let rows = first as isize..first.saturating_add(band).min(height) as isize;
             for (x, contrast) in out.iter_mut().enumerate() {
                 let i = y * width + x;
-                // The rows of this pixel's band.
-                let rows = (y - y % band) as isize
-                    ..(y - y % band).saturating_add(band).min(height) as isize;
                 let loud = LOUDER * squared_errors[i].max(FLAT);
                 // The first louder pixel from (x, y) in steps of (dx, dy).
                 let seen = |dx: isize, dy: isize| {
