@@ -21,8 +21,9 @@ pub struct SamplingArgs {
     /// every pixel, at more samples than --target-error for the same image error).
     #[arg(long, value_name = "E", value_parser = parse_positive, conflicts_with = "spp")]
     pub pixel_error: Option<f64>,
-    /// Stop adaptive sampling after about this many seconds and keep the image reached (alone:
-    /// spend them where they lower the image's error most).
+    /// Stop adaptive sampling after about this many seconds, its error estimate included, and
+    /// keep the image reached (alone: spend them where they lower the image's error most; the
+    /// first round of --min-spp samples a pixel always completes).
     #[arg(long, value_name = "SECONDS", value_parser = parse_positive, conflicts_with = "spp")]
     pub time_limit: Option<f64>,
     /// Spend this many samples per pixel on average, where they lower the image's error most:
