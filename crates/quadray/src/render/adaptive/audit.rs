@@ -170,38 +170,36 @@ pub(super) fn expected_cost(
     pixels: &Pixels<'_>,
     calibration: &Calibration,
 ) -> AuditCost {
-    let started = Instant::now();
-    let (rays, read) = expected_rays_in_bands(context, pixels, calibration, EXPECTED_RAYS_PIXELS);
-    let scale = pixels.estimates.len() as f64 / read.max(1) as f64;
-    AuditCost {
-        rays,
-        draw: started.elapsed().mul_f64(scale),
-    }
+    expected_cost_in_bands(context, pixels, calibration, EXPECTED_RAYS_PIXELS).0
 }
 
 /// About the most pixels [`expected_cost`] reads: the draw reads every pixel's samples, about
 /// 10 ms a round for 480x270 pixels on one thread and 0.6 s at 3840x2160 on two, so a window
 /// of more (past 1280x720) is read in bands of [`BAND_ROWS`] rows spread evenly over it, whose
-/// expected rays, scaled to the window, stand for its own.
+/// expected rays and draw time, scaled to the window, stand for its own. (A window of fewer
+/// rows than two bands is read whole.)
 const EXPECTED_RAYS_PIXELS: usize = 1 << 20;
 
-/// The rows of one band [`expected_cost`] reads: the draw's contrasts look up to three rows
-/// away, which only a band's first and last rows lack, and thin bands spread over more of the
-/// image.
+/// The rows of one band [`expected_cost`] reads: thin bands spread over more of the image. No
+/// neighbour counts across a band's border (the flat contrast looks one row away, the feature
+/// contrast up to three), so a band's edge rows see less than the window's would.
 const BAND_ROWS: usize = 8;
 
-/// The audit's expected rays ([`expected_cost`]) reading at most about `most` pixels of the
-/// window, and how many it read.
-fn expected_rays_in_bands(
+/// The audit's [`expected_cost`] reading at most about `most` (at least 1) pixels of the
+/// window, and how many it read. The draw's time is that of the pixels read, scaled.
+fn expected_cost_in_bands(
     context: &SampleContext<'_>,
     pixels: &Pixels<'_>,
     calibration: &Calibration,
     most: usize,
-) -> (f64, usize) {
+) -> (AuditCost, usize) {
     let count = pixels.estimates.len();
     let width = context.window.width() as usize;
     if count <= most || width == 0 {
-        return (expected_rays_of(context, pixels, calibration, WHOLE), count);
+        let started = Instant::now();
+        let rays = expected_rays_of(context, pixels, calibration, WHOLE);
+        let draw = started.elapsed();
+        return (AuditCost { rays, draw }, count);
     }
     // One band in every `every`: the bands' rows, in order, as one window as wide as this one.
     let every = count.div_ceil(most);
@@ -223,11 +221,15 @@ fn expected_rays_in_bands(
         rays: &rays,
         squared_errors: &squared_errors,
     };
+    // Timed without the copies above, which the audit itself does not make.
+    let started = Instant::now();
     let rays = expected_rays_of(&bands, &read, calibration, BAND_ROWS);
-    (
-        rays * count as f64 / estimates.len() as f64,
-        estimates.len(),
-    )
+    let scale = count as f64 / estimates.len() as f64;
+    let cost = AuditCost {
+        rays: rays * scale,
+        draw: started.elapsed().mul_f64(scale),
+    };
+    (cost, estimates.len())
 }
 
 /// Rows `rows` of the row-major `values`, `width` to a row.
@@ -535,10 +537,11 @@ mod tests {
             squared_errors: &squared_errors,
         };
         let count = estimates.len();
-        let (whole, read) = expected_rays_in_bands(&context, &pixels, &Calibration::NONE, count);
+        let (whole, read) = expected_cost_in_bands(&context, &pixels, &Calibration::NONE, count);
         assert_eq!(read, count);
         let (banded, read) =
-            expected_rays_in_bands(&context, &pixels, &Calibration::NONE, count / 2);
+            expected_cost_in_bands(&context, &pixels, &Calibration::NONE, count / 2);
+        let (whole, banded) = (whole.rays, banded.rays);
         assert_eq!(read, count / 2, "every other band of 8 rows");
         assert!(
             (banded / whole - 1.0).abs() < 0.1,

@@ -248,6 +248,11 @@ mod tests {
         let errors = estimates.map(|e| e.squared_error());
         assert!(flat_contrasts(&estimates, &errors, (1, WHOLE))[1] > 0.9);
         assert_eq!(flat_contrasts(&estimates, &errors, (1, 1))[1], 0.0);
+        // Black above white, the border between rows 1 and 2: the neighbour below.
+        let estimates = [black, black, white];
+        let errors = estimates.map(|e| e.squared_error());
+        assert!(flat_contrasts(&estimates, &errors, (1, WHOLE))[1] > 0.9);
+        assert_eq!(flat_contrasts(&estimates, &errors, (1, 2))[1], 0.0);
         // A quiet pixel between two that met a line, the second across a band's border.
         let quiet = pixel(&[0.8; 8]);
         let line = pixel(&[0.8, 0.8, 0.8, 0.0, 0.8, 0.8, 0.8, 0.8]);
@@ -255,5 +260,10 @@ mod tests {
         let errors = estimates.map(|e| e.squared_error());
         assert!(feature_contrasts(&estimates, &errors, (1, WHOLE))[1] > 0.0);
         assert_eq!(feature_contrasts(&estimates, &errors, (1, 2))[1], 0.0);
+        // The first across the border: rows 0 and 1, 2 and 3 make the bands.
+        let estimates = [line, line, quiet, line];
+        let errors = estimates.map(|e| e.squared_error());
+        assert!(feature_contrasts(&estimates, &errors, (1, WHOLE))[2] > 0.0);
+        assert_eq!(feature_contrasts(&estimates, &errors, (1, 2))[2], 0.0);
     }
 }

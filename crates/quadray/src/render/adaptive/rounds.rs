@@ -27,10 +27,10 @@ pub(super) struct Rounds<'a> {
     pub started: Instant,
     /// Rays traced so far, twins' included.
     pub totals: Mutex<RayCounts>,
-    /// Whether a round skipped rows at the time limit.
+    /// Whether a round skipped rows at the rounds' deadline under a time limit.
     pub timed_out: AtomicBool,
     /// When the rounds must end, in nanoseconds from `started`, under a time limit (else
-    /// `u64::MAX`): the limit less the time kept for the audit ([`Rounds::keep_for_audit`]).
+    /// `u64::MAX`): the limit less the time kept for the audit ([`Rounds::keep_time_for_audit`]).
     pub deadline_nanos: AtomicU64,
 }
 
@@ -144,7 +144,7 @@ impl Rounds<'_> {
 
     /// Takes `round`'s samples, bringing each pixel to its target, row by row in parallel,
     /// filling the passes from each pixel's first sample and computing the error of each pixel
-    /// sampled. After round 0 a row started past the time limit is skipped and the render marked
+    /// sampled. After round 0 a row started past the rounds' deadline (a time limit's) is skipped and the render marked
     /// timed out.
     pub fn sample(&self, round: u32, state: &mut WindowState) {
         let window = self.context.window;
@@ -233,7 +233,73 @@ impl Rounds<'_> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::{disc, settings};
     use super::*;
+    use crate::aov::AovSelection;
+    use crate::render::{NoProgress, RenderSettings};
+
+    /// After a round under a time limit, the rounds' deadline is the limit less the audit's
+    /// expected share (the draw of a 96x64 window takes well under a second), which is what rows
+    /// are then cut at; without a time limit there is no deadline.
+    #[test]
+    fn a_round_under_a_time_limit_moves_the_deadline_for_the_audit() {
+        let limit = Duration::from_secs(100);
+        let adaptive = Adaptive {
+            target_error: 0.0,
+            time_limit: Some(limit),
+            ..Adaptive::default()
+        };
+        let base = RenderSettings {
+            width: 96,
+            height: 64,
+            ..settings(adaptive)
+        };
+        let scene = disc();
+        let context = SampleContext::new(&scene, &base, AovSelection::NONE).unwrap();
+        let rounds = Rounds {
+            context: &context,
+            adaptive: &adaptive,
+            inner: context.window,
+            progress: &NoProgress,
+            started: Instant::now(),
+            totals: Mutex::new(RayCounts::default()),
+            timed_out: AtomicBool::new(false),
+            deadline_nanos: Rounds::initial_deadline(&adaptive),
+        };
+        assert_eq!(rounds.deadline(), Some(limit));
+        let mut state = WindowState::new(&context, None);
+        rounds.sample(0, &mut state);
+        rounds.keep_time_for_audit(&state, &context, None);
+        let rays = rounds.rays_so_far();
+        let pixels = InnerPixels::of(&state, context.window, context.window);
+        let audit = audit::expected_cost(&context, &pixels.pixels(), &Calibration::NONE).rays;
+        assert!(audit > 0.0 && rays > 0.0, "{audit} {rays}");
+        let share = limit.mul_f64(rays / (rays + audit));
+        let deadline = rounds.deadline().unwrap();
+        assert!(
+            deadline <= share && deadline + Duration::from_secs(1) > share && deadline < limit,
+            "deadline {deadline:?}, the rounds' share {share:?}"
+        );
+        assert!(!rounds.out_of_time());
+        rounds.deadline_nanos.store(0, Ordering::Relaxed);
+        assert!(
+            rounds.out_of_time(),
+            "rows are cut at the deadline, not the limit"
+        );
+        let untimed = Adaptive {
+            time_limit: None,
+            target_error: 0.01,
+            ..adaptive
+        };
+        let rounds = Rounds {
+            adaptive: &untimed,
+            deadline_nanos: Rounds::initial_deadline(&untimed),
+            ..rounds
+        };
+        rounds.keep_time_for_audit(&state, &context, None);
+        assert_eq!(rounds.deadline(), None);
+        assert!(!rounds.out_of_time());
+    }
 
     /// The rounds get the limit less the draw, shared with the audit's rays in proportion to
     /// their own; all of it when the audit is expected to trace nothing, none of it when the
