@@ -402,7 +402,7 @@ fn draw_weights(
 #[cfg(test)]
 mod tests {
     use super::super::sample_pixel;
-    use super::super::tests::settings;
+    use super::super::tests::{settings, top_down_camera};
     use super::*;
     use crate::aov::AovSelection;
     use crate::render::RenderSettings;
@@ -414,12 +414,7 @@ mod tests {
     /// image.
     fn lit_spheres() -> Scene {
         Scene::new(SceneDescription {
-            camera: Camera {
-                from: DVec3::new(0.0, 0.0, 10.0),
-                to: DVec3::ZERO,
-                up: DVec3::Y,
-                projection: Projection::Orthographic { height: 4.0 },
-            },
+            camera: top_down_camera(),
             background: Vec3::ZERO,
             environment: None,
             materials: vec![Material::default()],
@@ -443,9 +438,28 @@ mod tests {
         .unwrap()
     }
 
-    /// Each pixel of `context`'s window sampled to 8, 16 or 32 samples (by a hash of its
-    /// position): the estimates, their rays and their squared errors.
-    fn sampled(context: &SampleContext<'_>) -> (Vec<PixelEstimate>, Vec<u64>, Vec<f64>) {
+    /// A window's pixels, sampled ([`sampled`]).
+    struct Window {
+        estimates: Vec<PixelEstimate>,
+        rays: Vec<u64>,
+        squared_errors: Vec<f64>,
+    }
+
+    impl Window {
+        /// The pixels as the audit takes them.
+        fn pixels(&self) -> Pixels<'_> {
+            Pixels {
+                estimates: &self.estimates,
+                rays: &self.rays,
+                squared_errors: &self.squared_errors,
+            }
+        }
+    }
+
+    /// Each pixel of the image of `scene` at `settings` sampled to 8, 16 or 32 samples (by a
+    /// hash of its position).
+    fn sampled(scene: &Scene, settings: &RenderSettings) -> Window {
+        let context = SampleContext::new(scene, settings, AovSelection::NONE).unwrap();
         let window = context.window;
         let mut estimates = Vec::new();
         let mut rays = Vec::new();
@@ -455,7 +469,7 @@ mod tests {
             let mut estimate = PixelEstimate::default();
             let mut counts = RayCounts::default();
             sample_pixel(
-                context,
+                &context,
                 (x, y),
                 &mut estimate,
                 None,
@@ -465,8 +479,12 @@ mod tests {
             estimates.push(estimate);
             rays.push(counts.total());
         }
-        let squared = estimates.iter().map(PixelEstimate::squared_error).collect();
-        (estimates, rays, squared)
+        let squared_errors = estimates.iter().map(PixelEstimate::squared_error).collect();
+        Window {
+            estimates,
+            rays,
+            squared_errors,
+        }
     }
 
     fn adaptive() -> Adaptive {
@@ -490,15 +508,11 @@ mod tests {
             ..settings(adaptive())
         };
         let context = SampleContext::new(&scene, &base, AovSelection::NONE).unwrap();
-        let (estimates, rays, squared_errors) = sampled(&context);
-        let pixels = Pixels {
-            estimates: &estimates,
-            rays: &rays,
-            squared_errors: &squared_errors,
-        };
+        let window = sampled(&scene, &base);
+        let pixels = window.pixels();
         let expected = expected_cost(&context, &pixels, &Calibration::NONE).rays;
-        let samples: u64 = estimates.iter().map(|e| u64::from(e.count())).sum();
-        let traced: u64 = rays.iter().sum();
+        let samples: u64 = window.estimates.iter().map(|e| u64::from(e.count())).sum();
+        let traced: u64 = window.rays.iter().sum();
         assert!(
             traced > samples + samples / 4,
             "shadow rays make samples differ in cost: {traced} rays for {samples} samples"
@@ -530,13 +544,9 @@ mod tests {
             ..settings(adaptive())
         };
         let context = SampleContext::new(&scene, &base, AovSelection::NONE).unwrap();
-        let (estimates, rays, squared_errors) = sampled(&context);
-        let pixels = Pixels {
-            estimates: &estimates,
-            rays: &rays,
-            squared_errors: &squared_errors,
-        };
-        let count = estimates.len();
+        let window = sampled(&scene, &base);
+        let pixels = window.pixels();
+        let count = window.estimates.len();
         let (whole, read) = expected_cost_in_bands(&context, &pixels, &Calibration::NONE, count);
         assert_eq!(read, count);
         let (banded, read) =

@@ -30,13 +30,17 @@ pub(crate) fn white_on_black(spheres: Vec<Sphere>) -> Scene {
 
 /// The shapes of `geometry`, white, as [`white_on_black`] shows spheres.
 pub(crate) fn white_shapes_on_black(geometry: Geometry) -> Scene {
-    let camera = Camera {
+    white_shapes(geometry, top_down_camera(), Vec3::ZERO)
+}
+
+/// An orthographic camera 4 units tall looking down the z axis at the origin.
+pub(crate) fn top_down_camera() -> Camera {
+    Camera {
         from: DVec3::new(0.0, 0.0, 10.0),
         to: DVec3::ZERO,
         up: DVec3::Y,
         projection: Projection::Orthographic { height: 4.0 },
-    };
-    white_shapes(geometry, camera, Vec3::ZERO)
+    }
 }
 
 /// The shapes of `geometry`, white (flat, ambient only), on `background`, seen by `camera`.
