@@ -97,10 +97,26 @@ pub(super) fn feature_contrasts(
         .for_each(|(y, out)| {
             // The rows of this row's band.
             let first = y - y % band;
-            let rows = first as isize..first.saturating_add(band).min(height) as isize;
+            let end = first.saturating_add(band).min(height);
+            let rows = first as isize..end as isize;
+            // The loudest error within reach above and below each pixel of the row, and along
+            // the row: a side whose loudest is not louder than a pixel has no pixel to find
+            // there, which most pixels learn from these without a probe.
+            let line = |r: usize| &squared_errors[r * width..(r + 1) * width];
+            let reach = |r: std::ops::Range<usize>| loudest(r.map(line), width);
+            let above = reach(y.saturating_sub(LINE_GAP).max(first)..y);
+            let below = reach(y + 1..(y + 1 + LINE_GAP).min(end));
+            let row = line(y);
             for (x, contrast) in out.iter_mut().enumerate() {
                 let i = y * width + x;
                 let loud = LOUDER * squared_errors[i].max(FLAT);
+                let beyond = |side: &[f64]| side.iter().copied().fold(f64::NEG_INFINITY, larger);
+                let left = beyond(&row[x.saturating_sub(LINE_GAP)..x]);
+                let right = beyond(&row[(x + 1).min(width)..(x + 1 + LINE_GAP).min(width)]);
+                let across_row = left > loud && right > loud;
+                if !across_row && !(above[x] > loud && below[x] > loud) {
+                    continue;
+                }
                 // The first louder pixel from (x, y) in steps of (dx, dy).
                 let seen = |dx: isize, dy: isize| {
                     (1..=LINE_GAP as isize).find_map(|k| {
@@ -130,6 +146,25 @@ pub(super) fn feature_contrasts(
             }
         });
     contrasts
+}
+
+/// The largest value in each column of `rows` (each `width` long; NaN ignored; −∞ for none).
+fn loudest<'a>(rows: impl Iterator<Item = &'a [f64]>, width: usize) -> Vec<f64> {
+    let mut most = vec![f64::NEG_INFINITY; width];
+    for row in rows {
+        for (m, &v) in most.iter_mut().zip(row) {
+            *m = larger(*m, v);
+        }
+    }
+    most
+}
+
+/// `v` where it is above `most`, else `most`: from −∞ on, the largest of the values seen with
+/// NaN ignored (a NaN is above nothing), as `f64::max` would give it in fewer instructions. So
+/// the largest is above a bound exactly when one of the values is.
+#[inline(always)]
+fn larger(most: f64, v: f64) -> f64 {
+    if v > most { v } else { most }
 }
 
 /// Marks each pixel whose flat contrast ([`flat_contrasts`]) is above [`SLIVER_CONTRAST`]².
@@ -265,5 +300,20 @@ mod tests {
         let errors = estimates.map(|e| e.squared_error());
         assert!(feature_contrasts(&estimates, &errors, (1, WHOLE))[2] > 0.0);
         assert_eq!(feature_contrasts(&estimates, &errors, (1, 2))[2], 0.0);
+    }
+
+    /// `larger` folds to the largest value with NaN ignored, so the largest is above a bound
+    /// exactly when a value is, as the probes compare them one by one.
+    #[test]
+    fn the_largest_ignores_nan() {
+        let fold = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, larger);
+        assert_eq!(fold(&[f64::NAN, 1.0, f64::NAN, 0.5]), 1.0);
+        assert_eq!(fold(&[f64::NAN]), f64::NEG_INFINITY);
+        assert_eq!(fold(&[]), f64::NEG_INFINITY);
+        assert_eq!(fold(&[f64::INFINITY, 2.0]), f64::INFINITY);
+        assert_eq!(
+            loudest([[1.0, f64::NAN].as_slice(), &[0.5, 3.0]].into_iter(), 2),
+            [1.0, 3.0]
+        );
     }
 }
