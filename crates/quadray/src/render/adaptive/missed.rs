@@ -114,7 +114,8 @@ pub(super) fn feature_contrasts(
                 let left = beyond(&row[x.saturating_sub(LINE_GAP)..x]);
                 let right = beyond(&row[(x + 1).min(width)..(x + 1 + LINE_GAP).min(width)]);
                 let across_row = left > loud && right > loud;
-                if !across_row && !(above[x] > loud && below[x] > loud) {
+                let across_column = above[x] > loud && below[x] > loud;
+                if !(across_row || across_column) {
                     continue;
                 }
                 // The first louder pixel from (x, y) in steps of (dx, dy).
