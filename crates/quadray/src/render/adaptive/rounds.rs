@@ -51,8 +51,8 @@ pub(super) fn rounds_time(limit: Duration, rays: f64, audit: AuditCost) -> Durat
 }
 
 impl Rounds<'_> {
-    /// The rounds' deadline under a time limit as [`Rounds::deadline_nanos`] gives it, initially the
-    /// limit itself (`u64::MAX` without one).
+    /// The rounds' deadline under a time limit as [`Rounds::deadline_nanos`] gives it, initially
+    /// the limit itself (`u64::MAX` without one).
     pub fn initial_deadline(adaptive: &Adaptive) -> AtomicU64 {
         let nanos = adaptive.time_limit.map_or(u64::MAX, |limit| {
             limit.as_nanos().min(u128::from(u64::MAX)) as u64
@@ -144,8 +144,8 @@ impl Rounds<'_> {
 
     /// Takes `round`'s samples, bringing each pixel to its target, row by row in parallel,
     /// filling the passes from each pixel's first sample and computing the error of each pixel
-    /// sampled. After round 0 a row started past the rounds' deadline (a time limit's) is skipped and the render marked
-    /// timed out.
+    /// sampled. After round 0 a row started past the rounds' deadline (a time limit's) is
+    /// skipped and the render marked timed out.
     pub fn sample(&self, round: u32, state: &mut WindowState) {
         let window = self.context.window;
         let ww = window.width() as usize;
