@@ -113,6 +113,8 @@ pub(super) fn feature_contrasts(
                 let beyond = |side: &[f64]| side.iter().copied().fold(f64::NEG_INFINITY, larger);
                 let left = beyond(&row[x.saturating_sub(LINE_GAP)..x]);
                 let right = beyond(&row[(x + 1).min(width)..(x + 1 + LINE_GAP).min(width)]);
+                // A direction with a side that has no louder pixel has no contrast (0.0, as
+                // `between` gives for it); most pixels have neither direction.
                 let across_row = left > loud && right > loud;
                 let across_column = above[x] > loud && below[x] > loud;
                 if !(across_row || across_column) {
@@ -140,10 +142,11 @@ pub(super) fn feature_contrasts(
                     }
                     _ => 0.0,
                 };
-                *contrast = f64::max(
-                    between(seen(-1, 0), seen(1, 0)),
-                    between(seen(0, -1), seen(0, 1)),
-                );
+                let across = |on: bool, (dx, dy): (isize, isize)| match on {
+                    true => between(seen(-dx, -dy), seen(dx, dy)),
+                    false => 0.0,
+                };
+                *contrast = f64::max(across(across_row, (1, 0)), across(across_column, (0, 1)));
             }
         });
     contrasts
