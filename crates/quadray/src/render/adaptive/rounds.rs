@@ -75,14 +75,13 @@ impl Rounds<'_> {
     }
 
     /// Under a time limit, moves the rounds' deadline so that the audit of `state`'s inner
-    /// window (`inner_context`'s), whose errors the calibration of `state` (else `fallback`)
-    /// corrects, fits in the limit after them ([`rounds_time`]). Not needed once the deadline
-    /// has passed: the rounds stop.
+    /// window (`inner_context`'s), whose errors `calibration` corrects, fits in the limit after
+    /// them ([`rounds_time`]). Not needed once the deadline has passed: the rounds stop.
     pub fn keep_time_for_audit(
         &self,
         state: &WindowState,
         inner_context: &SampleContext<'_>,
-        fallback: Option<&Calibration>,
+        calibration: &Calibration,
     ) {
         let Some(limit) = self.adaptive.time_limit else {
             return;
@@ -90,9 +89,8 @@ impl Rounds<'_> {
         if self.out_of_time() {
             return;
         }
-        let calibration = state.calibration_or(fallback);
         let pixels = InnerPixels::of(state, self.context.window, self.inner);
-        let audit = audit::expected_cost(inner_context, &pixels.pixels(), &calibration);
+        let audit = audit::expected_cost(inner_context, &pixels.pixels(), calibration);
         let time = rounds_time(limit, self.rays_so_far(), audit);
         let nanos = time.as_nanos().min(u128::from(u64::MAX)) as u64;
         self.deadline_nanos.store(nanos, Ordering::Relaxed);
@@ -269,7 +267,7 @@ mod tests {
         assert_eq!(rounds.deadline(), Some(limit));
         let mut state = WindowState::new(&context, None);
         rounds.sample(0, &mut state);
-        rounds.keep_time_for_audit(&state, &context, None);
+        rounds.keep_time_for_audit(&state, &context, &state.calibration_or(None));
         let rays = rounds.rays_so_far();
         let pixels = InnerPixels::of(&state, context.window, context.window);
         let audit = audit::expected_cost(&context, &pixels.pixels(), &Calibration::NONE).rays;
@@ -296,7 +294,7 @@ mod tests {
             deadline_nanos: Rounds::initial_deadline(&untimed),
             ..rounds
         };
-        rounds.keep_time_for_audit(&state, &context, None);
+        rounds.keep_time_for_audit(&state, &context, &state.calibration_or(None));
         assert_eq!(rounds.deadline(), None);
         assert!(!rounds.out_of_time());
     }

@@ -153,13 +153,15 @@ impl WindowState {
     }
 
     /// Chooses round `round`'s pixels by the image rule, from the plan's threshold or, under a
-    /// time limit, from `unplanned_step` of the window's own states and the calibration's α (the
-    /// step the time left pays for, [`super::rounds::Rounds::unplanned_step`]); `Err` with the
-    /// reason to stop when it samples none.
+    /// time limit, from `unplanned_step` of the window's own states under `calibration` (the
+    /// window's own, [`WindowState::calibration_or`] without a fallback) and its α (the step the
+    /// time left pays for, [`super::rounds::Rounds::unplanned_step`]); `Err` with the reason to
+    /// stop when it samples none.
     pub(super) fn select_by_image(
         &mut self,
         (adaptive, plan): (&Adaptive, Option<&Plan>),
         round: u32,
+        calibration: &Calibration,
         unplanned_step: impl FnOnce(&[PixelState], f64) -> Result<Step, Stop>,
     ) -> Result<(), Stop> {
         self.fill_unknown_errors();
@@ -171,8 +173,7 @@ impl WindowState {
                 (step, self.states(&calibration))
             }
             None => {
-                let calibration = self.calibration_or(None);
-                let states = self.states(&calibration);
+                let states = self.states(calibration);
                 (unplanned_step(&states, calibration.alpha)?, states)
             }
         };
