@@ -54,9 +54,9 @@ impl EyeBuffer {
     fn new(eye: DVec3, reach: f64, shapes: Vec<Candidate>, eye_local: Vec<DVec3>) -> EyeBuffer {
         assert!(shapes.len() <= 128, "a few shapes");
         // Each cell's shapes as a set of bits, then each distinct set as a list.
+        let boxes: Vec<_> = shapes.iter().map(|c| relative_box(c, eye, reach)).collect();
         let mut seen = vec![0u128; CUBE.len()];
-        for (k, candidate) in shapes.iter().enumerate() {
-            let (lo, hi) = relative_box(candidate, eye, reach);
+        for (k, &(lo, hi)) in boxes.iter().enumerate() {
             CUBE.for_cells_seeing(lo, hi, |cell| seen[cell] |= 1 << k);
         }
         let items = (shapes.iter().enumerate())
@@ -64,12 +64,7 @@ impl EyeBuffer {
             .fold(0u128, |set, (k, _)| set | 1 << k);
         // Lists run from the shape whose box is nearest the eye, so that a farther quadric is
         // mostly refused by its slab test once a nearer hit is found.
-        let distances: Vec<f64> = (shapes.iter())
-            .map(|c| {
-                let (lo, hi) = relative_box(c, eye, reach);
-                lo.max(-hi).max(DVec3::ZERO).length_squared()
-            })
-            .collect();
+        let distances: Vec<f64> = boxes.iter().map(|&b| squared_distance(b)).collect();
         let mut by_distance: Vec<usize> = (0..shapes.len()).collect();
         by_distance.sort_by(|&i, &j| distances[i].total_cmp(&distances[j]));
         let (mut listed, mut starts) = (Vec::new(), vec![0u16]);
@@ -123,11 +118,15 @@ impl EyeBuffer {
         match self.cells[CUBE.cell(ray.dir)?] {
             NO_SHAPE => Some(&[]),
             MANY_SHAPES => None,
-            k => {
-                let (first, last) = (self.starts[k as usize], self.starts[k as usize + 1]);
-                Some(&self.shapes[first as usize..last as usize])
-            }
+            k => Some(self.list(k)),
         }
+    }
+
+    /// List `k` of those the cells hold.
+    #[inline(always)]
+    fn list(&self, k: u8) -> &[Shape] {
+        let (first, last) = (self.starts[k as usize], self.starts[k as usize + 1]);
+        &self.shapes[first as usize..last as usize]
     }
 
     /// The eye the buffer was made for.
@@ -221,6 +220,12 @@ impl EyeBuffer {
         }
         true
     }
+}
+
+/// The squared distance from the eye to a box given relative to it (`(lo, hi)` as
+/// [`relative_box`] gives it): zero for a box around the eye.
+fn squared_distance((lo, hi): (DVec3, DVec3)) -> f64 {
+    lo.max(-hi).max(DVec3::ZERO).length_squared()
 }
 
 impl Accel {
@@ -329,8 +334,10 @@ mod tests {
         }
         let distance = |shape: &Shape| {
             let k = candidates.iter().position(|c| c.shape == *shape).unwrap();
-            let (lo, hi) = relative_box(&candidates[k], eye, reach);
-            (k, lo.max(-hi).max(DVec3::ZERO).length_squared())
+            (
+                k,
+                squared_distance(relative_box(&candidates[k], eye, reach)),
+            )
         };
         let mut many = 0;
         for (cell, &set) in seen.iter().enumerate() {
@@ -342,9 +349,7 @@ mod tests {
                     many += 1;
                 }
                 k => {
-                    let (first, last) = (buffer.starts[k as usize], buffer.starts[k as usize + 1]);
-                    let list = &buffer.shapes[first as usize..last as usize];
-                    let listed: Vec<_> = list.iter().map(distance).collect();
+                    let listed: Vec<_> = buffer.list(k).iter().map(distance).collect();
                     let set_listed = listed.iter().fold(0u128, |s, &(k, _)| s | 1 << k);
                     assert_eq!(set_listed, set, "cell {cell}");
                     assert!(listed.len() as u32 <= MAX_LISTED);
