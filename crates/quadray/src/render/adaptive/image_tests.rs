@@ -62,6 +62,8 @@ fn the_estimate_follows_the_true_error_down_to_the_target() {
             let error = rendered.sampling.error.unwrap();
             let truth = true_rmse(&rendered.film, &converged);
             assert_eq!(error.stop, Stop::Converged, "{error:?}");
+            // The image's target is no pixel's: no per-pixel relative errors are reported.
+            assert_eq!(error.pixels, None);
             ratios.push(error.estimated_rmse / truth);
             truths.push(truth);
         }

@@ -45,7 +45,7 @@ pub use settings::{
     Adaptive, AdaptiveError, DEFAULT_MAX_SPP, DEFAULT_MIN_SPP, ErrorRule, MAX_TIME_LIMIT_SECS,
     MIN_FIRST_ROUND, time_limit_from_secs,
 };
-pub use stats::{ErrorStats, RoundSummary, SamplingStats, Stop, estimated_rmse};
+pub use stats::{ErrorStats, PixelErrors, RoundSummary, SamplingStats, Stop, estimated_rmse};
 use std::borrow::Cow;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -152,6 +152,10 @@ pub(crate) fn render_adaptive(
     *rounds.totals.lock().unwrap_or_else(|e| e.into_inner()) += audit_counts;
     let sampled = Sampled {
         estimated_mse,
+        relative_errors: match adaptive.rule {
+            ErrorRule::Pixel => Some(state.errors),
+            ErrorRule::Image => None,
+        },
         estimates: state.estimates,
         aov_samples: state.aov_samples,
         rounds: round,
@@ -292,6 +296,8 @@ impl<'a> InnerPixels<'a> {
 struct Sampled {
     /// The audited MSE of the inner window ([`audit`]).
     estimated_mse: f64,
+    /// Under the pixel rule, each pixel's relative error as the rounds left it.
+    relative_errors: Option<Vec<f64>>,
     estimates: Vec<PixelEstimate>,
     aov_samples: Vec<AovSample>,
     rounds: u32,
@@ -319,8 +325,16 @@ impl Sampled {
                 Some(estimate.variance()),
             );
         }
+        let relative_errors = (self.relative_errors.as_deref()).map(|e| crop(e, sampled, window));
+        debug_assert!(
+            relative_errors
+                .as_deref()
+                .is_none_or(|errors| (errors.iter().zip(&*estimates))
+                    .all(|(r, e)| r.to_bits() == e.relative_error().to_bits())),
+            "the rounds left each pixel's own relative error"
+        );
         let sampling = stats::sampling_stats(
-            &estimates,
+            (&estimates, relative_errors.as_deref()),
             adaptive,
             self.rounds,
             self.stop,

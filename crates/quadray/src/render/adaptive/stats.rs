@@ -51,6 +51,19 @@ pub struct ErrorStats {
     /// The estimated RMSE of the image's display values against the converged image
     /// ([`estimated_rmse`]).
     pub estimated_rmse: f64,
+    /// Under the pixel rule, where the pixels' relative errors ended; `None` under the image
+    /// rule, whose target is the image's error, not a pixel's.
+    pub pixels: Option<PixelErrors>,
+    /// Rounds rendered.
+    pub rounds: u32,
+    /// Why sampling stopped.
+    pub stop: Stop,
+}
+
+/// Where the pixels' relative errors ([`PixelEstimate::relative_error`]) ended in a render by the
+/// pixel rule.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelErrors {
     /// The largest relative error of any pixel.
     pub worst: f64,
     /// The mean relative error over the pixels.
@@ -59,10 +72,34 @@ pub struct ErrorStats {
     pub met: f64,
     /// Pixels left above the target.
     pub above: u64,
-    /// Rounds rendered.
-    pub rounds: u32,
-    /// Why sampling stopped.
-    pub stop: Stop,
+}
+
+impl PixelErrors {
+    /// The statistics of the pixels' relative `errors` against `target`.
+    fn of(errors: &[f64], target: f64) -> PixelErrors {
+        let n = errors.len().max(1) as f64;
+        let met = errors.par_iter().filter(|&&e| e <= target).count();
+        PixelErrors {
+            worst: worst_error(errors),
+            mean: errors.iter().sum::<f64>() / n,
+            met: met as f64 / n,
+            above: (errors.len() - met) as u64,
+        }
+    }
+
+    /// The statistics of several windows' pixels together, each with its pixel count.
+    fn merged(parts: &[(PixelErrors, u64)]) -> PixelErrors {
+        let pixels = parts.iter().map(|(_, n)| *n).sum::<u64>().max(1) as f64;
+        let weighted = |f: fn(&PixelErrors) -> f64| {
+            parts.iter().map(|(p, n)| f(p) * *n as f64).sum::<f64>() / pixels
+        };
+        PixelErrors {
+            worst: parts.iter().map(|(p, _)| p.worst).fold(0.0, f64::max),
+            mean: weighted(|p| p.mean),
+            met: weighted(|p| p.met),
+            above: parts.iter().map(|(p, _)| p.above).sum(),
+        }
+    }
 }
 
 /// Samples per pixel a render took, and for an adaptive render the error it reached.
@@ -105,10 +142,11 @@ impl SamplingStats {
                 // Root of the pixel-weighted mean of the squares: the windows' MSEs add up.
                 estimated_rmse: weighted(&|s| s.error.map_or(0.0, |e| e.estimated_rmse.powi(2)))
                     .sqrt(),
-                worst: errors().map(|e| e.worst).fold(0.0, f64::max),
-                mean: weighted(&|s| s.error.map_or(0.0, |e| e.mean)),
-                met: weighted(&|s| s.error.map_or(0.0, |e| e.met)),
-                above: errors().map(|e| e.above).sum(),
+                // Every window's pixels, or none (the windows of one image share its rule).
+                pixels: (parts.iter())
+                    .map(|(s, n)| Some((s.error?.pixels?, *n)))
+                    .collect::<Option<Vec<_>>>()
+                    .map(|pixels| PixelErrors::merged(&pixels)),
                 rounds: errors().map(|e| e.rounds).max().unwrap_or(0),
                 // The stop of the window that fell shortest: a time limit over a maximum count
                 // over convergence.
@@ -166,23 +204,29 @@ impl SamplingStats {
                 )
             }
             ErrorRule::Pixel => {
+                let p = e.pixels.unwrap_or(PixelErrors {
+                    worst: f64::NAN,
+                    mean: f64::NAN,
+                    met: f64::NAN,
+                    above: 0,
+                });
                 let stop = match e.stop {
                     Stop::Converged => "every pixel at the target".to_string(),
                     Stop::MaxSpp => format!(
                         "{} pixels ({:.2}%) stopped at max spp {} above the target",
-                        e.above,
-                        100.0 * (1.0 - e.met),
+                        p.above,
+                        100.0 * (1.0 - p.met),
                         self.max_spp
                     ),
                     Stop::TimeLimit | Stop::Budget => format!(
                         "the time limit ran out with {} pixels ({:.2}%) above the target",
-                        e.above,
-                        100.0 * (1.0 - e.met)
+                        p.above,
+                        100.0 * (1.0 - p.met)
                     ),
                 };
                 format!(
                     "adaptive per pixel, {spp}, error target {}, worst {:.3}, mean {:.4}, estimated image error {:.2e} RMSE: {stop}",
-                    e.target, e.worst, e.mean, e.estimated_rmse
+                    e.target, p.worst, p.mean, e.estimated_rmse
                 )
             }
         }
@@ -190,9 +234,11 @@ impl SamplingStats {
 }
 
 /// The sample counts and error of a finished adaptive render of `rounds` rounds that stopped
-/// for `stop`, from each pixel's estimate and the calibration of the error estimate.
+/// for `stop`, from each pixel's estimate, the audited MSE and, under the pixel rule, each
+/// pixel's relative error as the rounds left it (`relative_errors`: the rounds compute them as
+/// they sample, so the pixels need no second pass).
 pub(super) fn sampling_stats(
-    estimates: &[PixelEstimate],
+    (estimates, relative_errors): (&[PixelEstimate], Option<&[f64]>),
     adaptive: &Adaptive,
     rounds: u32,
     stop: Stop,
@@ -206,11 +252,6 @@ pub(super) fn sampling_stats(
             || (u32::MAX, 0, 0),
             |a, b| (a.0.min(b.0), a.1.max(b.1), a.2 + b.2),
         );
-    let errors = relative_errors(estimates);
-    let met = errors
-        .par_iter()
-        .filter(|&&e| e <= adaptive.target_error)
-        .count();
     SamplingStats {
         min_spp: if estimates.is_empty() { 0 } else { min_spp },
         max_spp,
@@ -219,10 +260,7 @@ pub(super) fn sampling_stats(
             rule: adaptive.rule,
             target: adaptive.target_error,
             estimated_rmse: estimated_mse.sqrt(),
-            worst: worst_error(&errors),
-            mean: errors.iter().sum::<f64>() / n,
-            met: met as f64 / n,
-            above: (estimates.len() - met) as u64,
+            pixels: relative_errors.map(|errors| PixelErrors::of(errors, adaptive.target_error)),
             rounds,
             stop,
         }),
@@ -235,14 +273,6 @@ pub(super) fn sampling_stats(
 pub fn estimated_rmse(estimates: &[PixelEstimate], calibration: &Calibration) -> f64 {
     let sum: f64 = estimates.iter().map(|e| calibration.squared_error(e)).sum();
     (sum / estimates.len().max(1) as f64).sqrt()
-}
-
-/// Each pixel's relative error ([`PixelEstimate::relative_error`]).
-fn relative_errors(estimates: &[PixelEstimate]) -> Vec<f64> {
-    estimates
-        .par_iter()
-        .map(PixelEstimate::relative_error)
-        .collect()
 }
 
 /// The largest of the pixels' relative errors (0 for none).
@@ -264,14 +294,46 @@ mod tests {
                 rule: ErrorRule::Image,
                 target,
                 estimated_rmse: estimated,
-                worst: f64::NAN,
-                mean: f64::NAN,
-                met: 1.0,
-                above: 0,
+                pixels: None,
                 rounds: 4,
                 stop: Stop::Converged,
             }),
         }
+    }
+
+    /// Windows of one image merge their pixels' errors weighted by their pixel counts, the
+    /// worst of all and the pixels above summed; image-rule windows have none to merge.
+    #[test]
+    fn windows_merge_their_pixels_errors() {
+        let pixel_rule = |worst: f64, mean: f64, met: f64, above: u64| SamplingStats {
+            error: Some(ErrorStats {
+                rule: ErrorRule::Pixel,
+                pixels: Some(PixelErrors {
+                    worst,
+                    mean,
+                    met,
+                    above,
+                }),
+                ..converged(0.01, 0.001).error.unwrap()
+            }),
+            ..converged(0.01, 0.001)
+        };
+        let merged = SamplingStats::merged(&[
+            (pixel_rule(0.02, 0.004, 1.0, 0), 300),
+            (pixel_rule(0.05, 0.008, 0.5, 50), 100),
+        ]);
+        let pixels = merged.unwrap().error.unwrap().pixels.unwrap();
+        assert_eq!((pixels.worst, pixels.above), (0.05, 50));
+        assert!((pixels.mean - 0.005).abs() < 1e-15 && (pixels.met - 0.875).abs() < 1e-15);
+        let images = [(converged(0.01, 0.001), 300), (converged(0.01, 0.002), 100)];
+        assert_eq!(
+            SamplingStats::merged(&images)
+                .unwrap()
+                .error
+                .unwrap()
+                .pixels,
+            None
+        );
     }
 
     /// The final line says the target was reached only when the image's own estimate is at or
