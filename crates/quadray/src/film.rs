@@ -92,8 +92,9 @@ pub const MIN_ERROR_SAMPLES: u32 = 2;
 pub const ERROR_BATCHES: u32 = 8;
 
 /// One pixel's running estimate from its samples so far: the linear RGB mean that the image
-/// shows and the RGB variance (Welford's online algorithm, in f64), and the display-value sums
-/// that the pixel's error is estimated from.
+/// shows (Welford's online mean, in f64), and the display-value sums that the pixel's error is
+/// estimated from. The samples' variance, which only the variance pass reads, is kept apart
+/// ([`SampleVariance`]): 24 bytes a pixel that every adaptive render would fault in and update.
 ///
 /// The **display value** of a sample is the mean of its three sRGB-encoded channels
 /// ([`display_value`]: clamped to [0, 1], the value a viewer sees). The pixel's **relative error**
@@ -114,7 +115,6 @@ pub const ERROR_BATCHES: u32 = 8;
 pub struct PixelEstimate {
     count: u32,
     rgb_mean: DVec3,
-    rgb_m2: DVec3,
     /// Sums of the display channels of each aligned run of `batch_size` samples.
     batch_sums: [[f32; 3]; ERROR_BATCHES as usize],
 }
@@ -142,8 +142,8 @@ impl PixelEstimate {
         for _ in 0..count {
             if self.rgb_mean == x && x.is_finite() {
                 // Welford's step for a finite sample equal to the mean is x − m = ±0: the mean
-                // and M2 stay as they are, bit for bit (neither is ever −0.0: the first step's
-                // 0 + x/1 gives +0.0), so only the count and the run sums move.
+                // stays as it is, bit for bit (it is never −0.0: the first step's 0 + x/1 gives
+                // +0.0), so only the count and the run sums move.
                 self.count += 1;
                 self.add_to_runs(self.count - 1, display);
             } else {
@@ -158,11 +158,9 @@ impl PixelEstimate {
         let index = self.count;
         self.count += 1;
         let n = self.count as f64;
-        // Welford: m_n = m_{n-1} + (x - m_{n-1}) / n, M2_n = M2_{n-1} + (x - m_{n-1})(x - m_n).
+        // Welford: m_n = m_{n-1} + (x - m_{n-1}) / n.
         let x = radiance.as_dvec3();
-        let delta = x - self.rgb_mean;
-        self.rgb_mean += delta / n;
-        self.rgb_m2 += delta * (x - self.rgb_mean);
+        self.rgb_mean += (x - self.rgb_mean) / n;
         self.add_to_runs(index, display);
     }
 
@@ -208,14 +206,6 @@ impl PixelEstimate {
     pub fn mean_display_value(&self) -> f32 {
         let sum: f32 = self.batch_sums.iter().flatten().sum();
         sum / (3 * self.count.max(1)) as f32
-    }
-
-    /// The unbiased sample variance of each linear RGB channel (zero below two samples).
-    pub fn variance(&self) -> Vec3 {
-        if self.count < 2 {
-            return Vec3::ZERO;
-        }
-        (self.rgb_m2 / (self.count - 1) as f64).as_vec3()
     }
 
     /// The relative standard error of the mean display value (see the type's documentation):
@@ -297,6 +287,42 @@ fn channel_squared_error(batches: &[[f32; 3]], size: u32) -> f64 {
     }
     // The runs' sums are size times their means: one division for all of them.
     spread / (3.0 * (size as f64).powi(2) * k * (k - 1.0))
+}
+
+/// The unbiased sample variance of a pixel's linear RGB samples, by Welford's online algorithm
+/// in f64: the variance pass's, kept beside a pixel's [`PixelEstimate`] only where that pass is
+/// asked for. Its mean is the estimate's, bit for bit (the same steps on the same samples).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SampleVariance {
+    count: u32,
+    mean: DVec3,
+    m2: DVec3,
+}
+
+impl SampleVariance {
+    /// Adds one sample's linear radiance.
+    pub fn add(&mut self, radiance: Vec3) {
+        self.count += 1;
+        let n = self.count as f64;
+        // Welford: m_n = m_{n-1} + (x - m_{n-1}) / n, M2_n = M2_{n-1} + (x - m_{n-1})(x - m_n).
+        let x = radiance.as_dvec3();
+        let delta = x - self.mean;
+        self.mean += delta / n;
+        self.m2 += delta * (x - self.mean);
+    }
+
+    /// Adds `count` samples of the same radiance.
+    pub fn add_repeated(&mut self, radiance: Vec3, count: u32) {
+        (0..count).for_each(|_| self.add(radiance));
+    }
+
+    /// The unbiased sample variance of each linear RGB channel (zero below two samples).
+    pub fn variance(&self) -> Vec3 {
+        if self.count < 2 {
+            return Vec3::ZERO;
+        }
+        (self.m2 / (self.count - 1) as f64).as_vec3()
+    }
 }
 
 /// The mean of the runs' means and the squared standard error of that mean, from the sums of
@@ -388,9 +414,10 @@ mod tests {
         let samples: Vec<f32> = (0..64)
             .map(|i| ((i * 37 % 64) as f32 / 63.0).powi(2))
             .collect();
-        let mut e = PixelEstimate::default();
+        let (mut e, mut v2) = (PixelEstimate::default(), SampleVariance::default());
         for (k, &v) in samples.iter().enumerate() {
             e.add(Vec3::splat(v));
+            v2.add(Vec3::splat(v));
             let n = k + 1;
             if n == 1 {
                 assert!(e.relative_error().is_infinite());
@@ -425,14 +452,19 @@ mod tests {
             .sum::<f64>()
             / (n - 1.0);
         assert!((e.mean().x as f64 - mean).abs() < 1e-7);
-        assert!((e.variance().y as f64 - var).abs() < 1e-7);
+        assert!((v2.variance().y as f64 - var).abs() < 1e-7);
+        assert_eq!(
+            v2.mean.to_array().map(f64::to_bits),
+            e.rgb_mean.to_array().map(f64::to_bits)
+        );
 
-        let mut flat = PixelEstimate::default();
+        let (mut flat, mut flat_variance) = (PixelEstimate::default(), SampleVariance::default());
         for _ in 0..8 {
             flat.add(Vec3::new(0.3, 0.3, 0.3));
         }
+        flat_variance.add_repeated(Vec3::new(0.3, 0.3, 0.3), 8);
         assert_eq!(flat.relative_error(), 0.0);
-        assert_eq!(flat.variance(), Vec3::ZERO);
+        assert_eq!(flat_variance.variance(), Vec3::ZERO);
         // Near-black pixels are judged against the floor, not their own tiny mean.
         let mut dark = PixelEstimate::default();
         for i in 0..8 {

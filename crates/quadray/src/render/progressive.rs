@@ -72,7 +72,14 @@ impl ProgressiveFilm {
                 let mut counts = RayCounts::default();
                 for (column, estimate) in row.iter_mut().enumerate() {
                     let at = (window.x0 + column as u32, y);
-                    sample_pixel(&context, at, estimate, None, (count, count), &mut counts);
+                    sample_pixel(
+                        &context,
+                        at,
+                        estimate,
+                        (None, None),
+                        (count, count),
+                        &mut counts,
+                    );
                 }
                 *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
                 progress.row_done();

@@ -472,7 +472,7 @@ mod tests {
                 &context,
                 (x, y),
                 &mut estimate,
-                None,
+                (None, None),
                 (count, 64),
                 &mut counts,
             );

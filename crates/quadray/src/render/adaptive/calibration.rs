@@ -376,7 +376,15 @@ pub(super) fn sample_sets(
             .wrapping_add(set as u32);
         let pattern = pixel_pattern(at.0, at.1, seed);
         let footprint = (count, footprint_spp);
-        sample_sequence(context, at, pattern, estimate, None, footprint, counts);
+        sample_sequence(
+            context,
+            at,
+            pattern,
+            estimate,
+            (None, None),
+            footprint,
+            counts,
+        );
     }
 }
 

@@ -31,7 +31,7 @@
 //!   The calibration by twins ([`calibration`]) steers the rounds; the audit says where they got.
 
 use crate::aov::{AovSample, Aovs};
-use crate::film::{Film, PixelEstimate};
+use crate::film::{Film, PixelEstimate, SampleVariance};
 use crate::integrator::RayCounts;
 use crate::math::Ray;
 use crate::render::empty_tiles::EmptyTiles;
@@ -158,6 +158,7 @@ pub(crate) fn render_adaptive(
         },
         estimates: state.estimates,
         aov_samples: state.aov_samples,
+        variances: state.variances,
         rounds: round,
         stop,
         counts: rounds
@@ -170,12 +171,13 @@ pub(crate) fn render_adaptive(
 
 /// Brings the pixel at `(x, y)` of the image to `count` samples, each standing for its share of
 /// the pixel at `footprint_spp` samples (filtered textures), taking its surface passes from its
-/// first sample into `aov`, and adds the rays traced to `counts`.
+/// first sample into `aov` and adding every sample to `variance` (the variance pass's), and adds
+/// the rays traced to `counts`.
 pub(crate) fn sample_pixel(
     context: &SampleContext<'_>,
     (x, y): (u32, u32),
     estimate: &mut PixelEstimate,
-    aov: Option<&mut AovSample>,
+    (aov, variance): (Option<&mut AovSample>, Option<&mut SampleVariance>),
     counts_and_footprint: (u32, u32),
     counts: &mut RayCounts,
 ) {
@@ -186,7 +188,7 @@ pub(crate) fn sample_pixel(
         at,
         pattern,
         estimate,
-        aov,
+        (aov, variance),
         counts_and_footprint,
         counts,
     );
@@ -199,7 +201,7 @@ fn sample_sequence(
     (x, y): (u32, u32),
     pattern: u32,
     estimate: &mut PixelEstimate,
-    mut aov: Option<&mut AovSample>,
+    (mut aov, mut variance): (Option<&mut AovSample>, Option<&mut SampleVariance>),
     (count, footprint_spp): (u32, u32),
     counts: &mut RayCounts,
 ) {
@@ -208,7 +210,11 @@ fn sample_sequence(
     let traces_passes = first == 0 && aov.is_some();
     if first < count && !traces_passes && context.sees_nothing_at((x, y)) {
         // Every sample sees the background, which is what tracing them would add.
-        estimate.add_repeated(context.scene.background(), count - first);
+        let background = context.scene.background();
+        estimate.add_repeated(background, count - first);
+        if let Some(variance) = variance {
+            variance.add_repeated(background, count - first);
+        }
         counts.camera += u64::from(count - first);
         counts.untraced_camera += u64::from(count - first);
         return;
@@ -257,6 +263,9 @@ fn sample_sequence(
             }
         }
         estimate.add_eight(&radiances, traced);
+        if let Some(variance) = variance.as_deref_mut() {
+            radiances[..traced].iter().for_each(|&r| variance.add(r));
+        }
     }
 }
 
@@ -300,6 +309,8 @@ struct Sampled {
     relative_errors: Option<Vec<f64>>,
     estimates: Vec<PixelEstimate>,
     aov_samples: Vec<AovSample>,
+    /// Each pixel's samples' variance (empty unless the variance pass is asked for).
+    variances: Vec<SampleVariance>,
     rounds: u32,
     stop: Stop,
     counts: RayCounts,
@@ -318,12 +329,10 @@ impl Sampled {
         let estimates = crop(&self.estimates, sampled, window);
         let film = Film::of_estimates(window.width(), window.height(), &estimates);
         let mut aov_samples = crop(&self.aov_samples, sampled, window).into_owned();
-        for (aov, estimate) in aov_samples.iter_mut().zip(estimates.iter()) {
-            aov.fill_sampling(
-                context.selection,
-                estimate.count(),
-                Some(estimate.variance()),
-            );
+        let variances = crop(&self.variances, sampled, window);
+        for (i, (aov, estimate)) in aov_samples.iter_mut().zip(estimates.iter()).enumerate() {
+            let variance = variances.get(i).map(SampleVariance::variance);
+            aov.fill_sampling(context.selection, estimate.count(), variance);
         }
         let relative_errors = (self.relative_errors.as_deref()).map(|e| crop(e, sampled, window));
         debug_assert!(

@@ -14,7 +14,7 @@ use super::image_rule::{self, Aim, Budget, PixelState, Step};
 use super::missed::follow_neighbours;
 use super::{Adaptive, NEIGHBOUR_ROUNDS, Stop, sample_pixel};
 use crate::aov::AovSample;
-use crate::film::PixelEstimate;
+use crate::film::{PixelEstimate, SampleVariance};
 use crate::integrator::RayCounts;
 use crate::render::{Progress, RenderError, SampleContext};
 use rayon::prelude::*;
@@ -48,6 +48,8 @@ pub(super) struct PilotPixel {
     pub rays: u64,
     /// Its surface passes, from its first sample (when passes are selected).
     pub aov: Option<AovSample>,
+    /// Its samples' variance (when the variance pass is selected).
+    pub variance: Option<SampleVariance>,
     /// Bit k set: round k sampled it.
     pub rounds: u64,
     /// Its twin, if it got one after its first round ([`calibration`]): boxed, since about
@@ -99,6 +101,7 @@ pub(super) fn plan(
     let (width, height) = (context.settings.width, context.settings.height);
     let stride = stride(width, height);
     let aov = context.selection.any().then_some(AovSample::MISS);
+    let variance = context.selection.variance.then(SampleVariance::default);
     let mut pixels: Vec<PilotPixel> = (stride / 2..height)
         .step_by(stride as usize)
         .flat_map(|y| {
@@ -111,6 +114,7 @@ pub(super) fn plan(
             estimate: PixelEstimate::default(),
             rays: 0,
             aov,
+            variance,
             rounds: 0,
             twin: None,
         })
@@ -259,7 +263,7 @@ fn sample_round(
                 context,
                 pixel.at,
                 &mut pixel.estimate,
-                pixel.aov.as_mut(),
+                (pixel.aov.as_mut(), pixel.variance.as_mut()),
                 (target, adaptive.max_spp),
                 &mut counts,
             );

@@ -5,6 +5,7 @@ use super::audit::{self, AuditCost};
 use super::image_rule::{self, Aim, Budget, PixelState, Step};
 use super::window::{WindowState, error_of};
 use super::{Adaptive, Calibration, InnerPixels, Stop, sample_pixel, sample_twin};
+use crate::film::SampleVariance;
 use crate::integrator::RayCounts;
 use crate::render::{PixelWindow, Progress, SampleContext};
 use rayon::prelude::*;
@@ -149,6 +150,12 @@ impl Rounds<'_> {
         let ww = window.width() as usize;
         let rule = state.rule;
         let mut aov_rows = self.context.aov_rows(&mut state.aov_samples);
+        // The variances are kept only for the variance pass (empty otherwise).
+        let mut variance_rows: Vec<Option<&mut [SampleVariance]>> = match state.variances.is_empty()
+        {
+            true => (0..window.height()).map(|_| None).collect(),
+            false => state.variances.chunks_mut(ww).map(Some).collect(),
+        };
         // The squared errors are kept apart only under the pixel rule (empty otherwise).
         let mut squared_rows: Vec<Option<&mut [f64]>> = match state.squared.is_empty() {
             true => (0..window.height()).map(|_| None).collect(),
@@ -161,10 +168,13 @@ impl Rounds<'_> {
             .zip(state.errors.par_chunks_mut(ww))
             .zip(squared_rows.par_iter_mut())
             .zip(state.targets.par_chunks(ww))
-            .zip(aov_rows.par_iter_mut())
+            .zip(aov_rows.par_iter_mut().zip(variance_rows.par_iter_mut()))
             .enumerate()
             .for_each(
-                |(row_index, (((((row, rays), errors), squared), targets), aov_row))| {
+                |(
+                    row_index,
+                    (((((row, rays), errors), squared), targets), (aov_row, variances)),
+                )| {
                     let y = window.y0 + row_index as u32;
                     let row_done = || {
                         if (self.inner.y0..self.inner.y1).contains(&y) {
@@ -187,11 +197,12 @@ impl Rounds<'_> {
                         }
                         let before = counts.total();
                         let aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
+                        let variance = variances.as_deref_mut().map(|v| &mut v[column]);
                         sample_pixel(
                             self.context,
                             (window.x0 + column as u32, y),
                             estimate,
-                            aov,
+                            (aov, variance),
                             (targets[column], self.adaptive.max_spp),
                             &mut counts,
                         );

@@ -9,7 +9,7 @@ use super::{
     Adaptive, ErrorRule, NEIGHBOUR_ROUNDS, RoundSummary, SLIVER_ROUNDS, Stop, missed, pixel_rule,
 };
 use crate::aov::AovSample;
-use crate::film::PixelEstimate;
+use crate::film::{PixelEstimate, SampleVariance};
 use crate::render::{PixelWindow, SampleContext};
 use rayon::prelude::*;
 
@@ -32,6 +32,8 @@ pub(super) struct WindowState {
     /// The count the next round brings each pixel to (at most its own: not sampled).
     pub(super) targets: Vec<u32>,
     pub(super) aov_samples: Vec<AovSample>,
+    /// Each pixel's samples' variance, when the variance pass is asked for (else empty).
+    pub(super) variances: Vec<SampleVariance>,
     /// For pilot pixels inside the window, the rounds that sample them (bit k: round k), which
     /// the pilot took already; 0 for the others (the pilot samples each of its pixels in round
     /// 0, so a pilot pixel's bits are never 0). Half the bytes of an `Option`.
@@ -69,6 +71,10 @@ impl WindowState {
             },
             targets: (0..pixels).into_par_iter().map(|_| min_spp).collect(),
             aov_samples: context.aov_buffer(),
+            variances: match context.selection.variance {
+                true => vec![SampleVariance::default(); pixels],
+                false => Vec::new(),
+            },
             pilot_rounds: vec![0; pixels],
             twins: vec![Vec::new(); window.height() as usize],
         };
@@ -88,6 +94,9 @@ impl WindowState {
             state.pilot_rounds[i] = pixel.rounds;
             if let (Some(aov), Some(slot)) = (pixel.aov, state.aov_samples.get_mut(i)) {
                 *slot = aov;
+            }
+            if let (Some(variance), Some(slot)) = (pixel.variance, state.variances.get_mut(i)) {
+                *slot = variance;
             }
         }
         state
