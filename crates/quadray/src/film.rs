@@ -93,8 +93,8 @@ pub const ERROR_BATCHES: u32 = 8;
 
 /// One pixel's running estimate from its samples so far: the linear RGB mean that the image
 /// shows (Welford's online mean, in f64), and the display-value sums that the pixel's error is
-/// estimated from. The samples' variance, which only the variance pass reads, is kept apart
-/// ([`SampleVariance`]): 24 bytes a pixel that every adaptive render would fault in and update.
+/// estimated from. The samples' second moment, which only the variance pass reads, is kept
+/// apart ([`SecondMoment`]): 24 bytes a pixel every adaptive render would fault in and update.
 ///
 /// The **display value** of a sample is the mean of its three sRGB-encoded channels
 /// ([`display_value`]: clamped to [0, 1], the value a viewer sees). The pixel's **relative error**
@@ -122,45 +122,69 @@ pub struct PixelEstimate {
 impl PixelEstimate {
     /// Adds one sample's linear radiance (the pixel's next sample in its sequence).
     pub fn add(&mut self, radiance: Vec3) {
-        self.add_encoded(radiance, display_channels(radiance));
+        self.add_encoded(radiance, display_channels(radiance), None);
+    }
+
+    /// [`PixelEstimate::add`], and the sample's deviation from the mean to `moment`.
+    pub fn add_with_moment(&mut self, radiance: Vec3, moment: &mut SecondMoment) {
+        self.add_encoded(radiance, display_channels(radiance), Some(moment));
     }
 
     /// [`PixelEstimate::add`] of the first `count` of eight samples in order, their display
     /// encodings made together ([`display_channels_eight`]; the others are not added).
-    pub fn add_eight(&mut self, radiances: &[Vec3; 8], count: usize) {
+    pub fn add_eight(
+        &mut self,
+        radiances: &[Vec3; 8],
+        count: usize,
+        mut moment: Option<&mut SecondMoment>,
+    ) {
         let display = display_channels_eight(radiances);
         for (&radiance, &display) in radiances.iter().zip(&display).take(count) {
-            self.add_encoded(radiance, display);
+            self.add_encoded(radiance, display, moment.as_deref_mut());
         }
     }
 
     /// [`PixelEstimate::add`] of `count` samples of the same radiance (the background of a pixel
     /// that sees nothing), encoded for display once.
-    pub fn add_repeated(&mut self, radiance: Vec3, count: u32) {
+    pub fn add_repeated(
+        &mut self,
+        radiance: Vec3,
+        count: u32,
+        mut moment: Option<&mut SecondMoment>,
+    ) {
         let display = display_channels(radiance);
         let x = radiance.as_dvec3();
         for _ in 0..count {
             if self.rgb_mean == x && x.is_finite() {
                 // Welford's step for a finite sample equal to the mean is x − m = ±0: the mean
-                // stays as it is, bit for bit (it is never −0.0: the first step's 0 + x/1 gives
-                // +0.0), so only the count and the run sums move.
+                // and M2 stay as they are, bit for bit (neither is ever −0.0: the first step's
+                // 0 + x/1 gives +0.0), so only the count and the run sums move.
                 self.count += 1;
                 self.add_to_runs(self.count - 1, display);
             } else {
-                self.add_encoded(radiance, display);
+                self.add_encoded(radiance, display, moment.as_deref_mut());
             }
         }
     }
 
     /// [`PixelEstimate::add`] with the sample's display channels given.
     #[inline(always)]
-    fn add_encoded(&mut self, radiance: Vec3, display: [f32; 3]) {
+    fn add_encoded(
+        &mut self,
+        radiance: Vec3,
+        display: [f32; 3],
+        moment: Option<&mut SecondMoment>,
+    ) {
         let index = self.count;
         self.count += 1;
         let n = self.count as f64;
-        // Welford: m_n = m_{n-1} + (x - m_{n-1}) / n.
+        // Welford: m_n = m_{n-1} + (x - m_{n-1}) / n, M2_n = M2_{n-1} + (x - m_{n-1})(x - m_n).
         let x = radiance.as_dvec3();
-        self.rgb_mean += (x - self.rgb_mean) / n;
+        let delta = x - self.rgb_mean;
+        self.rgb_mean += delta / n;
+        if let Some(SecondMoment(m2)) = moment {
+            *m2 += delta * (x - self.rgb_mean);
+        }
         self.add_to_runs(index, display);
     }
 
@@ -289,39 +313,20 @@ fn channel_squared_error(batches: &[[f32; 3]], size: u32) -> f64 {
     spread / (3.0 * (size as f64).powi(2) * k * (k - 1.0))
 }
 
-/// The unbiased sample variance of a pixel's linear RGB samples, by Welford's online algorithm
-/// in f64: the variance pass's, kept beside a pixel's [`PixelEstimate`] only where that pass is
-/// asked for. Its mean is the estimate's, bit for bit (the same steps on the same samples).
+/// The second moment of a pixel's linear RGB samples about their mean, Σ(x − m)² per channel
+/// (Welford's M2, in f64): the variance pass's, kept beside a pixel's [`PixelEstimate`] (which
+/// updates it with its mean, [`PixelEstimate::add_eight`]) only where that pass is asked for.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SampleVariance {
-    count: u32,
-    mean: DVec3,
-    m2: DVec3,
-}
+pub struct SecondMoment(DVec3);
 
-impl SampleVariance {
-    /// Adds one sample's linear radiance.
-    pub fn add(&mut self, radiance: Vec3) {
-        self.count += 1;
-        let n = self.count as f64;
-        // Welford: m_n = m_{n-1} + (x - m_{n-1}) / n, M2_n = M2_{n-1} + (x - m_{n-1})(x - m_n).
-        let x = radiance.as_dvec3();
-        let delta = x - self.mean;
-        self.mean += delta / n;
-        self.m2 += delta * (x - self.mean);
-    }
-
-    /// Adds `count` samples of the same radiance.
-    pub fn add_repeated(&mut self, radiance: Vec3, count: u32) {
-        (0..count).for_each(|_| self.add(radiance));
-    }
-
-    /// The unbiased sample variance of each linear RGB channel (zero below two samples).
-    pub fn variance(&self) -> Vec3 {
-        if self.count < 2 {
+impl SecondMoment {
+    /// The unbiased sample variance of each linear RGB channel of the `count` samples the moment
+    /// was taken over (zero below two samples).
+    pub fn variance(&self, count: u32) -> Vec3 {
+        if count < 2 {
             return Vec3::ZERO;
         }
-        (self.m2 / (self.count - 1) as f64).as_vec3()
+        (self.0 / (count - 1) as f64).as_vec3()
     }
 }
 
@@ -362,13 +367,24 @@ mod tests {
         for held in [0u32, 13] {
             for count in 1..=8usize {
                 let mut one_by_one = PixelEstimate::default();
-                (0..held).for_each(|k| one_by_one.add(sample(k)));
-                let mut together = one_by_one;
+                let mut moment = SecondMoment::default();
+                (0..held).for_each(|k| one_by_one.add_with_moment(sample(k), &mut moment));
+                let (mut together, mut moment_together) = (one_by_one, moment);
                 let eight: [Vec3; 8] = std::array::from_fn(|k| sample(held + k as u32));
-                eight[..count].iter().for_each(|&r| one_by_one.add(r));
-                together.add_eight(&eight, count);
+                (eight[..count].iter()).for_each(|&r| one_by_one.add_with_moment(r, &mut moment));
+                together.add_eight(&eight, count, Some(&mut moment_together));
                 let case = format!("{held} held, {count} added");
                 assert!(same_bits(&together, &one_by_one), "{case}");
+                assert_eq!(
+                    format!("{moment_together:?}"),
+                    format!("{moment:?}"),
+                    "{case}"
+                );
+                // Without a moment the estimate is the same.
+                let mut alone = PixelEstimate::default();
+                (0..held).for_each(|k| alone.add(sample(k)));
+                alone.add_eight(&eight, count, None);
+                assert!(same_bits(&alone, &one_by_one), "{case}");
             }
         }
     }
@@ -390,17 +406,24 @@ mod tests {
                 for count in [1, 2, 7, 8, 9, 16, 40] {
                     let mut one_by_one = PixelEstimate::default();
                     let mut at_once = PixelEstimate::default();
+                    let (mut moment, mut moment_at_once) = Default::default();
                     for k in 0..start {
                         let other = Vec3::splat(0.1 * k as f32);
-                        one_by_one.add(other);
-                        at_once.add(other);
+                        one_by_one.add_with_moment(other, &mut moment);
+                        at_once.add_with_moment(other, &mut moment_at_once);
                     }
                     for _ in 0..count {
-                        one_by_one.add(background);
+                        one_by_one.add_with_moment(background, &mut moment);
                     }
-                    at_once.add_repeated(background, count);
+                    at_once.add_repeated(background, count, Some(&mut moment_at_once));
                     let case = format!("{background}, start {start}, count {count}");
                     assert!(same_bits(&one_by_one, &at_once), "{case}");
+                    let moments: [SecondMoment; 2] = [moment, moment_at_once];
+                    assert_eq!(
+                        format!("{:?}", moments[0]),
+                        format!("{:?}", moments[1]),
+                        "{case}"
+                    );
                 }
             }
         }
@@ -414,10 +437,9 @@ mod tests {
         let samples: Vec<f32> = (0..64)
             .map(|i| ((i * 37 % 64) as f32 / 63.0).powi(2))
             .collect();
-        let (mut e, mut v2) = (PixelEstimate::default(), SampleVariance::default());
+        let (mut e, mut moment) = (PixelEstimate::default(), SecondMoment::default());
         for (k, &v) in samples.iter().enumerate() {
-            e.add(Vec3::splat(v));
-            v2.add(Vec3::splat(v));
+            e.add_with_moment(Vec3::splat(v), &mut moment);
             let n = k + 1;
             if n == 1 {
                 assert!(e.relative_error().is_infinite());
@@ -452,19 +474,12 @@ mod tests {
             .sum::<f64>()
             / (n - 1.0);
         assert!((e.mean().x as f64 - mean).abs() < 1e-7);
-        assert!((v2.variance().y as f64 - var).abs() < 1e-7);
-        assert_eq!(
-            v2.mean.to_array().map(f64::to_bits),
-            e.rgb_mean.to_array().map(f64::to_bits)
-        );
+        assert!((moment.variance(e.count()).y as f64 - var).abs() < 1e-7);
 
-        let (mut flat, mut flat_variance) = (PixelEstimate::default(), SampleVariance::default());
-        for _ in 0..8 {
-            flat.add(Vec3::new(0.3, 0.3, 0.3));
-        }
-        flat_variance.add_repeated(Vec3::new(0.3, 0.3, 0.3), 8);
+        let (mut flat, mut flat_moment) = (PixelEstimate::default(), SecondMoment::default());
+        flat.add_repeated(Vec3::new(0.3, 0.3, 0.3), 8, Some(&mut flat_moment));
         assert_eq!(flat.relative_error(), 0.0);
-        assert_eq!(flat_variance.variance(), Vec3::ZERO);
+        assert_eq!(flat_moment.variance(flat.count()), Vec3::ZERO);
         // Near-black pixels are judged against the floor, not their own tiny mean.
         let mut dark = PixelEstimate::default();
         for i in 0..8 {

@@ -4,8 +4,9 @@
 //! The figures come from peak resident sizes measured on the quadric grid at 3840x2160 (whose
 //! scene is a few kilobytes, so the pixels are all of it), divided by the pixels and rounded up:
 //! 30 bytes a pixel for a uniform render to EXR (the f32 film and the file's encoding), 127 with
-//! every pass, 230 for an adaptive render (each pixel's estimate of 152 bytes, its state through
-//! the rounds and the audit, and the pilot) and 306 for an adaptive render with every pass.
+//! every pass, 209 for an adaptive render (each pixel's estimate of 128 bytes, its state through
+//! the rounds and the audit, and the pilot) and 293 for an adaptive render with every pass
+//! (2026-11-27; 230 and 306 while an estimate held its samples' second moment too).
 
 use super::adaptive::{pilot_pixels, sampled_window};
 use super::{PixelWindow, RenderSettings};
@@ -19,13 +20,17 @@ const PASS_BYTES: u64 = 96;
 /// Bytes an adaptive render holds for each pixel it samples while it renders: its estimate
 /// ([`crate::film::PixelEstimate`]), rays, errors, target and pilot bits, and the rounds' and the
 /// audit's per-pixel arrays.
-const ADAPTIVE_BYTES: u64 = 200;
+const ADAPTIVE_BYTES: u64 = 180;
+/// Bytes an adaptive render adds for each pixel it samples when the variance pass is selected:
+/// the samples' second moment ([`crate::film::SecondMoment`]).
+const MOMENT_BYTES: u64 = 24;
 /// Bytes an adaptive render of a window smaller than what it samples (a crop, a piece: its
 /// border) adds for each pixel of the window: the copies of their estimates and state it cuts
 /// out of the bordered arrays at the end.
 const CROP_BYTES: u64 = 176;
-/// Bytes a pilot pixel holds (its estimate, passes and round bits; its twin is boxed).
-const PILOT_PIXEL_BYTES: u64 = 240;
+/// Bytes a pilot pixel holds (its estimate, passes and round bits; its twin and its second
+/// moment are boxed).
+const PILOT_PIXEL_BYTES: u64 = 224;
 
 /// The memory a render holds for its pixels ([`pixel_memory`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -61,7 +66,8 @@ pub fn pixel_memory(
             true => pilot_pixels(width, height) * PILOT_PIXEL_BYTES,
             false => 0,
         };
-        (pixels(sampled) * ADAPTIVE_BYTES).saturating_add(crop + pilot)
+        let per_pixel = ADAPTIVE_BYTES + if selection.variance { MOMENT_BYTES } else { 0 };
+        (pixels(sampled) * per_pixel).saturating_add(crop + pilot)
     });
     PixelMemory {
         kept: pixels(window).saturating_mul(kept_per_pixel),
@@ -98,8 +104,8 @@ mod tests {
         };
         let adaptive_bytes = pixel_memory(&adaptive, none, whole);
         assert_eq!(adaptive_bytes.kept, uniform_bytes.kept);
-        assert!(total(adaptive_bytes) >= pixels * 230);
-        assert!(total(pixel_memory(&adaptive, all, whole)) >= pixels * 306);
+        assert!(total(adaptive_bytes) >= pixels * 209);
+        assert!(total(pixel_memory(&adaptive, all, whole)) >= pixels * 293);
         // A quarter of the image: a quarter of the film, but a border, copies of its pixels and
         // the whole image's pilot besides.
         let quarter = PixelWindow {

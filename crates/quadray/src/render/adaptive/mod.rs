@@ -31,7 +31,7 @@
 //!   The calibration by twins ([`calibration`]) steers the rounds; the audit says where they got.
 
 use crate::aov::{AovSample, Aovs};
-use crate::film::{Film, PixelEstimate, SampleVariance};
+use crate::film::{Film, PixelEstimate, SecondMoment};
 use crate::integrator::RayCounts;
 use crate::math::Ray;
 use crate::render::empty_tiles::EmptyTiles;
@@ -158,7 +158,7 @@ pub(crate) fn render_adaptive(
         },
         estimates: state.estimates,
         aov_samples: state.aov_samples,
-        variances: state.variances,
+        moments: state.moments,
         rounds: round,
         stop,
         counts: rounds
@@ -171,13 +171,13 @@ pub(crate) fn render_adaptive(
 
 /// Brings the pixel at `(x, y)` of the image to `count` samples, each standing for its share of
 /// the pixel at `footprint_spp` samples (filtered textures), taking its surface passes from its
-/// first sample into `aov` and adding every sample to `variance` (the variance pass's), and adds
-/// the rays traced to `counts`.
+/// first sample into `aov` and every sample's deviation to `moment` (the variance pass's), and
+/// adds the rays traced to `counts`.
 pub(crate) fn sample_pixel(
     context: &SampleContext<'_>,
     (x, y): (u32, u32),
     estimate: &mut PixelEstimate,
-    (aov, variance): (Option<&mut AovSample>, Option<&mut SampleVariance>),
+    (aov, moment): (Option<&mut AovSample>, Option<&mut SecondMoment>),
     counts_and_footprint: (u32, u32),
     counts: &mut RayCounts,
 ) {
@@ -188,7 +188,7 @@ pub(crate) fn sample_pixel(
         at,
         pattern,
         estimate,
-        (aov, variance),
+        (aov, moment),
         counts_and_footprint,
         counts,
     );
@@ -201,7 +201,7 @@ fn sample_sequence(
     (x, y): (u32, u32),
     pattern: u32,
     estimate: &mut PixelEstimate,
-    (mut aov, mut variance): (Option<&mut AovSample>, Option<&mut SampleVariance>),
+    (mut aov, mut moment): (Option<&mut AovSample>, Option<&mut SecondMoment>),
     (count, footprint_spp): (u32, u32),
     counts: &mut RayCounts,
 ) {
@@ -210,11 +210,7 @@ fn sample_sequence(
     let traces_passes = first == 0 && aov.is_some();
     if first < count && !traces_passes && context.sees_nothing_at((x, y)) {
         // Every sample sees the background, which is what tracing them would add.
-        let background = context.scene.background();
-        estimate.add_repeated(background, count - first);
-        if let Some(variance) = variance {
-            variance.add_repeated(background, count - first);
-        }
+        estimate.add_repeated(context.scene.background(), count - first, moment);
         counts.camera += u64::from(count - first);
         counts.untraced_camera += u64::from(count - first);
         return;
@@ -262,10 +258,7 @@ fn sample_sequence(
                 context.trace_rays(rays, cone, keys, counts, radiances);
             }
         }
-        estimate.add_eight(&radiances, traced);
-        if let Some(variance) = variance.as_deref_mut() {
-            radiances[..traced].iter().for_each(|&r| variance.add(r));
-        }
+        estimate.add_eight(&radiances, traced, moment.as_deref_mut());
     }
 }
 
@@ -309,8 +302,8 @@ struct Sampled {
     relative_errors: Option<Vec<f64>>,
     estimates: Vec<PixelEstimate>,
     aov_samples: Vec<AovSample>,
-    /// Each pixel's samples' variance (empty unless the variance pass is asked for).
-    variances: Vec<SampleVariance>,
+    /// Each pixel's samples' second moment (empty unless the variance pass is asked for).
+    moments: Vec<SecondMoment>,
     rounds: u32,
     stop: Stop,
     counts: RayCounts,
@@ -329,9 +322,9 @@ impl Sampled {
         let estimates = crop(&self.estimates, sampled, window);
         let film = Film::of_estimates(window.width(), window.height(), &estimates);
         let mut aov_samples = crop(&self.aov_samples, sampled, window).into_owned();
-        let variances = crop(&self.variances, sampled, window);
+        let moments = crop(&self.moments, sampled, window);
         for (i, (aov, estimate)) in aov_samples.iter_mut().zip(estimates.iter()).enumerate() {
-            let variance = variances.get(i).map(SampleVariance::variance);
+            let variance = moments.get(i).map(|m| m.variance(estimate.count()));
             aov.fill_sampling(context.selection, estimate.count(), variance);
         }
         let relative_errors = (self.relative_errors.as_deref()).map(|e| crop(e, sampled, window));

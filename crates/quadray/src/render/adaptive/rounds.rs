@@ -5,7 +5,7 @@ use super::audit::{self, AuditCost};
 use super::image_rule::{self, Aim, Budget, PixelState, Step};
 use super::window::{WindowState, error_of};
 use super::{Adaptive, Calibration, InnerPixels, Stop, sample_pixel, sample_twin};
-use crate::film::SampleVariance;
+use crate::film::SecondMoment;
 use crate::integrator::RayCounts;
 use crate::render::{PixelWindow, Progress, SampleContext};
 use rayon::prelude::*;
@@ -150,11 +150,10 @@ impl Rounds<'_> {
         let ww = window.width() as usize;
         let rule = state.rule;
         let mut aov_rows = self.context.aov_rows(&mut state.aov_samples);
-        // The variances are kept only for the variance pass (empty otherwise).
-        let mut variance_rows: Vec<Option<&mut [SampleVariance]>> = match state.variances.is_empty()
-        {
+        // The moments are kept only for the variance pass (empty otherwise).
+        let mut moment_rows: Vec<Option<&mut [SecondMoment]>> = match state.moments.is_empty() {
             true => (0..window.height()).map(|_| None).collect(),
-            false => state.variances.chunks_mut(ww).map(Some).collect(),
+            false => state.moments.chunks_mut(ww).map(Some).collect(),
         };
         // The squared errors are kept apart only under the pixel rule (empty otherwise).
         let mut squared_rows: Vec<Option<&mut [f64]>> = match state.squared.is_empty() {
@@ -168,13 +167,10 @@ impl Rounds<'_> {
             .zip(state.errors.par_chunks_mut(ww))
             .zip(squared_rows.par_iter_mut())
             .zip(state.targets.par_chunks(ww))
-            .zip(aov_rows.par_iter_mut().zip(variance_rows.par_iter_mut()))
+            .zip(aov_rows.par_iter_mut().zip(moment_rows.par_iter_mut()))
             .enumerate()
             .for_each(
-                |(
-                    row_index,
-                    (((((row, rays), errors), squared), targets), (aov_row, variances)),
-                )| {
+                |(row_index, (((((row, rays), errors), squared), targets), (aov_row, moments)))| {
                     let y = window.y0 + row_index as u32;
                     let row_done = || {
                         if (self.inner.y0..self.inner.y1).contains(&y) {
@@ -197,12 +193,12 @@ impl Rounds<'_> {
                         }
                         let before = counts.total();
                         let aov = aov_row.as_deref_mut().map(|aovs| &mut aovs[column]);
-                        let variance = variances.as_deref_mut().map(|v| &mut v[column]);
+                        let moment = moments.as_deref_mut().map(|m| &mut m[column]);
                         sample_pixel(
                             self.context,
                             (window.x0 + column as u32, y),
                             estimate,
-                            (aov, variance),
+                            (aov, moment),
                             (targets[column], self.adaptive.max_spp),
                             &mut counts,
                         );

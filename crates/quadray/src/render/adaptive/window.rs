@@ -9,7 +9,7 @@ use super::{
     Adaptive, ErrorRule, NEIGHBOUR_ROUNDS, RoundSummary, SLIVER_ROUNDS, Stop, missed, pixel_rule,
 };
 use crate::aov::AovSample;
-use crate::film::{PixelEstimate, SampleVariance};
+use crate::film::{PixelEstimate, SecondMoment};
 use crate::render::{PixelWindow, SampleContext};
 use rayon::prelude::*;
 
@@ -32,8 +32,8 @@ pub(super) struct WindowState {
     /// The count the next round brings each pixel to (at most its own: not sampled).
     pub(super) targets: Vec<u32>,
     pub(super) aov_samples: Vec<AovSample>,
-    /// Each pixel's samples' variance, when the variance pass is asked for (else empty).
-    pub(super) variances: Vec<SampleVariance>,
+    /// Each pixel's samples' second moment, when the variance pass is asked for (else empty).
+    pub(super) moments: Vec<SecondMoment>,
     /// For pilot pixels inside the window, the rounds that sample them (bit k: round k), which
     /// the pilot took already; 0 for the others (the pilot samples each of its pixels in round
     /// 0, so a pilot pixel's bits are never 0). Half the bytes of an `Option`.
@@ -58,7 +58,7 @@ impl WindowState {
             rule,
             width: window.width() as usize,
             // Filled in parallel, so that the pages are faulted in on every thread (at 3840x2160
-            // the estimates are 1.3 GB); the zeros come from the allocator.
+            // the estimates are 1.1 GB); the zeros come from the allocator.
             estimates: (0..pixels)
                 .into_par_iter()
                 .map(|_| PixelEstimate::default())
@@ -71,8 +71,8 @@ impl WindowState {
             },
             targets: (0..pixels).into_par_iter().map(|_| min_spp).collect(),
             aov_samples: context.aov_buffer(),
-            variances: match context.selection.variance {
-                true => vec![SampleVariance::default(); pixels],
+            moments: match context.selection.variance {
+                true => vec![SecondMoment::default(); pixels],
                 false => Vec::new(),
             },
             pilot_rounds: vec![0; pixels],
@@ -95,8 +95,8 @@ impl WindowState {
             if let (Some(aov), Some(slot)) = (pixel.aov, state.aov_samples.get_mut(i)) {
                 *slot = aov;
             }
-            if let (Some(variance), Some(slot)) = (pixel.variance, state.variances.get_mut(i)) {
-                *slot = variance;
+            if let (Some(moment), Some(slot)) = (&pixel.moment, state.moments.get_mut(i)) {
+                *slot = **moment;
             }
         }
         state
@@ -174,35 +174,39 @@ impl WindowState {
         unplanned_step: impl FnOnce(&[PixelState], f64) -> Result<Step, Stop>,
     ) -> Result<(), Stop> {
         self.fill_unknown_errors();
-        // The pixels' states under the calibration the step was decided with, made once.
-        let (step, states) = match plan {
+        // The step, and the calibration it was decided with.
+        let (step, calibration) = match plan {
             Some(plan) => {
                 let decision = plan.decisions.get(round as usize - 1);
-                let (step, calibration) = decision.copied().ok_or(plan.stop)?;
-                (step, self.states(&calibration))
+                decision.copied().ok_or(plan.stop)?
             }
-            None => {
-                let states = self.states(calibration);
-                (unplanned_step(&states, calibration.alpha)?, states)
-            }
+            None => (
+                unplanned_step(&self.states(calibration), calibration.alpha)?,
+                *calibration,
+            ),
         };
         let max_spp = adaptive.max_spp;
-        // Each pixel's own target; pilot pixels hold their samples already, and count as
-        // refined by their own estimate in the rounds that sampled them.
-        let mut targets: Vec<u32> = states
-            .par_iter()
+        // Each pixel's own target and its state's count, the pixel's state made on the way
+        // (a vector of states faulted in 24 bytes a pixel of fresh memory every round); pilot
+        // pixels hold their samples already, and count as refined by their own estimate in the
+        // rounds that sampled them.
+        let (mut targets, counts): (Vec<u32>, Vec<u32>) = (self.estimates.par_iter())
+            .zip(&self.errors)
+            .zip(&self.rays)
             .zip(&self.pilot_rounds)
-            .map(|(s, &pilot)| match pilot {
-                0 => step.target(s, max_spp),
-                _ => 0,
+            .map(|(((e, &estimated), &rays), &pilot)| {
+                let state = state_of((e.count(), estimated), rays, &calibration);
+                match pilot {
+                    0 => (step.target(&state, max_spp), state.count),
+                    _ => (0, state.count),
+                }
             })
-            .collect();
-        let own: Vec<bool> = states
-            .par_iter()
+            .unzip();
+        let own: Vec<bool> = (counts.par_iter())
             .zip(&self.pilot_rounds)
             .zip(&targets)
-            .map(|((s, &pilot), &target)| match pilot {
-                0 => target > s.count,
+            .map(|((&count, &pilot), &target)| match pilot {
+                0 => target > count,
                 bits => bits >> round & 1 == 1,
             })
             .collect();
@@ -213,21 +217,21 @@ impl WindowState {
         let may_follow = |i: usize| !(pilot_followed && self.pilot_rounds[i] != 0);
         let follow = (round <= NEIGHBOUR_ROUNDS).then(|| {
             missed::follow_neighbours(&own, self.width, |i, j| {
-                let (count, other) = (states[i].count, states[j].count);
+                let (count, other) = (counts[i], counts[j]);
                 count < max_spp && count <= other && may_follow(i)
             })
         });
         // Under the image rule `errors` holds each pixel's batch-means squared error.
         let across = (round <= SLIVER_ROUNDS)
             .then(|| missed::across_flat_edges(&self.estimates, &self.errors, self.width));
-        for (i, (target, s)) in targets.iter_mut().zip(&states).enumerate() {
+        for (i, (target, &count)) in targets.iter_mut().zip(&counts).enumerate() {
             let followed = follow.as_ref().is_some_and(|f| f[i] && !own[i]);
             let sliver = across.as_ref().is_some_and(|a| a[i] && may_follow(i));
             if followed || sliver {
-                *target = (*target).max((2 * s.count).min(max_spp));
+                *target = (*target).max((2 * count).min(max_spp));
             }
         }
-        if !targets.iter().zip(&states).any(|(&t, s)| t > s.count) && plan.is_none() {
+        if !targets.iter().zip(&counts).any(|(&t, &count)| t > count) && plan.is_none() {
             return Err(Stop::Converged);
         }
         self.targets = targets;

@@ -6,7 +6,7 @@ pub(crate) mod tests;
 mod tiles;
 
 use crate::aov::{AovSample, Aovs};
-use crate::film::{Film, SampleVariance};
+use crate::film::{Film, PixelEstimate, SecondMoment};
 use crate::footprint::RayCone;
 use crate::integrator::RayCounts;
 use crate::math::Ray;
@@ -223,8 +223,10 @@ fn shade_batch(
         // batch's keys made this loop 13-16% slower (grid, bunny frame), through codegen.
         let pattern = pixel_pattern(x, batch.y, settings.seed);
         let mut aov = aovs.as_deref_mut().map(|aovs| &mut aovs[i]);
-        // The variance pass needs the running variance; the image keeps its f32 sum.
-        let mut variance = selection.variance.then(SampleVariance::default);
+        // The variance pass needs the running estimate and moment; the image keeps its f32 sum.
+        let mut variance = selection
+            .variance
+            .then(<(PixelEstimate, SecondMoment)>::default);
         let mut sum = Vec3::ZERO;
         for (s, ray) in (0..spp).zip(&mut rays) {
             let first_hit = if s == 0 { aov.as_deref_mut() } else { None };
@@ -234,14 +236,15 @@ fn shade_batch(
                 count: Some(spp),
             };
             let radiance = context.trace_ray(ray, batch.cone, key, first_hit, counts);
-            if let Some(v) = &mut variance {
-                v.add(radiance);
+            if let Some((estimate, moment)) = &mut variance {
+                estimate.add_with_moment(radiance, moment);
             }
             sum += radiance;
         }
         *pixel = sum * inv_spp;
         if let Some(aov) = aov {
-            aov.fill_sampling(selection, spp, variance.map(|v| v.variance()));
+            let variance = variance.map(|(estimate, moment)| moment.variance(estimate.count()));
+            aov.fill_sampling(selection, spp, variance);
         }
     }
 }
