@@ -388,7 +388,7 @@ fn renders_larger_than_free_memory_are_refused_before_they_start() {
     };
     let out = common::tmp(&dir, "a.exr");
     let out = out.to_string_lossy();
-    // 20 000 pixels adaptively: about 232 bytes each and the pilot, 4.9 MB, against 2 MB free.
+    // 20 000 pixels adaptively: about 226 bytes each and the pilot, 4.5 MB, against 2 MB free.
     let adaptive = ["--target-error", "0.01"];
     let refused = render("2000000", &adaptive, &out);
     let stderr = String::from_utf8_lossy(&refused.stderr);

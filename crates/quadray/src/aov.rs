@@ -33,7 +33,7 @@ pub struct AovSelection {
     pub object_id: bool,
     /// Samples the pixel received (the same everywhere unless sampling is adaptive).
     pub sample_count: bool,
-    /// Sample variance of the pixel's linear RGB samples ([`crate::film::PixelEstimate::variance`]).
+    /// Sample variance of the pixel's linear RGB samples ([`crate::film::SecondMoment::variance`]).
     pub variance: bool,
 }
 

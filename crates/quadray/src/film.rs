@@ -1,5 +1,6 @@
-//! The film: a linear f32 RGB image, its sRGB encoding for 8-bit outputs, and the running
-//! per-pixel estimate (mean, variance, error) that adaptive sampling decides by.
+//! The film: a linear f32 RGB image, its sRGB encoding for 8-bit outputs, the running per-pixel
+//! estimate (mean, error) that adaptive sampling decides by, and the samples' second moment the
+//! variance pass reads.
 
 use crate::colour::display_channels_eight;
 use glam::{DVec3, Vec3};
@@ -131,7 +132,8 @@ impl PixelEstimate {
     }
 
     /// [`PixelEstimate::add`] of the first `count` of eight samples in order, their display
-    /// encodings made together ([`display_channels_eight`]; the others are not added).
+    /// encodings made together ([`display_channels_eight`]; the others are not added), and,
+    /// given `moment`, their deviations to it.
     pub fn add_eight(
         &mut self,
         radiances: &[Vec3; 8],
@@ -145,7 +147,7 @@ impl PixelEstimate {
     }
 
     /// [`PixelEstimate::add`] of `count` samples of the same radiance (the background of a pixel
-    /// that sees nothing), encoded for display once.
+    /// that sees nothing), encoded for display once, and, given `moment`, their deviations to it.
     pub fn add_repeated(
         &mut self,
         radiance: Vec3,

@@ -26,11 +26,14 @@ const ADAPTIVE_BYTES: u64 = 180;
 const MOMENT_BYTES: u64 = 24;
 /// Bytes an adaptive render of a window smaller than what it samples (a crop, a piece: its
 /// border) adds for each pixel of the window: the copies of their estimates and state it cuts
-/// out of the bordered arrays at the end.
+/// out of the bordered arrays at the end (measured with 152-byte estimates, so it errs on the
+/// safe side now; the moments' copies, under the variance pass, are [`MOMENT_BYTES`] more).
 const CROP_BYTES: u64 = 176;
 /// Bytes a pilot pixel holds (its estimate, passes and round bits; its twin and its second
 /// moment are boxed).
 const PILOT_PIXEL_BYTES: u64 = 224;
+/// Bytes a pilot pixel's boxed second moment takes on the heap, under the variance pass.
+const PILOT_MOMENT_BYTES: u64 = 32;
 
 /// The memory a render holds for its pixels ([`pixel_memory`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,17 +59,19 @@ pub fn pixel_memory(
     let working = settings.adaptive.map_or(0, |adaptive| {
         let (width, height) = (settings.width, settings.height);
         let sampled = sampled_window(window, &adaptive, width, height);
+        // The variance pass keeps each pixel's second moment beside its estimate.
+        let moment = |bytes: u64| if selection.variance { bytes } else { 0 };
         let crop = if sampled == window {
             0
         } else {
-            pixels(window) * CROP_BYTES
+            pixels(window) * (CROP_BYTES + moment(MOMENT_BYTES))
         };
         // The pilot covers the whole image, whatever the window.
         let pilot = match adaptive.is_planned() {
-            true => pilot_pixels(width, height) * PILOT_PIXEL_BYTES,
+            true => pilot_pixels(width, height) * (PILOT_PIXEL_BYTES + moment(PILOT_MOMENT_BYTES)),
             false => 0,
         };
-        let per_pixel = ADAPTIVE_BYTES + if selection.variance { MOMENT_BYTES } else { 0 };
+        let per_pixel = ADAPTIVE_BYTES + moment(MOMENT_BYTES);
         (pixels(sampled) * per_pixel).saturating_add(crop + pilot)
     });
     PixelMemory {

@@ -291,9 +291,13 @@ fn draw(
         calibration,
         (width, band),
     );
-    let totals = (weights.iter()).fold((0.0, 0.0, 0.0), |t, w| {
-        (t.0 + w.by_error, t.1 + w.by_contrast, t.2 + w.by_feature)
-    });
+    // Each summed in order: the same totals for any thread count.
+    let total = |weights: &[f64]| weights.iter().fold(0.0, |t, w| t + w);
+    let totals = (
+        total(&weights.by_error),
+        total(&weights.by_contrast),
+        total(&weights.by_feature),
+    );
     // A crop or a tile draws its share of the image's audit (at least a few pixels): auditing
     // every pixel of a 32x32 tile would triple its rays.
     let settings = context.settings;
@@ -307,14 +311,16 @@ fn draw(
         true => drawn * weight / total,
         false => 0.0,
     };
-    let chances: Vec<f64> = (weights.par_iter())
-        .map(|w| {
-            let error = part(by_error, w.by_error, totals.0);
-            let contrast = part(by_contrast, w.by_contrast, totals.1);
-            (error + contrast + part(by_feature, w.by_feature, totals.2) + uniform).min(1.0)
+    let chances: Vec<f64> = (weights.by_error.par_iter())
+        .zip(&weights.by_contrast)
+        .zip(&weights.by_feature)
+        .map(|((&w_error, &w_contrast), &w_feature)| {
+            let error = part(by_error, w_error, totals.0);
+            let contrast = part(by_contrast, w_contrast, totals.1);
+            (error + contrast + part(by_feature, w_feature, totals.2) + uniform).min(1.0)
         })
         .collect();
-    let set_counts = set_counts(estimates, &weights, &chances);
+    let set_counts = set_counts(&weights, &chances);
     Draw {
         chances,
         set_counts,
@@ -327,21 +333,19 @@ fn draw(
 /// estimates). The floor is [`AUDIT_MIN_SAMPLES`], halved until the samples it adds to the
 /// pixels drawn with `chances` are at most [`AUDIT_SHARE`] of the render's in expectation, down
 /// to none (each pixel's own count).
-fn set_counts(estimates: &[PixelEstimate], weights: &[Weights], chances: &[f64]) -> Vec<u32> {
-    // Each pixel's own count, read once in parallel: the serial sums below then read 4 bytes a
-    // pixel instead of striding through the estimates (at 3840x2160, 0.11 -> 0.04 s).
-    let own: Vec<u32> = estimates.par_iter().map(PixelEstimate::count).collect();
+fn set_counts(weights: &Weights, chances: &[f64]) -> Vec<u32> {
+    let own = &weights.counts;
     // A sum of whole numbers below 2^53: exact in f64, in any order.
     let rendered = own.par_iter().map(|&c| u64::from(c)).sum::<u64>() as f64;
-    let count = |own: u32, w: &Weights, floor: u32| match w.plain {
+    let count = |own: u32, plain: bool, floor: u32| match plain {
         true => own,
         false => own.max(floor),
     };
     // The samples `floor` adds to the pixels' own counts, in expectation (summed in order: the
     // same floor for any thread count).
     let added = |floor: u32| -> f64 {
-        (own.iter().zip(weights).zip(chances))
-            .map(|((&c, w), p)| p * 2.0 * (count(c, w, floor) - c) as f64)
+        (own.iter().zip(&weights.plain).zip(chances))
+            .map(|((&c, &plain), p)| p * 2.0 * (count(c, plain, floor) - c) as f64)
             .sum()
     };
     let mut floor = AUDIT_MIN_SAMPLES;
@@ -349,54 +353,66 @@ fn set_counts(estimates: &[PixelEstimate], weights: &[Weights], chances: &[f64])
         floor /= 2;
     }
     let floor = if floor > 1 { floor } else { 0 };
-    (own.par_iter().zip(weights))
-        .map(|(&c, w)| count(c, w, floor))
+    (own.par_iter().zip(&weights.plain))
+        .map(|(&c, &plain)| count(c, plain, floor))
         .collect()
 }
 
-/// A pixel's weights in the audit's draws.
+/// The pixels' weights in the audit's draws, and what the sets' counts are made from: one entry
+/// a pixel in each array (arrays, not a 32-byte record a pixel: the contrasts' own arrays are
+/// reused, and the fresh memory a draw faults in, about 2 µs a page here, is a quarter).
 struct Weights {
-    /// Its calibrated squared error over the root of its rays.
-    by_error: f64,
-    /// Its flat contrast over the root of its rays.
-    by_contrast: f64,
-    /// Its contrast with a line it lies across ([`feature_contrasts`]), at most
+    /// Each pixel's calibrated squared error over the root of its rays.
+    by_error: Vec<f64>,
+    /// Each pixel's flat contrast over the root of its rays.
+    by_contrast: Vec<f64>,
+    /// Each pixel's contrast with a line it lies across ([`feature_contrasts`]), at most
     /// [`FEATURE_CAP`], over the root of its rays.
-    by_feature: f64,
-    /// Whether it is flat with no flat neighbour of another value.
-    plain: bool,
+    by_feature: Vec<f64>,
+    /// Whether each pixel is flat with no flat neighbour of another value.
+    plain: Vec<bool>,
+    /// Each pixel's own count, read once: the serial sums of [`set_counts`] then read 4 bytes a
+    /// pixel instead of striding through the estimates (at 3840x2160, 0.11 -> 0.04 s).
+    counts: Vec<u32>,
 }
 
-/// Each pixel's [`Weights`], for the pixels `estimates` (row-major, `width` wide, in bands of
-/// `band` rows: [`flat_contrasts`]) having traced `rays`, whose batch-means squared errors are
+/// The [`Weights`] of the pixels `estimates` (row-major, `width` wide, in bands of `band` rows:
+/// [`flat_contrasts`]) having traced `rays`, whose batch-means squared errors are
 /// `squared_errors`.
 fn draw_weights(
     (estimates, rays): (&[PixelEstimate], &[u64]),
     squared_errors: &[f64],
     calibration: &Calibration,
     (width, band): (usize, usize),
-) -> Vec<Weights> {
+) -> Weights {
     debug_assert!(
         (squared_errors.iter().zip(estimates))
             .all(|(s, e)| s.to_bits() == e.squared_error().to_bits()),
         "the squared errors given are the estimates' own"
     );
-    let contrasts = flat_contrasts(estimates, squared_errors, (width, band));
-    let features = feature_contrasts(estimates, squared_errors, (width, band));
-    (estimates.par_iter().zip(rays))
-        .zip(squared_errors.par_iter().zip(contrasts))
-        .zip(features)
-        .map(|(((e, &r), (&squared_error, contrast)), feature)| {
+    // Each contrast becomes its weight in place.
+    let mut by_contrast = flat_contrasts(estimates, squared_errors, (width, band));
+    let mut by_feature = feature_contrasts(estimates, squared_errors, (width, band));
+    let (by_error, (plain, counts)) = (estimates.par_iter().zip(rays))
+        .zip(squared_errors)
+        .zip(by_contrast.par_iter_mut().zip(by_feature.par_iter_mut()))
+        .map(|(((e, &r), &squared_error), (contrast, feature))| {
             let root = (r.max(1) as f64).sqrt();
             let by_error = calibration.corrected(e.count(), squared_error).max(0.0) / root;
-            Weights {
-                by_error: if by_error.is_finite() { by_error } else { 0.0 },
-                by_contrast: contrast / root,
-                by_feature: feature.min(FEATURE_CAP) / root,
-                plain: is_flat_error(squared_error) && contrast == 0.0 && feature == 0.0,
-            }
+            let plain = is_flat_error(squared_error) && *contrast == 0.0 && *feature == 0.0;
+            *contrast /= root;
+            *feature = feature.min(FEATURE_CAP) / root;
+            let by_error = if by_error.is_finite() { by_error } else { 0.0 };
+            (by_error, (plain, e.count()))
         })
-        .collect()
+        .unzip();
+    Weights {
+        by_error,
+        by_contrast,
+        by_feature,
+        plain,
+        counts,
+    }
 }
 
 #[cfg(test)]

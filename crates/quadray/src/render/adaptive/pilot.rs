@@ -54,7 +54,7 @@ pub(super) struct PilotPixel {
     pub rounds: u64,
     /// Its twin, if it got one after its first round ([`calibration`]): boxed, since about
     /// 1500 of the pilot's pixels have one and a twin is two estimates (a pilot pixel takes
-    /// 224 bytes, 480 with the twin inline: 116 MB against 249 MB at 3840x2160).
+    /// 224 bytes, 488 with the twin inline: 116 MB against 253 MB at 3840x2160).
     pub twin: Option<Box<Twin>>,
 }
 

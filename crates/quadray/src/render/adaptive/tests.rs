@@ -478,3 +478,72 @@ fn bad_settings_are_refused() {
     assert_eq!(settings(ok).validate(), Ok(()));
     assert_eq!(settings(ok.with_min_spp(2)).validate(), Ok(()));
 }
+
+/// The variance pass of an adaptive render is every pixel's sample variance over all the
+/// samples it took, bit for bit: each pixel of a whole render and of a crop (its border, the
+/// pilot's pixels copied in, background pixels whose samples are added without tracing), under
+/// both rules, equals the moment of its sequence's samples to its count traced one by one (not
+/// through the rounds' batches, so a batch that misses the moment fails it).
+#[test]
+fn the_variance_pass_holds_every_samples_deviation() {
+    let scene = disc();
+    let crop = PixelWindow {
+        x0: 7,
+        y0: 3,
+        x1: 41,
+        y1: 30,
+    };
+    for rule in [ErrorRule::Image, ErrorRule::Pixel] {
+        let adaptive = Adaptive {
+            target_error: if rule == ErrorRule::Image {
+                0.002
+            } else {
+                0.02
+            },
+            rule,
+            max_spp: 256,
+            ..Adaptive::default()
+        };
+        for window in [None, Some(crop)] {
+            let s = RenderSettings {
+                crop: window,
+                ..settings(adaptive)
+            };
+            let (rendered, aovs) =
+                render_with_aovs(&scene, &s, counts_pass(), &NoProgress).unwrap();
+            let aovs = aovs.unwrap();
+            let context = SampleContext::new(&scene, &s, AovSelection::NONE).unwrap();
+            let w = rendered.window;
+            let mut refined = 0;
+            for y in w.y0..w.y1 {
+                for x in w.x0..w.x1 {
+                    let pass = aovs.get(x - w.x0, y - w.y0);
+                    let (mut estimate, mut moment) = (PixelEstimate::default(), Default::default());
+                    let pattern = pixel_pattern(x, y, s.seed);
+                    let cone = context.sample_cone(adaptive.max_spp);
+                    for index in 0..pass.sample_count {
+                        let (dx, dy) = progressive_2d(index, pattern);
+                        let mut ray = [Ray::new(DVec3::ZERO, DVec3::ZERO)];
+                        context.camera_rays(&[[x as f64 + dx, y as f64 + dy]], &mut ray);
+                        let key = SampleKey {
+                            pattern,
+                            index,
+                            count: None,
+                        };
+                        let mut counts = RayCounts::default();
+                        let radiance = context.trace_ray(&ray[0], cone, key, None, &mut counts);
+                        estimate.add_with_moment(radiance, &mut moment);
+                    }
+                    let want = moment.variance(pass.sample_count);
+                    let case = format!("{rule:?} {window:?} ({x}, {y})");
+                    assert_eq!(pass.variance.to_array(), want.to_array(), "{case}");
+                    refined += (pass.sample_count > adaptive.min_spp) as u32;
+                }
+            }
+            assert!(
+                refined > 50,
+                "{rule:?} {window:?}: {refined} pixels refined"
+            );
+        }
+    }
+}

@@ -72,7 +72,10 @@ impl WindowState {
             targets: (0..pixels).into_par_iter().map(|_| min_spp).collect(),
             aov_samples: context.aov_buffer(),
             moments: match context.selection.variance {
-                true => vec![SecondMoment::default(); pixels],
+                true => (0..pixels)
+                    .into_par_iter()
+                    .map(|_| SecondMoment::default())
+                    .collect(),
                 false => Vec::new(),
             },
             pilot_rounds: vec![0; pixels],
