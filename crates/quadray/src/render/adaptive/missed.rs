@@ -195,14 +195,20 @@ pub(super) fn follow_neighbours(
     refine
         .par_chunks_mut(width)
         .enumerate()
-        .for_each(|(y, row)| {
+        .for_each_init(Vec::new, |column, (y, row)| {
             let (y0, y1) = (y.saturating_sub(1), (y + 1).min(height - 1));
+            // Whether each column of the three rows holds a marked pixel: most pixels have none
+            // in their three columns, which these tell without asking `follows` of each of the
+            // eight (1.6 ms a selection of the quadric grid at 480x270).
+            let rows = |x: usize| (y0..=y1).any(|ny| own[ny * width + x]);
+            column.clear();
+            column.extend((0..width).map(rows));
             for (x, wanted) in row.iter_mut().enumerate() {
-                if *wanted {
+                let (x0, x1) = (x.saturating_sub(1), (x + 1).min(width - 1));
+                if *wanted || !column[x0..=x1].contains(&true) {
                     continue;
                 }
                 let i = y * width + x;
-                let (x0, x1) = (x.saturating_sub(1), (x + 1).min(width - 1));
                 *wanted = (y0..=y1).any(|ny| {
                     (x0..=x1).any(|nx| {
                         let j = ny * width + nx;
