@@ -30,36 +30,52 @@ pub(super) fn flat_contrasts(
     squared_errors: &[f64],
     (width, band): (usize, usize),
 ) -> Vec<f64> {
+    flat_neighbours(
+        estimates,
+        squared_errors,
+        (width, band),
+        0.0,
+        |value, neighbours| {
+            (neighbours.into_iter().flatten())
+                .map(|other| ((other - value) as f64).powi(2))
+                .fold(0.0, f64::max)
+        },
+    )
+}
+
+/// `of` the display value of each flat pixel of `estimates` (as [`flat_contrasts`] reads them)
+/// and those of its flat 4-neighbours (left, right, up, down; `None` where a neighbour is not
+/// flat or not there); `none` for the others.
+fn flat_neighbours<T: Copy + Send + Sync>(
+    estimates: &[PixelEstimate],
+    squared_errors: &[f64],
+    (width, band): (usize, usize),
+    none: T,
+    of: impl Fn(f32, [Option<f32>; 4]) -> T + Sync,
+) -> Vec<T> {
     let flat: Vec<Option<f32>> = (estimates.par_iter().zip(squared_errors))
         .map(|(e, &s)| is_flat_error(s).then(|| e.mean_display_value()))
         .collect();
-    let mut contrasts = vec![0.0; flat.len()];
+    let mut out = vec![none; flat.len()];
     // Row by row, so that a pixel's column needs no division (a `%` per pixel was most of the
-    // cost); the neighbours in the order left, right, up, down.
+    // cost).
     let rows: Vec<&[Option<f32>]> = flat.chunks(width).collect();
-    contrasts
-        .par_chunks_mut(width)
-        .enumerate()
-        .for_each(|(y, out)| {
-            let row = rows[y];
-            let up = (y % band != 0).then(|| rows[y - 1]);
-            let down = ((y + 1) % band != 0)
-                .then(|| rows.get(y + 1).copied())
-                .flatten();
-            for (x, contrast) in out.iter_mut().enumerate() {
-                let Some(value) = row[x] else { continue };
-                let left = x.checked_sub(1).and_then(|x| row[x]);
-                let right = row.get(x + 1).copied().flatten();
-                let above = up.and_then(|r| r[x]);
-                let below = down.and_then(|r| r[x]);
-                *contrast = [left, right, above, below]
-                    .into_iter()
-                    .flatten()
-                    .map(|other| ((other - value) as f64).powi(2))
-                    .fold(0.0, f64::max);
-            }
-        });
-    contrasts
+    out.par_chunks_mut(width).enumerate().for_each(|(y, out)| {
+        let row = rows[y];
+        let up = (y % band != 0).then(|| rows[y - 1]);
+        let down = ((y + 1) % band != 0)
+            .then(|| rows.get(y + 1).copied())
+            .flatten();
+        for (x, out) in out.iter_mut().enumerate() {
+            let Some(value) = row[x] else { continue };
+            let left = x.checked_sub(1).and_then(|x| row[x]);
+            let right = row.get(x + 1).copied().flatten();
+            let above = up.and_then(|r| r[x]);
+            let below = down.and_then(|r| r[x]);
+            *out = of(value, [left, right, above, below]);
+        }
+    });
+    out
 }
 
 /// How far along a row or a column [`feature_contrasts`] looks, through quiet pixels, for the
@@ -171,16 +187,23 @@ fn larger(most: f64, v: f64) -> f64 {
     if v > most { v } else { most }
 }
 
-/// Marks each pixel whose flat contrast ([`flat_contrasts`]) is above [`SLIVER_CONTRAST`]².
+/// Marks each pixel whose flat contrast ([`flat_contrasts`]) is above [`SLIVER_CONTRAST`]²: one
+/// of its flat 4-neighbours' squared differences is (without the contrasts' array).
 pub(super) fn across_flat_edges(
     estimates: &[PixelEstimate],
     squared_errors: &[f64],
     width: usize,
 ) -> Vec<bool> {
     let least = (SLIVER_CONTRAST as f64).powi(2);
-    (flat_contrasts(estimates, squared_errors, (width, WHOLE)).into_iter())
-        .map(|c| c > least)
-        .collect()
+    flat_neighbours(
+        estimates,
+        squared_errors,
+        (width, WHOLE),
+        false,
+        |value, neighbours| {
+            (neighbours.into_iter().flatten()).any(|other| ((other - value) as f64).powi(2) > least)
+        },
+    )
 }
 
 /// Marks the pixels `own` marks, and in the neighbour rounds each pixel `i` one of whose eight
