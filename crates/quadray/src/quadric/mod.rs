@@ -14,6 +14,8 @@
 //! ([`solve_quadratic`]). Both roots are tested against the box, so the inside of an open surface
 //! shows through the clip opening. Normals come from the gradient ∇f = 2(Ap + b), which is right
 //! everywhere the surface is smooth, including where it is not a graph z = f(x, y).
+//!
+//! [`solve_quadratic`]: crate::math::solve_quadratic
 
 mod classify;
 mod conditioning;

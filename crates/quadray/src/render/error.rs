@@ -40,7 +40,7 @@ pub enum RenderError {
     /// The camera cannot produce rays at this aspect.
     #[error("camera: {0}")]
     Camera(crate::camera::CameraError),
-    /// [`Progress::cancelled`] asked to stop before the render finished.
+    /// [`crate::render::Progress::cancelled`] asked to stop before the render finished.
     #[error("the render was cancelled")]
     Cancelled,
 }

@@ -12,6 +12,8 @@ pub trait Progress: Sync {
 
     /// Whether the caller no longer wants the result (an interactive view that changed): rows
     /// not yet started are skipped and the render returns [`RenderError::Cancelled`].
+    ///
+    /// [`RenderError::Cancelled`]: crate::render::RenderError::Cancelled
     fn cancelled(&self) -> bool {
         false
     }

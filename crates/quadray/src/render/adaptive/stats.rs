@@ -7,6 +7,8 @@ use crate::film::PixelEstimate;
 use rayon::prelude::*;
 
 /// Where an adaptive render stands after a round (reported to [`Progress::round_done`]).
+///
+/// [`Progress::round_done`]: crate::render::Progress::round_done
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RoundSummary {
     /// The round just finished, from 0.
