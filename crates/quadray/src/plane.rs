@@ -65,22 +65,43 @@ impl Plane {
 
     /// Texture coordinates of a point on the plane: its 2-D frame around `point` (z = 0); height 0.
     pub fn texture_point(&self, point: DVec3) -> TexturePoint {
-        let offset = point - self.point;
-        let (u, v) = orthonormal_basis(self.normal);
-        TexturePoint {
-            local: DVec3::new(offset.dot(u), offset.dot(v), 0.0),
-            height: 0.0,
-        }
+        in_frame(self.frame(), point - self.point)
     }
 
     /// How the texture coordinates change along each of the vectors `along` (they are linear in
     /// the point), the plane's frame made once for both.
     pub fn texture_offsets(&self, along: [DVec3; 2]) -> [TexturePoint; 2] {
-        let (u, w) = orthonormal_basis(self.normal);
-        along.map(|v| TexturePoint {
-            local: DVec3::new(v.dot(u), v.dot(w), 0.0),
-            height: 0.0,
-        })
+        let frame = self.frame();
+        along.map(|v| in_frame(frame, v))
+    }
+
+    /// [`Plane::texture_point`] of `point` and [`Plane::texture_offsets`] along `along`, the
+    /// plane's frame made once for the three (a filtered texture asks for all of them).
+    pub fn texture_point_and_offsets(
+        &self,
+        point: DVec3,
+        along: [DVec3; 2],
+    ) -> (TexturePoint, [TexturePoint; 2]) {
+        let frame = self.frame();
+        (
+            in_frame(frame, point - self.point),
+            along.map(|v| in_frame(frame, v)),
+        )
+    }
+
+    /// The plane's texture frame: two unit vectors spanning it.
+    #[inline]
+    fn frame(&self) -> (DVec3, DVec3) {
+        orthonormal_basis(self.normal)
+    }
+}
+
+/// The texture coordinates of `offset` (a vector in the plane) in the plane's `frame`.
+#[inline]
+fn in_frame((u, v): (DVec3, DVec3), offset: DVec3) -> TexturePoint {
+    TexturePoint {
+        local: DVec3::new(offset.dot(u), offset.dot(v), 0.0),
+        height: 0.0,
     }
 }
 

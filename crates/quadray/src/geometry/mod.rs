@@ -284,6 +284,24 @@ impl Geometry {
         }
     }
 
+    /// [`Geometry::texture_point`] of `point` and [`Geometry::texture_offsets`] along `along`
+    /// together: a plane's frame made once for the three.
+    pub fn texture_point_and_offsets(
+        &self,
+        prim: PrimRef,
+        path: &InstancePath,
+        point: DVec3,
+        along: [DVec3; 2],
+    ) -> (TexturePoint, [TexturePoint; 2]) {
+        match prim.local {
+            LocalPrim::Plane(i) => self.planes[i as usize].texture_point_and_offsets(point, along),
+            _ => (
+                self.texture_point(prim, path, point),
+                self.texture_offsets(prim, path, along),
+            ),
+        }
+    }
+
     /// Interpolated vertex attributes at world-space `point` on `prim` (texture coordinates and
     /// colours exist only on meshes; other primitives get the defaults). Where `texcoords` says
     /// the caller will not read the texture coordinates (asked only on meshes), a mesh with no

@@ -10,7 +10,7 @@ use crate::material::Material;
 use crate::math::{Ray, offset_origin};
 use crate::mesh::Mesh;
 use crate::shape::{PrimRef, SurfaceGeometry, SurfaceHit};
-use crate::texture::{Texture, TextureExtent};
+use crate::texture::{Texture, TextureExtent, TexturePoint};
 use glam::Vec3;
 use validate::{validate_levels, validate_material};
 
@@ -348,10 +348,10 @@ impl Scene {
         let texcoords = || colour.texture().reads_texcoords();
         let attributes = self.geometry.attributes(hit.prim, path, point, texcoords);
         let texture_point = |filtered: bool| {
-            let centre = self.geometry.texture_point(hit.prim, path, point);
             if filtered && !footprint.is_point() {
-                (centre, self.texture_extent(hit, path, footprint))
+                self.filtered_texture_point(hit, path, footprint)
             } else {
+                let centre = self.geometry.texture_point(hit.prim, path, point);
                 (centre, TextureExtent::POINT)
             }
         };
@@ -361,19 +361,21 @@ impl Scene {
         }
     }
 
-    /// The extent in texture space of `footprint` around `hit`: the texture maps are affine, so
-    /// the footprint's axes carried into texture space span it. Out of line: only filtered
-    /// textures ask for it.
+    /// The texture point of `hit` and the extent in texture space of `footprint` around it: the
+    /// texture maps are affine, so the footprint's axes carried into texture space span it. Out
+    /// of line: only filtered textures ask for it.
     #[inline(never)]
-    fn texture_extent(
+    fn filtered_texture_point(
         &self,
         hit: &SurfaceHit,
         path: &InstancePath,
         footprint: &HitFootprint,
-    ) -> TextureExtent {
-        let (ax, ay) = footprint.axes(hit.geometry.geometric_normal);
-        let [along_x, along_y] = self.geometry.texture_offsets(hit.prim, path, [ax, ay]);
-        TextureExtent::spanned(&along_x, &along_y)
+    ) -> (TexturePoint, TextureExtent) {
+        let g = &hit.geometry;
+        let (ax, ay) = footprint.axes(g.geometric_normal);
+        let (centre, [along_x, along_y]) =
+            (self.geometry).texture_point_and_offsets(hit.prim, path, g.point, [ax, ay]);
+        (centre, TextureExtent::spanned(&along_x, &along_y))
     }
 
     /// The instances leading to `placement`: the world's own path (most of a scene's hits, which
