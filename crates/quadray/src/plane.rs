@@ -150,5 +150,12 @@ mod tests {
         let s = p.surface(&r, t);
         assert_eq!(p.texture_point(s.point).local.z, 0.0);
         assert!((s.point - p.point).dot(p.normal).abs() < 1e-14);
+        // The point and the offsets in one frame are each the ones asked apart, bit for bit.
+        let along = [DVec3::new(0.3, -0.2, 0.1), DVec3::new(-1e-3, 4e-3, 2.0)];
+        let (centre, offsets) = p.texture_point_and_offsets(s.point, along);
+        let bits = |t: TexturePoint| (t.local.to_array().map(f64::to_bits), t.height.to_bits());
+        assert_eq!(bits(centre), bits(p.texture_point(s.point)));
+        let apart = p.texture_offsets(along);
+        assert_eq!(offsets.map(bits), apart.map(bits));
     }
 }
