@@ -48,7 +48,7 @@ pub use settings::{
 pub use stats::{ErrorStats, PixelErrors, RoundSummary, SamplingStats, Stop, estimated_rmse};
 use std::borrow::Cow;
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 use window::WindowState;
 
@@ -102,43 +102,7 @@ pub(crate) fn render_adaptive(
     };
     let mut state = WindowState::new(rounds.context, plan.as_ref());
     let inner_context = context.with_window(inner).with_empty_tiles(&empty_tiles);
-    let mut round = 0u32;
-    let (stop, calibration) = loop {
-        rounds.sample(round, &mut state);
-        // A planned render takes its calibration from the pilot, and its reported error from the
-        // audit: twins of its own would only cost.
-        if round == 0 && plan.is_none() {
-            state.choose_twins(rounds.context);
-        }
-        rounds.sample_twins(&mut state);
-        if progress.cancelled() {
-            return Err(RenderError::Cancelled);
-        }
-        // The round's calibration, made once: the audit's reservation, the next round's choice
-        // (an unplanned render's, whose fallback is none), the round's summary and, after the
-        // last round, the audit read it. Choosing the next round fills no error it reads: after
-        // the first round only pilot pixels (a planned render's, which has no twins and takes
-        // the pilot's calibration) have errors still unknown.
-        let calibration = state.calibration_or(plan.as_ref().map(|p| &p.calibration));
-        rounds.keep_time_for_audit(&state, &inner_context, &calibration);
-        let next = match adaptive.rule {
-            ErrorRule::Pixel => state.select_by_pixel(adaptive, round + 1),
-            ErrorRule::Image => state.select_by_image(
-                (adaptive, plan.as_ref()),
-                round + 1,
-                &calibration,
-                |states, alpha| rounds.unplanned_step(states, alpha),
-            ),
-        };
-        progress.round_done(&state.summary(round, window, inner, adaptive, &calibration));
-        round += 1;
-        if let Err(stop) = next {
-            break (stop, calibration);
-        }
-        if rounds.timed_out.load(Ordering::Relaxed) || rounds.out_of_time() {
-            break (Stop::TimeLimit, calibration);
-        }
-    };
+    let (round, stop, calibration) = rounds.run(&mut state, plan.as_ref(), &inner_context)?;
     if let Some(plan) = &plan {
         *rounds.totals.lock().unwrap_or_else(|e| e.into_inner()) += plan.counts;
     }

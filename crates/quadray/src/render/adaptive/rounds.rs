@@ -3,11 +3,12 @@
 
 use super::audit::{self, AuditCost};
 use super::image_rule::{self, Aim, Budget, PixelState, Step};
+use super::pilot::Plan;
 use super::window::{WindowState, error_of};
-use super::{Adaptive, Calibration, InnerPixels, Stop, sample_pixel, sample_twin};
+use super::{Adaptive, Calibration, ErrorRule, InnerPixels, Stop, sample_pixel, sample_twin};
 use crate::film::SecondMoment;
 use crate::integrator::RayCounts;
-use crate::render::{PixelWindow, Progress, SampleContext};
+use crate::render::{PixelWindow, Progress, RenderError, SampleContext};
 use rayon::prelude::*;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -52,6 +53,57 @@ pub(super) fn rounds_time(limit: Duration, rays: f64, audit: AuditCost) -> Durat
 }
 
 impl Rounds<'_> {
+    /// Samples the rounds of the window in `state` until the rule stops them, a time limit
+    /// runs out or the caller cancels, under the pilot's `plan` where the render has one; the
+    /// rounds taken, why they stopped and the last round's calibration (which the audit of
+    /// `inner_context`'s window reads, as the reservation for it under a time limit does).
+    pub fn run(
+        &self,
+        state: &mut WindowState,
+        plan: Option<&Plan>,
+        inner_context: &SampleContext<'_>,
+    ) -> Result<(u32, Stop, Calibration), RenderError> {
+        let window = self.context.window;
+        let mut round = 0u32;
+        loop {
+            self.sample(round, state);
+            // A planned render takes its calibration from the pilot, and its reported error from
+            // the audit: twins of its own would only cost.
+            if round == 0 && plan.is_none() {
+                state.choose_twins(self.context);
+            }
+            self.sample_twins(state);
+            if self.progress.cancelled() {
+                return Err(RenderError::Cancelled);
+            }
+            // The round's calibration, made once: the audit's reservation, the next round's choice
+            // (an unplanned render's, whose fallback is none), the round's summary and, after the
+            // last round, the audit read it. Choosing the next round fills no error it reads: after
+            // the first round only pilot pixels (a planned render's, which has no twins and takes
+            // the pilot's calibration) have errors still unknown.
+            let calibration = state.calibration_or(plan.map(|p| &p.calibration));
+            self.keep_time_for_audit(state, inner_context, &calibration);
+            let next = match self.adaptive.rule {
+                ErrorRule::Pixel => state.select_by_pixel(self.adaptive, round + 1),
+                ErrorRule::Image => state.select_by_image(
+                    (self.adaptive, plan),
+                    round + 1,
+                    &calibration,
+                    |states, alpha| self.unplanned_step(states, alpha),
+                ),
+            };
+            let summary = state.summary(round, window, self.inner, self.adaptive, &calibration);
+            self.progress.round_done(&summary);
+            round += 1;
+            if let Err(stop) = next {
+                return Ok((round, stop, calibration));
+            }
+            if self.timed_out.load(Ordering::Relaxed) || self.out_of_time() {
+                return Ok((round, Stop::TimeLimit, calibration));
+            }
+        }
+    }
+
     /// The rounds' deadline under a time limit as [`Rounds::deadline_nanos`] gives it, initially
     /// the limit itself (`u64::MAX` without one).
     pub fn initial_deadline(adaptive: &Adaptive) -> AtomicU64 {
