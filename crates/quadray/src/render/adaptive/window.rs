@@ -177,42 +177,45 @@ impl WindowState {
         unplanned_step: impl FnOnce(&[PixelState], f64) -> Result<Step, Stop>,
     ) -> Result<(), Stop> {
         self.fill_unknown_errors();
-        // The step, and the calibration it was decided with.
-        let (step, calibration) = match plan {
+        // The step, the calibration it was decided with, and the states an unplanned step was
+        // chosen from (a planned render's are made on the way below: a vector of states faulted
+        // in 24 bytes a pixel of fresh memory every round).
+        let (step, calibration, states) = match plan {
             Some(plan) => {
                 let decision = plan.decisions.get(round as usize - 1);
-                decision.copied().ok_or(plan.stop)?
+                let (step, calibration) = decision.copied().ok_or(plan.stop)?;
+                (step, calibration, None)
             }
-            None => (
-                unplanned_step(&self.states(calibration), calibration.alpha)?,
-                *calibration,
-            ),
+            None => {
+                let states = self.states(calibration);
+                let step = unplanned_step(&states, calibration.alpha)?;
+                (step, *calibration, Some(states))
+            }
         };
         let max_spp = adaptive.max_spp;
-        // Each pixel's own target and its state's count, the pixel's state made on the way
-        // (a vector of states faulted in 24 bytes a pixel of fresh memory every round); pilot
-        // pixels hold their samples already, and count as refined by their own estimate in the
-        // rounds that sampled them.
-        let (mut targets, counts): (Vec<u32>, Vec<u32>) = (self.estimates.par_iter())
-            .zip(&self.errors)
-            .zip(&self.rays)
-            .zip(&self.pilot_rounds)
-            .map(|(((e, &estimated), &rays), &pilot)| {
-                let state = state_of((e.count(), estimated), rays, &calibration);
-                match pilot {
-                    0 => (step.target(&state, max_spp), state.count),
-                    _ => (0, state.count),
-                }
-            })
-            .unzip();
-        let own: Vec<bool> = (counts.par_iter())
-            .zip(&self.pilot_rounds)
-            .zip(&targets)
-            .map(|((&count, &pilot), &target)| match pilot {
-                0 => target > count,
-                bits => bits >> round & 1 == 1,
-            })
-            .collect();
+        // Each pixel's own target, its state's count, and whether its own estimate refines it;
+        // pilot pixels hold their samples already, and count as refined by their own estimate in
+        // the rounds that sampled them.
+        let choose = |state: PixelState, pilot: u64| match pilot {
+            0 => {
+                let target = step.target(&state, max_spp);
+                (target, (state.count, target > state.count))
+            }
+            bits => (0, (state.count, bits >> round & 1 == 1)),
+        };
+        let (mut targets, (counts, own)): (Vec<u32>, (Vec<u32>, Vec<bool>)) = match states {
+            Some(states) => (states.into_par_iter().zip(&self.pilot_rounds))
+                .map(|(state, &pilot)| choose(state, pilot))
+                .unzip(),
+            None => (self.estimates.par_iter())
+                .zip(&self.errors)
+                .zip(&self.rays)
+                .zip(&self.pilot_rounds)
+                .map(|(((e, &estimated), &rays), &pilot)| {
+                    choose(state_of((e.count(), estimated), rays, &calibration), pilot)
+                })
+                .unzip(),
+        };
         // Pilot pixels follow neighbours and slivers too, unless the pilot followed neighbours
         // itself: a sparse pilot samples its pixels by their own estimates only, and a pilot
         // pixel whose first samples all missed an edge was left with them.
