@@ -138,21 +138,18 @@ impl SamplingStats {
         let first = parts.first()?.0;
         let error = first.error.map(|e| {
             let errors = || parts.iter().filter_map(|(s, _)| s.error);
+            // The windows that have pixel errors (all or none: the windows of one image share
+            // its rule).
+            let pixels: Vec<_> = (parts.iter())
+                .filter_map(|(s, n)| Some((s.error?.pixels?, *n)))
+                .collect();
             ErrorStats {
                 rule: e.rule,
                 target: e.target,
                 // Root of the pixel-weighted mean of the squares: the windows' MSEs add up.
                 estimated_rmse: weighted(&|s| s.error.map_or(0.0, |e| e.estimated_rmse.powi(2)))
                     .sqrt(),
-                // The windows that have pixel errors (all or none: the windows of one image
-                // share its rule).
-                pixels: Some(
-                    (parts.iter())
-                        .filter_map(|(s, n)| Some((s.error?.pixels?, *n)))
-                        .collect::<Vec<_>>(),
-                )
-                .filter(|pixels| !pixels.is_empty())
-                .map(|pixels| PixelErrors::merged(&pixels)),
+                pixels: (!pixels.is_empty()).then(|| PixelErrors::merged(&pixels)),
                 rounds: errors().map(|e| e.rounds).max().unwrap_or(0),
                 // The stop of the window that fell shortest: a time limit over a maximum count
                 // over convergence.
