@@ -201,27 +201,19 @@ fn sample_sequence(
             count: None,
         };
         let traced = (end - start) as usize;
-        match aov.as_deref_mut() {
-            // The pixel's first sample fills its passes.
+        // The pixel's first sample fills its passes, traced alone; the rest of the batch in one
+        // call, as the uniform renderer traces its own.
+        let alone = match aov.as_deref_mut() {
             Some(aov) if start == 0 => {
                 radiances[0] = context.trace_ray(&rays[0], cone, key(0), Some(aov), counts);
-                let rest = 1..traced;
-                let keys = |k: usize| key(k as u32 + 1);
-                context.trace_rays(
-                    &rays[rest.clone()],
-                    cone,
-                    keys,
-                    counts,
-                    &mut radiances[rest],
-                );
+                1
             }
-            // One call for the batch, as the uniform renderer traces its own.
-            _ => {
-                let keys = |k: usize| key(start + k as u32);
-                let (rays, radiances) = (&rays[..traced], &mut radiances[..traced]);
-                context.trace_rays(rays, cone, keys, counts, radiances);
-            }
-        }
+            _ => 0,
+        };
+        let rest = alone..traced;
+        let keys = |k: usize| key(start + (alone + k) as u32);
+        let radiances_rest = &mut radiances[rest.clone()];
+        context.trace_rays(&rays[rest], cone, keys, counts, radiances_rest);
         estimate.add_eight(&radiances, traced, moment.as_deref_mut());
     }
 }
