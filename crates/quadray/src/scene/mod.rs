@@ -1,6 +1,6 @@
 //! A validated, immutable scene: camera, materials, lights, geometry and its BVH.
 
-use crate::accel::{Accel, EyeBuffer, LightBuffer, max_abs_coordinate};
+use crate::accel::{Accel, EyeBuffer, LightBuffer};
 use crate::camera::{Camera, CameraError, Projection};
 use crate::footprint::HitFootprint;
 use crate::geometry::Geometry;
@@ -12,7 +12,7 @@ use crate::mesh::Mesh;
 use crate::shape::{PrimRef, SurfaceGeometry, SurfaceHit};
 use crate::texture::{Texture, TextureExtent, TexturePoint};
 use glam::Vec3;
-use validate::{validate_levels, validate_material};
+use validate::{checked_layout, validate_description};
 
 pub use crate::math::MAX_COORDINATE;
 
@@ -147,76 +147,8 @@ fn invalid(what: impl Into<String>, problem: impl Into<String>) -> SceneError {
 impl Scene {
     /// Validates a description and builds its BVH.
     pub fn new(mut d: SceneDescription) -> Result<Scene, SceneError> {
-        d.camera.prepare(1.0)?;
-        if !d.background.is_finite() || d.background.min_element() < 0.0 {
-            return Err(invalid("background", "must be finite and non-negative"));
-        }
-        if d.environment
-            .is_some_and(|e| !e.is_finite() || e.min_element() < 0.0)
-        {
-            return Err(invalid("environment", "must be finite and non-negative"));
-        }
-        for (i, m) in d.materials.iter().enumerate() {
-            validate_material(m).map_err(|p| invalid(format!("material {i}"), p))?;
-        }
-        for (what, id) in d.geometry.materials_used() {
-            if id as usize >= d.materials.len() {
-                return Err(SceneError::MaterialOutOfRange {
-                    what,
-                    id,
-                    count: d.materials.len(),
-                });
-            }
-        }
-        validate_levels(&mut d.geometry)?;
-        for (i, p) in d.geometry.planes.iter().enumerate() {
-            if !(p.point.is_finite()
-                && p.normal.is_finite()
-                && (p.normal.length() - 1.0).abs() < 1e-9)
-            {
-                return Err(invalid(
-                    format!("plane {i}"),
-                    "point must be finite and normal unit length",
-                ));
-            }
-        }
-        let placements = crate::geometry::instance::Placements::new(&d.geometry)?;
-        for (i, l) in d.lights.iter().enumerate() {
-            l.validate().map_err(|p| invalid(format!("light {i}"), p))?;
-        }
-        let mut origins = vec![d.camera.from, d.camera.to];
-        if let Projection::Orthographic { height } = d.camera.projection {
-            // The image plane can reach this far from `from` (any aspect up to the documented maximum).
-            origins
-                .push(d.camera.from.abs() + glam::DVec3::splat(height * crate::limits::MAX_ASPECT));
-        }
-        let origin_extent = max_abs_coordinate(&origins);
-        // Planes are not in the BVHs' boxes, but their points enter the same f32 arithmetic of
-        // ray offsets and textures: the same limit.
-        for (i, plane) in d.geometry.planes.iter().enumerate() {
-            let far = plane.point.abs().max_element();
-            if far.is_nan() || far > MAX_COORDINATE {
-                return Err(invalid(
-                    format!("plane {i}"),
-                    format!(
-                        "its point lies {far:e} from the origin; quadray supports magnitudes up \
-                         to {MAX_COORDINATE:e}"
-                    ),
-                ));
-            }
-        }
-        // The BVHs hold f32 boxes: coordinates of shapes (in their level and as placed) and of the
-        // camera must stay well inside f32's range, or boxes become infinite.
-        let layout = crate::accel::Layout::new(&d.geometry, Some(placements));
-        let extent = layout.coordinate_extent(origin_extent);
-        if extent.is_nan() || extent > MAX_COORDINATE {
-            return Err(invalid(
-                "geometry",
-                format!(
-                    "coordinates reach {extent:e}; quadray supports magnitudes up to {MAX_COORDINATE:e} (its BVHs use f32 boxes)"
-                ),
-            ));
-        }
+        let placements = validate_description(&mut d)?;
+        let (layout, origin_extent) = checked_layout(&d, placements)?;
         let accel = Accel::build_with(&d.geometry, layout, origin_extent);
         let single_sided = (0..d.geometry.level_count())
             .any(|l| d.geometry.level(l).meshes.iter().any(Mesh::single_sided));

@@ -1,16 +1,103 @@
-//! Validation of a scene description: every level's spheres and instances, and materials with
-//! their textures. Values that would render as NaN or negative light are refused with the item
-//! they belong to.
+//! Validation of a scene description: the camera and backdrop, every level's spheres and
+//! instances, planes, lights, materials with their textures, and the reach of every coordinate.
+//! Values that would render as NaN or negative light are refused with the item they belong to.
 
-use super::{SceneError, invalid};
+use super::{MAX_COORDINATE, SceneDescription, SceneError, invalid};
+use crate::accel::{Layout, max_abs_coordinate};
+use crate::camera::Projection;
 use crate::geometry::Geometry;
+use crate::geometry::instance::Placements;
 use crate::material::Material;
 use crate::texture::Texture;
 use glam::Vec3;
 
+/// Checks everything a description holds but the reach of its coordinates: the camera, the
+/// background and environment, the materials and every reference to one, every level, the planes
+/// and the lights. Returns the instances' placements.
+pub(super) fn validate_description(d: &mut SceneDescription) -> Result<Placements, SceneError> {
+    d.camera.prepare(1.0)?;
+    if !d.background.is_finite() || d.background.min_element() < 0.0 {
+        return Err(invalid("background", "must be finite and non-negative"));
+    }
+    if d.environment
+        .is_some_and(|e| !e.is_finite() || e.min_element() < 0.0)
+    {
+        return Err(invalid("environment", "must be finite and non-negative"));
+    }
+    for (i, m) in d.materials.iter().enumerate() {
+        validate_material(m).map_err(|p| invalid(format!("material {i}"), p))?;
+    }
+    for (what, id) in d.geometry.materials_used() {
+        if id as usize >= d.materials.len() {
+            return Err(SceneError::MaterialOutOfRange {
+                what,
+                id,
+                count: d.materials.len(),
+            });
+        }
+    }
+    validate_levels(&mut d.geometry)?;
+    for (i, p) in d.geometry.planes.iter().enumerate() {
+        if !(p.point.is_finite() && p.normal.is_finite() && (p.normal.length() - 1.0).abs() < 1e-9)
+        {
+            return Err(invalid(
+                format!("plane {i}"),
+                "point must be finite and normal unit length",
+            ));
+        }
+    }
+    let placements = Placements::new(&d.geometry)?;
+    for (i, l) in d.lights.iter().enumerate() {
+        l.validate().map_err(|p| invalid(format!("light {i}"), p))?;
+    }
+    Ok(placements)
+}
+
+/// The BVHs' layout of a validated description, and the largest coordinate a camera ray can
+/// start at, once every coordinate is known to stay within [`MAX_COORDINATE`]: the BVHs hold f32
+/// boxes, so the coordinates of shapes (in their level and as placed) and of the camera must stay
+/// well inside f32's range, or boxes become infinite.
+pub(super) fn checked_layout(
+    d: &SceneDescription,
+    placements: Placements,
+) -> Result<(Layout, f64), SceneError> {
+    let mut origins = vec![d.camera.from, d.camera.to];
+    if let Projection::Orthographic { height } = d.camera.projection {
+        // The image plane can reach this far from `from` (any aspect up to the documented maximum).
+        origins.push(d.camera.from.abs() + glam::DVec3::splat(height * crate::limits::MAX_ASPECT));
+    }
+    let origin_extent = max_abs_coordinate(&origins);
+    // Planes are not in the BVHs' boxes, but their points enter the same f32 arithmetic of ray
+    // offsets and textures: the same limit.
+    for (i, plane) in d.geometry.planes.iter().enumerate() {
+        let far = plane.point.abs().max_element();
+        if far.is_nan() || far > MAX_COORDINATE {
+            return Err(invalid(
+                format!("plane {i}"),
+                format!(
+                    "its point lies {far:e} from the origin; quadray supports magnitudes up to \
+                     {MAX_COORDINATE:e}"
+                ),
+            ));
+        }
+    }
+    let layout = Layout::new(&d.geometry, Some(placements));
+    let extent = layout.coordinate_extent(origin_extent);
+    if extent.is_nan() || extent > MAX_COORDINATE {
+        return Err(invalid(
+            "geometry",
+            format!(
+                "coordinates reach {extent:e}; quadray supports magnitudes up to \
+                 {MAX_COORDINATE:e} (its BVHs use f32 boxes)"
+            ),
+        ));
+    }
+    Ok((layout, origin_extent))
+}
+
 /// Checks every level's spheres and instances, rebuilding each instance's inverse and normal
 /// matrix from its `to_world` alone, so they always match it.
-pub(super) fn validate_levels(g: &mut Geometry) -> Result<(), SceneError> {
+fn validate_levels(g: &mut Geometry) -> Result<(), SceneError> {
     let prototypes = g.prototypes.len();
     let mut levels: Vec<(
         String,
@@ -55,7 +142,7 @@ fn non_negative(c: Vec3) -> bool {
     c.is_finite() && c.min_element() >= 0.0
 }
 
-pub(super) fn validate_material(m: &Material) -> Result<(), String> {
+fn validate_material(m: &Material) -> Result<(), String> {
     for (name, v) in [
         ("ambient", m.ambient),
         ("diffuse", m.diffuse),
