@@ -374,6 +374,20 @@ impl Quadric {
     #[inline(always)]
     fn intersect_local(&self, local: Ray, t_max: f64, from_self: bool) -> Option<f64> {
         let Ray { origin: o, dir: d } = local;
+        if from_self {
+            let ad = self.a.times(d);
+            let a = d.dot(ad);
+            let beta = ad.dot(o) + self.b.dot(d);
+            let t = -2.0 * beta / a;
+            // Only a root ahead of the ray can be a re-hit: the box is asked only then (a shadow
+            // ray leaving a convex side never asks it). Within the box's interval or nothing, as
+            // after the slab test below (an empty or NaN interval holds no t).
+            if t > 0.0 {
+                let (lo, hi) = unit_cube_interval(unit_cube_slabs(o, d), t_max);
+                return (t >= lo && t <= hi).then_some(t);
+            }
+            return None;
+        }
         let slabs = unit_cube_slabs(o, d);
         let (lo, hi) = unit_cube_interval(slabs, t_max);
         // Also rejects NaN bounds (a zero direction).
@@ -382,11 +396,6 @@ impl Quadric {
         }
         let ad = self.a.times(d);
         let a = d.dot(ad);
-        if from_self {
-            let beta = ad.dot(o) + self.b.dot(d);
-            let t = -2.0 * beta / a;
-            return (t > 0.0 && t >= lo && t <= hi).then_some(t);
-        }
         // Re-origin at the box entry (or keep the origin when it is inside the box).
         let mut base = lo;
         let mut o = o + d * lo;

@@ -116,9 +116,11 @@ impl Accel {
         // No box test before the shapes' own: the BVH's robust slab test would cost about as
         // much as it saves (measured), and obvhs' single-box test is not widened for rounding.
         let level = g.level(0);
+        // The world primitive the ray was spawned on, if any: compared with each candidate.
+        let from_world = from.filter(|p| p.placement == 0).map(|p| p.local);
         candidates.iter().any(|&c| match c {
             Shape::Analytic(shape) => {
-                let from_self = from == Some(PrimRef::world(shape));
+                let from_self = from_world == Some(shape);
                 level.intersect(shape, ray, t_max, from_self).is_some()
             }
             Shape::Item(item) => self.occluded_world_item(g, item, ray, t_max, from),
