@@ -209,8 +209,9 @@ impl<'a> SampleContext<'a> {
         }
     }
 
-    /// The buffer's rows (all `None` when it is empty: no pass selected).
-    pub fn aov_rows<'b>(&self, buffer: &'b mut [AovSample]) -> Vec<Option<&'b mut [AovSample]>> {
+    /// The rows of a buffer of one value a window pixel, all `None` when it is empty (kept only
+    /// for a pass, or a rule, that is not asked for).
+    pub fn optional_rows<'b, T>(&self, buffer: &'b mut [T]) -> Vec<Option<&'b mut [T]>> {
         if buffer.is_empty() {
             (0..self.window.height()).map(|_| None).collect()
         } else {

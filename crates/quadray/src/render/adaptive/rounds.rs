@@ -6,7 +6,6 @@ use super::image_rule::{self, Aim, Budget, PixelState, Step};
 use super::pilot::Plan;
 use super::window::{WindowState, error_of};
 use super::{Adaptive, Calibration, ErrorRule, InnerPixels, Stop, sample_pixel, sample_twin};
-use crate::film::SecondMoment;
 use crate::integrator::RayCounts;
 use crate::render::{PixelWindow, Progress, RenderError, SampleContext};
 use rayon::prelude::*;
@@ -201,17 +200,11 @@ impl Rounds<'_> {
         let window = self.context.window;
         let ww = window.width() as usize;
         let rule = state.rule;
-        let mut aov_rows = self.context.aov_rows(&mut state.aov_samples);
-        // The moments are kept only for the variance pass (empty otherwise).
-        let mut moment_rows: Vec<Option<&mut [SecondMoment]>> = match state.moments.is_empty() {
-            true => (0..window.height()).map(|_| None).collect(),
-            false => state.moments.chunks_mut(ww).map(Some).collect(),
-        };
-        // The squared errors are kept apart only under the pixel rule (empty otherwise).
-        let mut squared_rows: Vec<Option<&mut [f64]>> = match state.squared.is_empty() {
-            true => (0..window.height()).map(|_| None).collect(),
-            false => state.squared.chunks_mut(ww).map(Some).collect(),
-        };
+        // The passes, the moments (the variance pass's) and the squared errors (the pixel
+        // rule's) are kept only where asked for.
+        let mut aov_rows = self.context.optional_rows(&mut state.aov_samples);
+        let mut moment_rows = self.context.optional_rows(&mut state.moments);
+        let mut squared_rows = self.context.optional_rows(&mut state.squared);
         state
             .estimates
             .par_chunks_mut(ww)

@@ -65,7 +65,7 @@ pub(super) fn render_uniform(
     let mut film = Film::new(window.width(), window.height());
     // Pass samples are allocated and computed only when a pass is selected.
     let mut aov_samples = context.aov_buffer();
-    let aov_rows = context.aov_rows(&mut aov_samples);
+    let aov_rows = context.optional_rows(&mut aov_samples);
     let (tiles, band_rows) = cut_into_tiles(&mut film, window, aov_rows);
     let totals = Mutex::new(RayCounts::default());
     let cone = context.sample_cone(settings.spp);
