@@ -187,7 +187,7 @@ impl WindowState {
                 (step, calibration, None)
             }
             None => {
-                let states = self.states(calibration);
+                let states: Vec<PixelState> = self.states(calibration).collect();
                 let step = unplanned_step(&states, calibration.alpha)?;
                 (step, *calibration, Some(states))
             }
@@ -207,13 +207,8 @@ impl WindowState {
             Some(states) => (states.into_par_iter().zip(&self.pilot_rounds))
                 .map(|(state, &pilot)| choose(state, pilot))
                 .unzip(),
-            None => (self.estimates.par_iter())
-                .zip(&self.errors)
-                .zip(&self.rays)
-                .zip(&self.pilot_rounds)
-                .map(|(((e, &estimated), &rays), &pilot)| {
-                    choose(state_of((e.count(), estimated), rays, &calibration), pilot)
-                })
+            None => (self.states(&calibration).zip(&self.pilot_rounds))
+                .map(|(state, &pilot)| choose(state, pilot))
                 .unzip(),
         };
         // Pilot pixels follow neighbours and slivers too, unless the pilot followed neighbours
@@ -254,14 +249,16 @@ impl WindowState {
     }
 
     /// Each pixel's state for the allocation under `calibration` (from the image rule's cached
-    /// squared errors).
-    fn states(&self, calibration: &Calibration) -> Vec<PixelState> {
+    /// squared errors), in pixel order.
+    fn states<'a>(
+        &'a self,
+        calibration: &'a Calibration,
+    ) -> impl IndexedParallelIterator<Item = PixelState> + 'a {
         self.estimates
             .par_iter()
             .zip(&self.errors)
             .zip(&self.rays)
             .map(|((e, &estimated), &r)| state_of((e.count(), estimated), r, calibration))
-            .collect()
     }
 
     /// The calibration from the window's own twins, backed by `fallback` at counts with too few.
