@@ -183,7 +183,9 @@ impl ShearedRay {
 
 /// The parameter where the f64 ray meets the plane of triangle (`v0`, `v1`, `v2`), or `fallback`
 /// when the ray is parallel to it: phase two's f64 refinement of an f32 hit.
-#[inline]
+// Inlined into the traversal's caller: as a call, its three vertices went through memory
+// (2% of a camera-rays-only kitchen frame's instructions).
+#[inline(always)]
 pub fn plane_t(origin: DVec3, dir: DVec3, v: [DVec3; 3], fallback: f64) -> f64 {
     let n = (v[1] - v[0]).cross(v[2] - v[0]);
     let t = n.dot(v[0] - origin) / n.dot(dir);
