@@ -3,12 +3,12 @@
 
 use crate::dielectric::{Attenuation, Transmission, fresnel, refract};
 use crate::footprint::{HitFootprint, RayCone};
-use crate::material::SpecularModel;
+use crate::material::{Material, SpecularModel};
 use crate::math::{Ray, offset_origin};
 use crate::microfacet::{MIRROR_ROUGHNESS, reflect_glossy, schlick};
 use crate::sampler::SampleKey;
 use crate::scene::{Scene, Seen};
-use crate::shape::{PrimRef, SurfaceHit};
+use crate::shape::{PrimRef, SurfaceGeometry, SurfaceHit};
 use glam::{DVec3, Vec3};
 use std::ops::AddAssign;
 
@@ -215,7 +215,6 @@ impl Whitted {
         counts: &mut RayCounts,
     ) -> Vec3 {
         let m = &scene.materials()[hit.material as usize];
-        let g = &hit.geometry;
         let incoming = ray.dir.normalize();
         // Without cones the footprint is a compile-time point, and so is everything cut from it.
         let distance = if CONES { hit.t * ray.dir.length() } else { 0.0 };
@@ -225,90 +224,37 @@ impl Whitted {
             HitFootprint::POINT
         };
         let base = scene.albedo(hit, &footprint);
-        let view = -incoming;
-        // Two-sided shading: face both normals towards the viewer.
-        let facing = if g.geometric_normal.dot(view) >= 0.0 {
-            1.0
-        } else {
-            -1.0
-        };
-        let ng = g.geometric_normal * facing;
-        let ns = g.shading_normal * facing;
-        // Glass splits what it does not reflect by Fresnel into light through it; the rest of
-        // the surface is the opaque material.
-        let glass = m
-            .transmission
-            .as_ref()
-            .filter(|_| GLASS)
-            .map(|t| Glass::at(t, incoming, (ns, ng), facing > 0.0, base));
-        let opaque = glass.as_ref().map_or(1.0, |g| 1.0 - g.transmission.factor);
-        // glTF's model weighs the mirror by Schlick's Fresnel, not by `reflectivity`, and takes
-        // what it reflects from the diffuse and ambient terms (which already carry the
-        // metalness): (1 − F) at the view, F's largest channel (grey for a dielectric, the only
-        // kind with a diffuse term). Glass keeps its exact Fresnel split instead.
-        let ggx = m.specular_model == SpecularModel::Ggx && glass.is_none();
-        let view_fresnel = if ggx {
-            schlick(m.fresnel_f0(base), view.dot(ns))
-        } else {
-            Vec3::ZERO
-        };
-        let matte = if ggx {
-            1.0 - view_fresnel.max_element()
-        } else {
-            (1.0 - m.reflectivity) * opaque
-        };
-        let mut color = base * (m.ambient * matte);
+        let s = Shading::at::<GLASS>(m, &hit.geometry, incoming, base);
+        let mut color = base * (m.ambient * s.matte);
         if m.emission.is_some() {
             color += scene.emitted(hit, &footprint);
         }
 
-        color = self.direct_light::<GLASS>(scene, hit, base, (ns, ng, view), matte, color, counts);
+        let normals = (s.ns, s.ng, s.view);
+        color = self.direct_light::<GLASS>(scene, hit, base, normals, s.matte, color, counts);
 
         // The mirror: the opaque share's reflectivity, plus the Fresnel share of glass.
-        let (mirror, mirror_share) = match &glass {
-            None if ggx => (view_fresnel, view_fresnel.max_element()),
+        let (mirror, mirror_share) = match &s.glass {
+            None if s.ggx => (s.view_fresnel, s.view_fresnel.max_element()),
             None => (m.reflection_color(base), m.reflectivity),
             Some(g) => {
-                let mirror = m.reflection_color(base) * opaque + Vec3::splat(g.reflected);
+                let mirror = m.reflection_color(base) * s.opaque + Vec3::splat(g.reflected);
                 (mirror, mirror.max_element())
             }
         };
         let weight = throughput * mirror_share;
         if mirror_share > 0.0 && depth < self.max_depth && weight >= self.min_throughput {
-            let reflection = if m.roughness < MIRROR_ROUGHNESS {
-                let mut dir = reflect(incoming, ns);
-                // An interpolated normal can mirror the ray into the surface; fall back to the
-                // true normal.
-                if dir.dot(ng) <= 0.0 {
-                    dir = reflect(incoming, ng);
-                }
-                Some((dir, mirror))
-            } else {
-                // One ray from the GGX lobe, drawn with this sample's point for this bounce; a
-                // microfacet that sends it below the surface reflects nothing for this sample.
-                let alpha = (m.roughness * m.roughness) as f64;
-                reflect_glossy(incoming, ns, alpha, key.bounce(depth))
-                    .filter(|(dir, _)| dir.dot(ng) > 0.0)
-                    .map(|(dir, masking)| {
-                        // glTF's Fresnel is the microfacet's: at the half vector of view and ray.
-                        let fresnel = if ggx {
-                            schlick(m.fresnel_f0(base), view.dot((view + dir).normalize()))
-                        } else {
-                            mirror
-                        };
-                        (dir, fresnel * masking)
-                    })
-            };
-            if let Some((dir, mirror)) = reflection {
+            let g = &hit.geometry;
+            if let Some((dir, mirror)) = s.mirror_ray(m, base, mirror, key, depth) {
                 counts.reflection += 1;
-                let reflected = Ray::new(offset_origin(g.point, ng, g.error, dir), dir);
+                let reflected = Ray::new(offset_origin(g.point, s.ng, g.error, dir), dir);
                 let reflected_cone = if CONES {
                     cone.reflected(distance, scene.curvature(hit))
                 } else {
                     RayCone::POINT
                 };
                 // Reflected inside a solid, the ray stays in it.
-                let medium = glass.as_ref().and_then(|g| g.inside_after_reflection());
+                let medium = s.glass.as_ref().and_then(|g| g.inside_after_reflection());
                 color += self.radiance::<CONES, GLASS>(
                     scene,
                     &reflected,
@@ -323,7 +269,7 @@ impl Whitted {
                 ) * mirror;
             }
         }
-        if let Some(glass) = &glass {
+        if let Some(glass) = &s.glass {
             color += self.refracted::<CONES>(
                 scene, ray, cone, hit, depth, throughput, glass, backdrop, key, counts,
             );
@@ -451,6 +397,125 @@ impl Whitted {
             key,
             counts,
         ) * glass.through
+    }
+}
+
+/// What the terms of a hit's shading share: the directions, turned towards the viewer, and how
+/// the surface splits light between glass, mirror and matte.
+struct Shading {
+    /// Unit direction of the arriving ray.
+    incoming: DVec3,
+    /// Unit direction back towards the viewer.
+    view: DVec3,
+    /// The shading normal, on the viewer's side.
+    ns: DVec3,
+    /// The geometric normal, on the viewer's side.
+    ng: DVec3,
+    /// The glass split, for a transmissive material (in scenes with glass).
+    glass: Option<Glass>,
+    /// The share of the surface that is not glass.
+    opaque: f32,
+    /// Whether the surface follows glTF's model (GGX highlights, Schlick's Fresnel), glass aside.
+    ggx: bool,
+    /// Schlick's Fresnel at the view for `ggx`, else zero.
+    view_fresnel: Vec3,
+    /// The weight of the ambient and diffuse terms.
+    matte: f32,
+}
+
+impl Shading {
+    /// The shading of material `m` at a hit of geometry `g`, seen along unit `incoming`, with
+    /// base colour `base` (through glass only when `GLASS`).
+    #[inline(always)]
+    fn at<const GLASS: bool>(
+        m: &Material,
+        g: &SurfaceGeometry,
+        incoming: DVec3,
+        base: Vec3,
+    ) -> Shading {
+        let view = -incoming;
+        // Two-sided shading: face both normals towards the viewer.
+        let facing = if g.geometric_normal.dot(view) >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        let ng = g.geometric_normal * facing;
+        let ns = g.shading_normal * facing;
+        // Glass splits what it does not reflect by Fresnel into light through it; the rest of
+        // the surface is the opaque material.
+        let glass = m
+            .transmission
+            .as_ref()
+            .filter(|_| GLASS)
+            .map(|t| Glass::at(t, incoming, (ns, ng), facing > 0.0, base));
+        let opaque = glass.as_ref().map_or(1.0, |g| 1.0 - g.transmission.factor);
+        // glTF's model weighs the mirror by Schlick's Fresnel, not by `reflectivity`, and takes
+        // what it reflects from the diffuse and ambient terms (which already carry the
+        // metalness): (1 − F) at the view, F's largest channel (grey for a dielectric, the only
+        // kind with a diffuse term). Glass keeps its exact Fresnel split instead.
+        let ggx = m.specular_model == SpecularModel::Ggx && glass.is_none();
+        let view_fresnel = if ggx {
+            schlick(m.fresnel_f0(base), view.dot(ns))
+        } else {
+            Vec3::ZERO
+        };
+        let matte = if ggx {
+            1.0 - view_fresnel.max_element()
+        } else {
+            (1.0 - m.reflectivity) * opaque
+        };
+        Shading {
+            incoming,
+            view,
+            ns,
+            ng,
+            glass,
+            opaque,
+            ggx,
+            view_fresnel,
+            matte,
+        }
+    }
+
+    /// The reflected ray's direction and the colour weighing what it brings back, for a mirror
+    /// of colour `mirror` (material `m`, base colour `base`): the mirror direction, or for a
+    /// rough material one ray from the GGX lobe, drawn with sample `key`'s point for the bounce
+    /// at `depth`. `None` when the drawn microfacet sends the ray below the surface.
+    #[inline(always)]
+    fn mirror_ray(
+        &self,
+        m: &Material,
+        base: Vec3,
+        mirror: Vec3,
+        key: SampleKey,
+        depth: u32,
+    ) -> Option<(DVec3, Vec3)> {
+        let (incoming, ns, ng) = (self.incoming, self.ns, self.ng);
+        if m.roughness < MIRROR_ROUGHNESS {
+            let mut dir = reflect(incoming, ns);
+            // An interpolated normal can mirror the ray into the surface; fall back to the true
+            // normal.
+            if dir.dot(ng) <= 0.0 {
+                dir = reflect(incoming, ng);
+            }
+            return Some((dir, mirror));
+        }
+        let alpha = (m.roughness * m.roughness) as f64;
+        reflect_glossy(incoming, ns, alpha, key.bounce(depth))
+            .filter(|(dir, _)| dir.dot(ng) > 0.0)
+            .map(|(dir, masking)| {
+                // glTF's Fresnel is the microfacet's: at the half vector of view and ray.
+                let fresnel = if self.ggx {
+                    schlick(
+                        m.fresnel_f0(base),
+                        self.view.dot((self.view + dir).normalize()),
+                    )
+                } else {
+                    mirror
+                };
+                (dir, fresnel * masking)
+            })
     }
 }
 
