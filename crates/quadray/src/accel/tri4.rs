@@ -1,9 +1,10 @@
 //! Four triangles in structure-of-arrays form, tested against one ray at once with the watertight
 //! test of [`crate::triangle`] in glam's `Vec4` (SSE2 on x86-64, NEON on aarch64).
 //!
-//! Each lane performs exactly the scalar test's operations in the same order, so a triangle gives
-//! the same answer in a block as alone, and shared edges stay watertight across blocks. Unused
-//! lanes hold NaN vertices, which no comparison accepts.
+//! Each lane performs exactly the scalar test's arithmetic in the same order (its sign test on
+//! the edge functions is written with a minimum and a maximum, which decide the same), so a
+//! triangle gives the same answer in a block as alone, and shared edges stay watertight across
+//! blocks. Unused lanes hold NaN vertices, which no comparison accepts.
 
 use crate::triangle::ShearedRay;
 use glam::{BVec4A, DVec3, Vec4};
@@ -141,9 +142,11 @@ impl Tri4 {
             v = Vec4::select(degenerate, f(ax, cy, ay, cx), v);
             w = Vec4::select(degenerate, f(bx, ay, by, ax), w);
         }
-        let negative = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
-        let positive = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
-        let inside = !(negative & positive);
+        // Signs mixed (some edge function below zero and some above): the least below zero and
+        // the greatest above, four comparisons fewer than testing each function. A lane with a
+        // NaN function (and so a NaN determinant and t) may pass here; the t test rejects it.
+        let mixed = u.min(v).min(w).cmplt(zero) & u.max(v).max(w).cmpgt(zero);
+        let inside = !mixed;
         // A block none of whose triangles holds the ray stops here, and one whose crossings all
         // lie at or beyond `t_max` stops below, before the bound on t's error. The lanes that go
         // on compute everything as before, so their answers are unchanged.
