@@ -165,27 +165,29 @@ impl Tri4 {
         if !candidate.any() {
             return BlockHits::NONE;
         }
-        // The bound on the error of t, as in the scalar test.
+        // In front of the origin, as in the scalar test: where all three sheared depths clearly
+        // are (by more than twice their rounding error), else by the bound on t's error. The
+        // first is the common case and cheaper, so the bound is computed only for the lanes it
+        // leaves: the same lanes as the scalar test's `t > δt || (…)` in either order.
         let max_z = az.abs().max(bz.abs()).max(cz.abs());
-        let max_x = ax.abs().max(bx.abs()).max(cx.abs());
-        let max_y = ay.abs().max(by.abs()).max(cy.abs());
-        let g2 = Vec4::splat(gamma32(2));
         let g3 = Vec4::splat(gamma32(3));
-        let g5 = Vec4::splat(gamma32(5));
         let delta_z = g3 * max_z;
-        let delta_x = g5 * (max_x + max_z_unscaled);
-        let delta_y = g5 * (max_y + max_z_unscaled);
-        let delta_e = Vec4::splat(2.0) * (g2 * max_x * max_y + delta_y * max_x + delta_x * max_y);
-        let max_e = u.abs().max(v.abs()).max(w.abs());
-        let delta_t = Vec4::splat(3.0)
-            * (g3 * max_e * max_z + delta_e * max_z + delta_z * max_e)
-            * inv_det.abs();
-        let mut valid = candidate & t.cmpgt(delta_t);
+        let min_z = az.min(bz).min(cz);
+        let mut valid = candidate & min_z.cmpgt(Vec4::splat(2.0) * delta_z) & t.cmpgt(zero);
         if (candidate & !valid).any() {
-            // Rejected by the bound on t's error: still in front of the origin if all three
-            // sheared depths clearly are (as in the scalar test). Rare, so off the common path.
-            let min_z = az.min(bz).min(cz);
-            valid |= candidate & min_z.cmpgt(Vec4::splat(2.0) * delta_z) & t.cmpgt(zero);
+            let max_x = ax.abs().max(bx.abs()).max(cx.abs());
+            let max_y = ay.abs().max(by.abs()).max(cy.abs());
+            let g2 = Vec4::splat(gamma32(2));
+            let g5 = Vec4::splat(gamma32(5));
+            let delta_x = g5 * (max_x + max_z_unscaled);
+            let delta_y = g5 * (max_y + max_z_unscaled);
+            let delta_e =
+                Vec4::splat(2.0) * (g2 * max_x * max_y + delta_y * max_x + delta_x * max_y);
+            let max_e = u.abs().max(v.abs()).max(w.abs());
+            let delta_t = Vec4::splat(3.0)
+                * (g3 * max_e * max_z + delta_e * max_z + delta_z * max_e)
+                * inv_det.abs();
+            valid |= candidate & t.cmpgt(delta_t);
         }
         BlockHits {
             valid: valid.bitmask(),
