@@ -1,6 +1,6 @@
 //! Rays, affine transforms and the numerically stable quadratic solver shared by all shapes.
 
-use glam::{DAffine3, DMat3, DVec3};
+use glam::{DAffine3, DMat3, DVec3, Vec3A};
 
 /// Largest coordinate magnitude a scene may reach, shapes as placed and camera alike (f32's range
 /// is 3.4·10³⁸; the margin covers box padding and ray spans).
@@ -8,6 +8,15 @@ pub const MAX_COORDINATE: f64 = 1e30;
 
 /// Unit roundoff of f64 (half an ulp of 1.0): every correctly rounded operation has relative error at most this.
 pub const F64_UNIT_ROUNDOFF: f64 = f64::EPSILON * 0.5;
+
+/// Whether every component of `a` and `b` is finite, in one comparison: x − x is 0 for a
+/// finite x and NaN otherwise (the ray queries check their f32 rays so, where three tests and
+/// branches a vector cost them about 2% of their instructions).
+#[inline(always)]
+#[allow(clippy::eq_op)] // x − x is the test itself.
+pub(crate) fn all_finite(a: Vec3A, b: Vec3A) -> bool {
+    ((a - a) + (b - b)).cmpeq(Vec3A::ZERO).all()
+}
 
 /// Higham's gamma(n) = n·u / (1 − n·u): the relative error bound of n chained roundings.
 #[inline]
@@ -255,6 +264,33 @@ pub fn orthonormal_basis(n: DVec3) -> (DVec3, DVec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `all_finite` agrees with testing each component, at the edges of f32's range.
+    #[test]
+    fn all_finite_tests_every_component() {
+        let values = [
+            0.0,
+            -0.0,
+            1.0,
+            -3.5e-45,
+            f32::MIN_POSITIVE,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        for (k, &x) in values.iter().enumerate() {
+            for lane in 0..6 {
+                let mut c = [0.5f32; 6];
+                c[lane] = x;
+                c[(lane + k) % 6] = values[(k * 7 + lane) % values.len()];
+                let (a, b) = (Vec3A::new(c[0], c[1], c[2]), Vec3A::new(c[3], c[4], c[5]));
+                let expected = c.iter().all(|v| v.is_finite());
+                assert_eq!(all_finite(a, b), expected, "{c:?}");
+            }
+        }
+    }
 
     #[test]
     fn floor_matches_the_library_bit_for_bit() {

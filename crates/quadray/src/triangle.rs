@@ -55,15 +55,15 @@ impl ShearedRay {
     #[inline]
     pub fn new(origin: Vec3, dir: Vec3) -> ShearedRay {
         let a = dir.abs();
-        let kz = if a.x > a.y {
-            if a.x > a.z { 0 } else { 2 }
+        // z the largest component, x and y the next two in cyclic order (written out rather than
+        // as two `% 3`: five instructions a ray query fewer).
+        let (kz, mut kx, mut ky) = if a.x > a.y {
+            if a.x > a.z { (0, 1, 2) } else { (2, 0, 1) }
         } else if a.y > a.z {
-            1
+            (1, 2, 0)
         } else {
-            2
+            (2, 0, 1)
         };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
         // Indexed as arrays: `Vec3`'s own indexing is a match on the index, a branch apiece.
         let (origin, dir) = (origin.to_array(), dir.to_array());
         // Keep the winding: swapping x and y when z points backwards preserves the triangle orientation.

@@ -330,7 +330,7 @@ fn pack_leaf(
 #[inline(always)]
 fn f32_rays(ray: &Ray) -> Option<(BoxRay, FilterRay)> {
     let (origin, dir) = (ray.origin.as_vec3a(), ray.dir.as_vec3a());
-    (origin.is_finite() && dir.is_finite())
+    crate::math::all_finite(origin, dir)
         .then(|| (BoxRay::new(origin, dir), FilterRay::new(origin, dir)))
 }
 

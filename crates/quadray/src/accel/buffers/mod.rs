@@ -192,7 +192,7 @@ impl Cube {
 /// ray beyond f32's range is "nothing", so the buffers leave such rays to it.
 #[inline(always)]
 fn finite_in_f32(ray: &crate::math::Ray) -> bool {
-    ray.origin.as_vec3a().is_finite() && ray.dir.as_vec3a().is_finite()
+    crate::math::all_finite(ray.origin.as_vec3a(), ray.dir.as_vec3a())
 }
 
 /// The relative box of `candidate` as listed from `point`: its padded box grown by `reach`, minus

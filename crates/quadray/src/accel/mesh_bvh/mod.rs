@@ -72,10 +72,11 @@ impl MeshRay {
     /// Prepares `origin + t·dir` for traversal (a ray that is not finite in f32 meets nothing).
     #[inline]
     pub(crate) fn new(origin: Vec3, dir: Vec3) -> MeshRay {
+        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
         MeshRay {
-            boxes: BoxRay::new(origin.into(), dir.into()),
+            boxes: BoxRay::new(o, d),
             sheared: ShearedRay::new(origin, dir),
-            finite: origin.is_finite() && dir.is_finite(),
+            finite: crate::math::all_finite(o, d),
         }
     }
 
