@@ -94,8 +94,8 @@ impl Tri4 {
     #[inline(always)]
     pub(crate) fn vertices(&self, lane: usize) -> [DVec3; 3] {
         // Masked to a lane, so the nine reads need no bounds checks: as nested closures with
-        // them, this was a call a vertex and 60 instructions a hit (3% of a camera-rays-only kitchen
-        // frame's instructions).
+        // them, this was a call a vertex and 60 instructions a hit (3% of a camera-rays-only
+        // kitchen frame's instructions).
         let lane = lane & 3;
         let v = &self.v;
         let at = |row: usize| v[row][lane] as f64;
