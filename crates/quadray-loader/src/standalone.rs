@@ -4,7 +4,7 @@
 
 use crate::error::{LoadError, LoadErrorKind};
 use crate::framing::{default_key_light, framing_camera, framing_points};
-use crate::import::{Imported, Selector};
+use crate::import::{Imported, ImportedCamera, Selector};
 use crate::native::{LoadedScene, SceneSettings};
 use glam::Vec3;
 use quadray::SceneDescription;
@@ -25,53 +25,13 @@ pub fn scene_from_import(
     path: &Path,
     camera: Option<&Selector>,
 ) -> Result<LoadedScene, LoadError> {
-    let g = &imported.geometry;
-    if g.spheres.is_empty()
-        && g.planes.is_empty()
-        && g.quadrics.is_empty()
-        && g.meshes.is_empty()
-        && g.instances.is_empty()
-    {
-        // Only points, lines or empty nodes: say so rather than draw an empty image.
-        let skipped = if imported.notes.is_empty() {
-            String::new()
-        } else {
-            format!(" ({})", imported.notes.join("; "))
-        };
-        return Err(LoadError::new(
-            path,
-            None,
-            LoadErrorKind::Unsupported(format!(
-                "the file holds no surfaces (triangles or quadric shapes): nothing to render{skipped}"
-            )),
-        ));
-    }
+    refuse_without_surfaces(&imported, path)?;
     let mut notes = imported.notes.clone();
     let mut settings = SceneSettings::default();
     if let Some([w, h]) = imported.hints.resolution {
         (settings.width, settings.height) = (w, h);
     }
-    let chosen = match camera {
-        Some(sel) => Some(
-            crate::import::select_camera(&imported.cameras, sel)
-                .map_err(|m| LoadError::invalid(path, None, "camera", m))?,
-        ),
-        None => {
-            if imported.cameras.len() > 1 {
-                let c = &imported.cameras[0];
-                notes.push(format!(
-                    "the file has {} cameras; using the first{}",
-                    imported.cameras.len(),
-                    c.name
-                        .as_deref()
-                        .map(|n| format!(" (\"{n}\")"))
-                        .unwrap_or_default()
-                ));
-            }
-            imported.cameras.first()
-        }
-    };
-    let camera = match chosen {
+    let camera = match chosen_camera(&imported, path, camera, &mut notes)? {
         Some(c) => {
             let size = (settings.width, settings.height);
             let given = imported.hints.resolution.is_some();
@@ -121,4 +81,55 @@ pub fn scene_from_import(
         material_names,
         notes,
     })
+}
+
+/// An error naming `path` when its import holds no surface (only points, lines or empty nodes):
+/// said, rather than drawn as an empty image.
+fn refuse_without_surfaces(imported: &Imported, path: &Path) -> Result<(), LoadError> {
+    let g = &imported.geometry;
+    if !(g.spheres.is_empty()
+        && g.planes.is_empty()
+        && g.quadrics.is_empty()
+        && g.meshes.is_empty()
+        && g.instances.is_empty())
+    {
+        return Ok(());
+    }
+    let skipped = if imported.notes.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", imported.notes.join("; "))
+    };
+    Err(LoadError::new(
+        path,
+        None,
+        LoadErrorKind::Unsupported(format!(
+            "the file holds no surfaces (triangles or quadric shapes): nothing to render{skipped}"
+        )),
+    ))
+}
+
+/// The file's camera that `selector` picks, else its first (with a note when it has several);
+/// `None` when it has none.
+fn chosen_camera<'a>(
+    imported: &'a Imported,
+    path: &Path,
+    selector: Option<&Selector>,
+    notes: &mut Vec<String>,
+) -> Result<Option<&'a ImportedCamera>, LoadError> {
+    let cameras = &imported.cameras;
+    if let Some(sel) = selector {
+        return crate::import::select_camera(cameras, sel)
+            .map(Some)
+            .map_err(|m| LoadError::invalid(path, None, "camera", m));
+    }
+    if cameras.len() > 1 {
+        let name = cameras[0].name.as_deref();
+        notes.push(format!(
+            "the file has {} cameras; using the first{}",
+            cameras.len(),
+            name.map(|n| format!(" (\"{n}\")")).unwrap_or_default()
+        ));
+    }
+    Ok(cameras.first())
 }
