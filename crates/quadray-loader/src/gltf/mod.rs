@@ -28,7 +28,7 @@ pub use document::{GltfFile, open_bytes};
 use crate::error::LoadError;
 use crate::gltf::graph::GraphBuild;
 use crate::import::{ImportOptions, Imported, Selector, UpAxis};
-use quadrics_ext::RootExtension;
+use quadrics_ext::{RenderHints, RootExtension};
 use std::path::Path;
 
 pub use crate::gltf::graph::{MAX_DEPTH, MAX_INSTANCES, MAX_TRIANGLES};
@@ -46,34 +46,12 @@ pub fn convert(
     options: &ImportOptions,
 ) -> Result<Imported, LoadError> {
     let doc = &file.document;
-    let invalid = |key: String, message: String| LoadError::invalid(path, None, key, message);
     let mut notes = Vec::new();
 
     let scene = choose_scene(doc, options.scene.as_ref(), path)?;
-    let mut hints = crate::gltf::quadrics_ext::RenderHints::default();
-    if let Some(extras) = scene
-        .as_ref()
-        .and_then(|s| file.scene_extras.get(s.index()))
-        .and_then(Option::as_ref)
-    {
-        hints = serde_json::from_value(extras.clone()).map_err(|e| {
-            invalid(
-                "scenes[].extras.quadray".into(),
-                crate::plain_words::in_plain_words(&e.to_string()),
-            )
-        })?;
-    }
+    let hints = render_hints(file, scene.as_ref(), path)?;
     let roots = scene_roots(doc, scene.as_ref(), &mut notes, path)?;
-
-    let shapes: RootExtension = match doc.extension_value(quadrics_ext::EXTENSION) {
-        Some(v) => serde_json::from_value(v.clone()).map_err(|e| {
-            invalid(
-                format!("extensions.{}", quadrics_ext::EXTENSION),
-                crate::plain_words::in_plain_words(&e.to_string()),
-            )
-        })?,
-        None => RootExtension::default(),
-    };
+    let shapes = root_extension(doc, path)?;
 
     let mut out = Imported::default();
     let mut build = GraphBuild::new(file, path, &roots, &shapes, options)?;
@@ -81,48 +59,10 @@ pub fn convert(
     out.degenerate = build.degenerate;
     notes.append(&mut build.notes);
     let instances = build.node_placements();
-    let (skipped_modes, mut rest_pose) = (build.skipped_modes, build.rest_pose);
-    let (range_ignored, brightest) = (build.range_ignored, build.brightest);
-    let materials = build.materials;
-    if out.degenerate > 0 {
-        notes.push(format!(
-            "dropped {} degenerate triangles (a vertex index repeated: they have no area)",
-            out.degenerate
-        ));
-    }
-    if !skipped_modes.is_empty() {
-        let list: Vec<String> = skipped_modes
-            .iter()
-            .map(|(m, n)| format!("{n} {m}"))
-            .collect();
-        notes.push(format!(
-            "skipped primitives that are not surfaces: {} (quadray renders triangles only)",
-            list.join(", ")
-        ));
-    }
-    rest_pose.sort_unstable();
-    rest_pose.dedup();
-    if doc.animations().next().is_some() {
-        rest_pose.push("animations");
-    }
-    if !rest_pose.is_empty() {
-        notes.push(format!(
-            "{} not evaluated: meshes are shown in their rest pose",
-            rest_pose.join(", ")
-        ));
-    }
-    if range_ignored {
-        notes.push("light `range` ignored: quadray's lights fall off with the inverse square, without cutoff".into());
-    }
-    if !out.lights.is_empty() && brightest <= 10.0 {
-        notes.push(
-            "every light's intensity is at most 10 cd or lx: if the file meant unitless values it will render dark (quadray divides glTF intensities by 683·π, see docs)".into(),
-        );
-    }
-    notes.extend(materials.feature_notes());
+    notes.extend(what_was_left_out(&build, doc, !out.lights.is_empty()));
     out.nodes = usize::try_from(instances).unwrap_or(usize::MAX);
     out.hints = hints;
-    out.materials = materials.list;
+    out.materials = build.materials.list;
     if out.materials.is_empty() && !options.skip_materials {
         out.materials
             .push(("default".into(), quadray::Material::default()));
@@ -135,9 +75,89 @@ pub fn convert(
     out.notes = notes;
     // The instance limits (nesting, expanded placements), said here with the file's name rather
     // than later in prototype numbers.
-    quadray::Placements::new(&out.geometry)
-        .map_err(|e| invalid("nodes".into(), format!("the node graph is too large: {e}")))?;
+    quadray::Placements::new(&out.geometry).map_err(|e| {
+        LoadError::invalid(
+            path,
+            None,
+            "nodes",
+            format!("the node graph is too large: {e}"),
+        )
+    })?;
     Ok(out)
+}
+
+/// The render hints of `scene` (its `extras.quadray`), or the defaults.
+fn render_hints(
+    file: &GltfFile,
+    scene: Option<&gltf::Scene<'_>>,
+    path: &Path,
+) -> Result<RenderHints, LoadError> {
+    let Some(extras) = scene
+        .and_then(|s| file.scene_extras.get(s.index()))
+        .and_then(Option::as_ref)
+    else {
+        return Ok(RenderHints::default());
+    };
+    serde_json::from_value(extras.clone()).map_err(|e| {
+        let message = crate::plain_words::in_plain_words(&e.to_string());
+        LoadError::invalid(path, None, "scenes[].extras.quadray", message)
+    })
+}
+
+/// The file's quadric shapes (the root extension), or none.
+fn root_extension(doc: &gltf::Document, path: &Path) -> Result<RootExtension, LoadError> {
+    let Some(v) = doc.extension_value(quadrics_ext::EXTENSION) else {
+        return Ok(RootExtension::default());
+    };
+    serde_json::from_value(v.clone()).map_err(|e| {
+        let key = format!("extensions.{}", quadrics_ext::EXTENSION);
+        let message = crate::plain_words::in_plain_words(&e.to_string());
+        LoadError::invalid(path, None, key, message)
+    })
+}
+
+/// Notes on what the import of `doc` by `build` left out or assumed: degenerate triangles,
+/// primitives that are not surfaces, animation and skinning, light ranges, dim lights (`lit`: the
+/// file has lights) and material features.
+fn what_was_left_out(build: &GraphBuild<'_>, doc: &gltf::Document, lit: bool) -> Vec<String> {
+    let mut notes = Vec::new();
+    if build.degenerate > 0 {
+        notes.push(format!(
+            "dropped {} degenerate triangles (a vertex index repeated: they have no area)",
+            build.degenerate
+        ));
+    }
+    if !build.skipped_modes.is_empty() {
+        let list: Vec<String> = (build.skipped_modes.iter())
+            .map(|(m, n)| format!("{n} {m}"))
+            .collect();
+        notes.push(format!(
+            "skipped primitives that are not surfaces: {} (quadray renders triangles only)",
+            list.join(", ")
+        ));
+    }
+    let mut rest_pose = build.rest_pose.clone();
+    rest_pose.sort_unstable();
+    rest_pose.dedup();
+    if doc.animations().next().is_some() {
+        rest_pose.push("animations");
+    }
+    if !rest_pose.is_empty() {
+        notes.push(format!(
+            "{} not evaluated: meshes are shown in their rest pose",
+            rest_pose.join(", ")
+        ));
+    }
+    if build.range_ignored {
+        notes.push("light `range` ignored: quadray's lights fall off with the inverse square, without cutoff".into());
+    }
+    if lit && build.brightest <= 10.0 {
+        notes.push(
+            "every light's intensity is at most 10 cd or lx: if the file meant unitless values it will render dark (quadray divides glTF intensities by 683·π, see docs)".into(),
+        );
+    }
+    notes.extend(build.materials.feature_notes());
+    notes
 }
 
 /// The scene `selector` names (by index or name), else the file's default scene, else its first;
