@@ -224,6 +224,19 @@ impl Builder<'_> {
             }
             self.mesh_into(st, names, m, &key, out, planes.as_deref_mut())?;
         }
+        self.fill_instances(st, names, c, out)
+    }
+
+    /// The instances `c` holds into `out`: its groups (built, and placed unless templates) and
+    /// its instances of named prototypes.
+    fn fill_instances<'f>(
+        &self,
+        st: &mut GraphState<'f>,
+        names: &HashMap<String, u32>,
+        c: &Contents<'f>,
+        out: &mut Prototype,
+    ) -> Result<(), LoadError> {
+        let k = &c.key;
         for (i, g) in c.groups.iter().enumerate() {
             let key = format!("{k}group[{i}]");
             let spec = g.get_ref();
