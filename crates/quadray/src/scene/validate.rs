@@ -16,12 +16,10 @@ use glam::Vec3;
 /// and the lights. Returns the instances' placements.
 pub(super) fn validate_description(d: &mut SceneDescription) -> Result<Placements, SceneError> {
     d.camera.prepare(1.0)?;
-    if !d.background.is_finite() || d.background.min_element() < 0.0 {
+    if !non_negative(d.background) {
         return Err(invalid("background", "must be finite and non-negative"));
     }
-    if d.environment
-        .is_some_and(|e| !e.is_finite() || e.min_element() < 0.0)
-    {
+    if d.environment.is_some_and(|e| !non_negative(e)) {
         return Err(invalid("environment", "must be finite and non-negative"));
     }
     for (i, m) in d.materials.iter().enumerate() {
@@ -138,6 +136,7 @@ fn validate_levels(g: &mut Geometry) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// Whether every channel of `c` is finite and at least zero.
 fn non_negative(c: Vec3) -> bool {
     c.is_finite() && c.min_element() >= 0.0
 }
