@@ -97,12 +97,29 @@ impl Whitted {
     ) {
         assert_eq!(rays.len(), radiances.len(), "one radiance per ray");
         counts.camera += rays.len() as u64;
-        for (i, (ray, radiance)) in rays.iter().zip(radiances).enumerate() {
-            *radiance = match scene.seen_from(ray, None) {
-                Seen::Surface(hit) => self.shade_camera_hit(scene, ray, cone, &hit, key(i), counts),
-                Seen::Constant { radiance, .. } => radiance,
-                Seen::Nothing => scene.background(),
-            };
+        // Phase one for up to a render's batch of rays (16) in one call, then each hit shaded:
+        // the call, its compiled path's choice and the traversal's set-up paid once a batch
+        // (3% of the kitchen's camera-rays-only frame).
+        const CHUNK: usize = 16;
+        let mut firsts = [None; CHUNK];
+        for (c, (rays, radiances)) in rays
+            .chunks(CHUNK)
+            .zip(radiances.chunks_mut(CHUNK))
+            .enumerate()
+        {
+            let firsts = &mut firsts[..rays.len()];
+            scene.closest_each(rays, firsts);
+            for (j, ((ray, radiance), &first)) in
+                rays.iter().zip(radiances).zip(&*firsts).enumerate()
+            {
+                *radiance = match scene.seen_given(ray, first) {
+                    Seen::Surface(hit) => {
+                        self.shade_camera_hit(scene, ray, cone, &hit, key(c * CHUNK + j), counts)
+                    }
+                    Seen::Constant { radiance, .. } => radiance,
+                    Seen::Nothing => scene.background(),
+                };
+            }
         }
     }
 

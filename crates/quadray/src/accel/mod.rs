@@ -205,6 +205,30 @@ impl Accel {
         self.closest_impl::<true>(g, ray, t_max, from)
     }
 
+    /// [`Accel::closest`] in (0, ∞) for each ray of `rays` spawned on nothing, into `hits` (one
+    /// each), in one call: a batch of camera rays pays the call, its compiled path's choice and
+    /// its set-up once, not once a ray.
+    pub fn closest_each(&self, g: &Geometry, rays: &[Ray], hits: &mut [Option<(f64, PrimRef)>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit per ray");
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: the CPU supports AVX2 and FMA (checked by `simd_path`).
+            return unsafe { self.closest_each_avx2(g, rays, hits) };
+        }
+        for (ray, hit) in rays.iter().zip(hits) {
+            *hit = self.closest_impl::<false>(g, ray, f64::INFINITY, None);
+        }
+    }
+
+    /// [`Accel::closest_each`] compiled for AVX2, the traversal inlined into the loop.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn closest_each_avx2(&self, g: &Geometry, rays: &[Ray], hits: &mut [Option<(f64, PrimRef)>]) {
+        for (ray, hit) in rays.iter().zip(hits) {
+            *hit = self.closest_impl::<true>(g, ray, f64::INFINITY, None);
+        }
+    }
+
     /// The world level inlined (nested levels are entered through [`Accel::closest_level`]),
     /// then the planes.
     #[inline(always)]

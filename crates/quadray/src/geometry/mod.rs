@@ -201,7 +201,9 @@ impl Geometry {
     /// one that does).
     #[inline(always)]
     pub fn material(&self, prim: PrimRef, path: &InstancePath) -> MaterialId {
-        let level = if path.is_empty() {
+        // Placement 0 is the world's, whose path is empty: known without reading the path (the
+        // world's path is a static, read through memory at every hit).
+        let level = if prim.placement == 0 || path.is_empty() {
             self.level(0)
         } else if let Some(m) = path.instances(self).find_map(|inst| inst.material) {
             return m;

@@ -394,6 +394,21 @@ impl Scene {
             }
     }
 
+    /// [`Scene::closest`] for each of `rays` from the camera's eye (spawned on nothing) into
+    /// `hits`, one each.
+    #[inline]
+    pub(crate) fn closest_each(&self, rays: &[Ray], hits: &mut [Option<(f64, PrimRef)>]) {
+        if self.accel.eye_answers_rays()
+            && let Some(eye) = &self.eye_buffer
+        {
+            for (ray, hit) in rays.iter().zip(hits) {
+                *hit = (self.accel).closest_from_eye(&self.geometry, eye, ray);
+            }
+            return;
+        }
+        (self.accel).closest_each(&self.geometry, rays, hits)
+    }
+
     /// Phase one: the nearest hit's distance and primitive, through the eye buffer for rays from
     /// the camera's eye.
     #[inline(always)]

@@ -49,25 +49,33 @@ impl Scene {
     /// What `ray` (spawned on primitive `from`, whose self-hits are skipped) meets first:
     /// [`Scene::intersect_from`], except that a hit on a material of constant radiance
     /// ([`Material::unlit_constant_radiance`], in a scene without lights) skips phase two.
-    #[inline(always)]
+    #[inline]
     pub fn seen_from(&self, ray: &Ray, from: Option<PrimRef>) -> Seen {
-        if self.constant_radiance.is_empty() || self.single_sided {
-            return match self.intersect_from(ray, from) {
-                Some(hit) => Seen::Surface(hit),
-                None => Seen::Nothing,
-            };
-        }
-        // Phase one written out as in `Scene::first_hit` rather than shared with it: a helper
-        // both called made the kitchen's camera-rays-only frame 9% slower (its codegen).
-        let Some((t, prim)) = self.closest(ray, from) else {
+        self.seen_given(ray, self.closest(ray, from))
+    }
+
+    /// [`Scene::seen_from`] for a ray whose phase one is done: `first` is its nearest hit
+    /// ([`Scene::closest`], or [`Scene::closest_each`] for a batch of camera rays).
+    #[inline(always)]
+    pub(crate) fn seen_given(&self, ray: &Ray, first: Option<(f64, PrimRef)>) -> Seen {
+        let Some((t, prim)) = first else {
             return Seen::Nothing;
         };
         let mut slot = None;
         let path = self.path_in(prim.placement, &mut slot);
         let material = self.geometry.material(prim, path);
-        match self.constant_radiance[material as usize] {
-            Some(radiance) => Seen::Constant { t, radiance },
-            None => Seen::Surface(self.surface_hit(ray, (t, prim), path, material)),
+        if !self.single_sided
+            && let Some(&Some(radiance)) = self.constant_radiance.get(material as usize)
+        {
+            return Seen::Constant { t, radiance };
+        }
+        let hit = self.surface_hit(ray, (t, prim), path, material);
+        if !self.single_sided {
+            return Seen::Surface(hit);
+        }
+        match self.past_back_faces(ray, hit) {
+            Some(hit) => Seen::Surface(hit),
+            None => Seen::Nothing,
         }
     }
 }
@@ -85,6 +93,7 @@ mod tests {
     use crate::plane::Plane;
     use crate::sampler::SampleKey;
     use crate::scene::SceneDescription;
+    use crate::shape::LocalPrim;
     use crate::texture::Texture;
     use crate::{Mesh, Sphere};
     use glam::{DVec3, Vec4};
@@ -236,6 +245,76 @@ mod tests {
             constant > 100 && surface > 1000,
             "{constant} constant, {surface} shaded"
         );
+    }
+
+    /// Phase one for a batch of camera rays (`Scene::closest_each`) followed by `seen_given`
+    /// finds each ray's hit as `Scene::intersect` does ray by ray, unlit and lit; with a single-sided triangle over the spheres
+    /// facing away from the camera, which every ray passes through: the same as without it
+    /// (the eye buffer's path included where the process takes the baseline path).
+    #[test]
+    fn batched_phase_one_sees_what_each_ray_sees() {
+        let p = vec![
+            Vec3::new(-6.0, -6.0, 2.5),
+            Vec3::new(6.0, -6.0, 2.5),
+            Vec3::new(0.0, 6.0, 2.5),
+        ];
+        // Wound clockwise seen from above: its normal faces down, away from the camera.
+        let veil = Mesh::new(p, vec![[0, 2, 1]], None, 0)
+            .unwrap()
+            .with_single_sided(true);
+        let light = Light::Point {
+            position: DVec3::new(0.0, 0.0, 10.0),
+            intensity: Vec3::splat(50.0),
+        };
+        let key = |s: &Seen| match s {
+            Seen::Nothing => (0, 0, 0, 0),
+            Seen::Constant { t, radiance } => (1, t.to_bits(), radiance.x.to_bits() as u64, 0),
+            Seen::Surface(h) => (2, h.t.to_bits(), h.prim.placement, h.material as u64),
+        };
+        for lights in [Vec::new(), vec![light]] {
+            let (bare, veiled) = (
+                scene(lights.clone(), Vec::new()),
+                scene(lights, vec![veil.clone()]),
+            );
+            let rays: Vec<Ray> = rays(&bare).collect();
+            let (mut kinds, mut veil_first) = ([0; 3], 0);
+            for batch in rays.chunks(37) {
+                for scene in [&bare, &veiled] {
+                    let mut firsts = vec![None; batch.len()];
+                    scene.closest_each(batch, &mut firsts);
+                    for (ray, &first) in batch.iter().zip(&firsts) {
+                        veil_first += matches!(
+                            first,
+                            Some((_, p)) if matches!(p.local, LocalPrim::Triangle { .. })
+                        ) as usize;
+                        let given = key(&scene.seen_given(ray, first));
+                        // As the full query finds it, one ray at a time.
+                        let hit = scene.intersect(ray);
+                        assert_eq!(given.0 == 0, hit.is_none());
+                        if let Some(h) = hit {
+                            assert_eq!(given.1, h.t.to_bits());
+                            if given.0 == 2 {
+                                assert_eq!(
+                                    (given.2, given.3),
+                                    (h.prim.placement, h.material as u64)
+                                );
+                            }
+                        }
+                        // Past the veil, t is the sum of its legs': equal to a few ulps. (A
+                        // scene with single-sided meshes keeps every surface record.)
+                        let unveiled = key(&bare.seen_from(ray, None));
+                        let t = f64::from_bits(given.1);
+                        assert_eq!(given.0 == 0, unveiled.0 == 0);
+                        assert!((t - f64::from_bits(unveiled.1)).abs() <= 1e-12 * t);
+                        kinds[given.0 as usize] += 1;
+                    }
+                }
+            }
+            assert!(
+                kinds[2] > 1000 && veil_first > 1000,
+                "{kinds:?}, {veil_first}"
+            );
+        }
     }
 
     #[test]

@@ -186,10 +186,19 @@ fn render_segment(
             };
             let whitted = &settings.whitted;
             whitted.camera_rays(context.scene, rays, cone, key, counts, radiances);
-            // Each pixel the mean of its samples, summed in order as one at a time would.
-            let inv_spp = 1.0 / spp as f32;
-            for (pixel, samples) in pixels.iter_mut().zip(radiances.chunks_exact(spp as usize)) {
-                *pixel = samples.iter().fold(Vec3::ZERO, |sum, &r| sum + r) * inv_spp;
+            // Each pixel the mean of its samples, summed in order as one at a time would. One
+            // sample a pixel is its own mean (the sum's zero added, which makes −0 +0), without
+            // the loop over each pixel's samples (27 instructions a pixel).
+            if spp == 1 {
+                for (pixel, &r) in pixels.iter_mut().zip(&*radiances) {
+                    *pixel = Vec3::ZERO + r;
+                }
+            } else {
+                let inv_spp = 1.0 / spp as f32;
+                let samples = radiances.chunks_exact(spp as usize);
+                for (pixel, samples) in pixels.iter_mut().zip(samples) {
+                    *pixel = samples.iter().fold(Vec3::ZERO, |sum, &r| sum + r) * inv_spp;
+                }
             }
         }
     }
