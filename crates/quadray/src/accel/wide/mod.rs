@@ -238,19 +238,6 @@ impl<const N: usize> Node<N> {
         stack: &mut Vec<(u32, f32)>,
         prefetch: impl Fn(u32),
     ) -> u32 {
-        // Two children, the commonest case: one comparison, in the order the sort below gives
-        // (the later lane first when their distances tie).
-        let rest = mask & (mask - 1);
-        if rest & (rest - 1) == 0 {
-            let (a, b) = (
-                mask.trailing_zeros() as usize % N,
-                rest.trailing_zeros() as usize % N,
-            );
-            let (near, far) = if enter[a] < enter[b] { (a, b) } else { (b, a) };
-            prefetch(self.children[far]);
-            stack.push((self.children[far], enter[far]));
-            return self.children[near];
-        }
         let mut order = [(0u32, 0f32); N];
         let mut n = 0;
         for (lane, (&child, &t)) in self.children.iter().zip(&enter).enumerate() {
