@@ -409,6 +409,24 @@ impl Scene {
         (self.accel).closest_each(&self.geometry, rays, hits)
     }
 
+    /// The surface `ray` sees at its nearest hit `(t, prim)` on `material`, placed by `path`: that
+    /// hit's full record, or past single-sided back faces the first front face behind it.
+    #[inline(always)]
+    pub(crate) fn hit_seen(
+        &self,
+        ray: &Ray,
+        (t, prim): (f64, PrimRef),
+        path: &InstancePath,
+        material: crate::material::MaterialId,
+    ) -> Option<SurfaceHit> {
+        let hit = self.surface_hit(ray, (t, prim), path, material);
+        if self.single_sided {
+            self.past_back_faces(ray, hit)
+        } else {
+            Some(hit)
+        }
+    }
+
     /// Phase one: the nearest hit's distance and primitive, through the eye buffer for rays from
     /// the camera's eye.
     #[inline(always)]
@@ -518,10 +536,22 @@ impl Scene {
 
     /// [`Scene::intersect`] for every ray of a slice, into `out` (one slot per ray), on the
     /// calling thread; split the slice (for instance with rayon's `par_chunks`) to use more.
+    /// Phase one (the nearest hits) runs for up to 64 rays in one call.
     pub fn intersect_many(&self, rays: &[Ray], out: &mut [Option<SurfaceHit>]) {
         assert_eq!(rays.len(), out.len(), "one result per ray");
-        for (ray, out) in rays.iter().zip(out) {
-            *out = self.intersect(ray);
+        const CHUNK: usize = 64;
+        let mut firsts = [None; CHUNK];
+        for (rays, out) in rays.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+            let firsts = &mut firsts[..rays.len()];
+            self.closest_each(rays, firsts);
+            for ((ray, out), &first) in rays.iter().zip(out).zip(&*firsts) {
+                *out = first.and_then(|(t, prim)| {
+                    let mut slot = None;
+                    let path = self.path_in(prim.placement, &mut slot);
+                    let material = self.geometry.material(prim, path);
+                    self.hit_seen(ray, (t, prim), path, material)
+                });
+            }
         }
     }
 

@@ -69,11 +69,7 @@ impl Scene {
         {
             return Seen::Constant { t, radiance };
         }
-        let hit = self.surface_hit(ray, (t, prim), path, material);
-        if !self.single_sided {
-            return Seen::Surface(hit);
-        }
-        match self.past_back_faces(ray, hit) {
+        match self.hit_seen(ray, (t, prim), path, material) {
             Some(hit) => Seen::Surface(hit),
             None => Seen::Nothing,
         }
