@@ -100,10 +100,10 @@ impl Whitted {
     ) {
         assert_eq!(rays.len(), radiances.len(), "one radiance per ray");
         counts.camera += rays.len() as u64;
-        // Phase one for up to a render's batch of rays (16) in one call, then each hit shaded:
+        // Phase one for up to a render's batch of rays (32) in one call, then each hit shaded:
         // the call, its compiled path's choice and the traversal's set-up paid once a batch
         // (3% of the kitchen's camera-rays-only frame).
-        const CHUNK: usize = 16;
+        const CHUNK: usize = 32;
         let mut firsts = [None; CHUNK];
         for (c, (rays, radiances)) in rays
             .chunks(CHUNK)

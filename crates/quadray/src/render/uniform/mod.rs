@@ -21,7 +21,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use tiles::{cut_into_tiles, fill_background, meets_nothing};
 
 /// Camera rays made at once before they are traced (at least one pixel's worth).
-const BATCH_SAMPLES: usize = 16;
+const BATCH_SAMPLES: usize = 32;
 
 /// A thread's sampler and the buffers of its batches of camera rays, made once a thread and
 /// reused across its tiles.

@@ -221,8 +221,8 @@ fn batched_camera_rays_draw_each_samples_own_key() {
         x1: 40,
         y1: 30,
     };
-    // 20 samples a pixel: a batch of more rays than `Whitted::camera_rays` traces at once.
-    for spp in [1, 2, 3, 8, 20] {
+    // 40 samples a pixel: a batch of more rays than `Whitted::camera_rays` traces at once.
+    for spp in [1, 2, 3, 8, 40] {
         let settings = |seed| RenderSettings {
             width: 40,
             height: 30,
