@@ -151,7 +151,10 @@ fn closed_mesh_is_watertight_and_acne_free_at_any_scale() {
         let mut many = vec![None; rays.len()];
         scene.intersect_many(&rays, &mut many);
         for (ray, got) in rays.iter().zip(&many) {
-            assert_eq!(got.map(|h| h.t), scene.intersect(ray).map(|h| h.t));
+            assert_eq!(
+                got.map(|h| (h.t, h.prim)),
+                scene.intersect(ray).map(|h| (h.t, h.prim))
+            );
         }
     }
 }
@@ -297,7 +300,10 @@ fn instances_share_one_prototype() {
     let mut many = vec![None; rays.len()];
     scene.intersect_many(&rays, &mut many);
     for (ray, got) in rays.iter().zip(&many) {
-        assert_eq!(got.map(|h| h.t), scene.intersect(ray).map(|h| h.t));
+        assert_eq!(
+            got.map(|h| (h.t, h.prim)),
+            scene.intersect(ray).map(|h| (h.t, h.prim))
+        );
     }
     let shadow: Vec<(Ray, f64)> = rays.iter().map(|r| (*r, 3.0)).collect();
     let mut blocked = vec![false; rays.len()];

@@ -130,25 +130,7 @@ impl Accel {
                     });
                 }
             }
-            TopItem::Meshes => {
-                let Some(bvh) = &l.meshes else { return };
-                let meshes = q.g.level(q.level).meshes;
-                let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
-                if let Some(h) =
-                    bvh.closest::<AVX2>(meshes, &mray, round_up(*best_t), q.triangle_skip())
-                {
-                    // Mesh::refine_t, on the block's copy of the vertices.
-                    let t = plane_t(q.ray.origin, q.ray.dir, bvh.vertices(&h), h.hit.t as f64);
-                    let (mesh, tri) = h.id;
-                    if t < *best_t {
-                        *best_t = t;
-                        *best = Some(PrimRef {
-                            placement: q.placement,
-                            local: LocalPrim::Triangle { mesh, tri },
-                        });
-                    }
-                }
-            }
+            TopItem::Meshes => self.closest_in_meshes::<AVX2>(l, q, best_t, best),
             TopItem::Instance { index, level } => {
                 let inst = &q.g.level(q.level).instances[index as usize];
                 let local = inst.ray_to_object(q.ray);
@@ -163,6 +145,55 @@ impl Accel {
                 self.closest_level(q.g, level, placement, &local, q.from, best_t, best);
             }
         }
+    }
+
+    /// Lowers `best_t` to the nearest hit of the query's ray with the mesh BVH of level `l`.
+    #[inline(always)]
+    fn closest_in_meshes<const AVX2: bool>(
+        &self,
+        l: &LevelAccel,
+        q: &Query<'_>,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) {
+        let Some(bvh) = &l.meshes else { return };
+        let meshes = q.g.level(q.level).meshes;
+        let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+        if let Some(h) = bvh.closest::<AVX2>(meshes, &mray, round_up(*best_t), q.triangle_skip()) {
+            // Mesh::refine_t, on the block's copy of the vertices.
+            let t = plane_t(q.ray.origin, q.ray.dir, bvh.vertices(&h), h.hit.t as f64);
+            let (mesh, tri) = h.id;
+            if t < *best_t {
+                *best_t = t;
+                *best = Some(PrimRef {
+                    placement: q.placement,
+                    local: LocalPrim::Triangle { mesh, tri },
+                });
+            }
+        }
+    }
+
+    /// [`Accel::closest_each`]'s loop where the world is one mesh BVH and nothing else (no
+    /// planes, analytic shapes or instances), its level's dispatch decided once for the batch;
+    /// `false`, doing nothing, for any other world.
+    #[inline(always)]
+    pub(super) fn closest_each_in_world_meshes<const AVX2: bool>(
+        &self,
+        g: &Geometry,
+        rays: &[Ray],
+        hits: &mut [Option<(f64, PrimRef)>],
+    ) -> bool {
+        let l = &self.levels[0];
+        if self.planes != 0 || l.top.is_some() || !matches!(l.items[..], [TopItem::Meshes]) {
+            return false;
+        }
+        for (ray, hit) in rays.iter().zip(hits) {
+            let (mut best_t, mut best) = (f64::INFINITY, None);
+            let q = Query::new(g, 0, 0, ray, None);
+            self.closest_in_meshes::<AVX2>(l, &q, &mut best_t, &mut best);
+            *hit = best.map(|p| (best_t, p));
+        }
+        true
     }
 
     #[inline(always)]

@@ -215,6 +215,9 @@ impl Accel {
             // SAFETY: the CPU supports AVX2 and FMA (checked by `simd_path`).
             return unsafe { self.closest_each_avx2(g, rays, hits) };
         }
+        if self.closest_each_in_world_meshes::<false>(g, rays, hits) {
+            return;
+        }
         for (ray, hit) in rays.iter().zip(hits) {
             *hit = self.closest_impl::<false>(g, ray, f64::INFINITY, None);
         }
@@ -224,6 +227,9 @@ impl Accel {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn closest_each_avx2(&self, g: &Geometry, rays: &[Ray], hits: &mut [Option<(f64, PrimRef)>]) {
+        if self.closest_each_in_world_meshes::<true>(g, rays, hits) {
+            return;
+        }
         for (ray, hit) in rays.iter().zip(hits) {
             *hit = self.closest_impl::<true>(g, ray, f64::INFINITY, None);
         }
