@@ -6,7 +6,7 @@
 //! module docs of [`super`]); a closure or a function that is not inlined would be compiled for
 //! the baseline, so the AVX2 copy's traversals keep out of them.
 
-use super::mesh_bvh::MeshRay;
+use super::mesh_bvh::{MeshBvh, MeshRay};
 use super::stack::{Stacks, put_stack, take_stack, with_stack};
 use super::top::TopLeaves;
 use super::{Accel, FLAT_TOP, LevelAccel, TopItem, round_up, to_obvhs};
@@ -130,7 +130,11 @@ impl Accel {
                     });
                 }
             }
-            TopItem::Meshes => self.closest_in_meshes::<AVX2>(l, q, best_t, best),
+            TopItem::Meshes => {
+                let mut stack = MeshBvh::take_stack();
+                self.closest_in_meshes::<AVX2>(l, q, &mut stack, best_t, best);
+                MeshBvh::put_stack(stack);
+            }
             TopItem::Instance { index, level } => {
                 let inst = &q.g.level(q.level).instances[index as usize];
                 let local = inst.ray_to_object(q.ray);
@@ -147,19 +151,22 @@ impl Accel {
         }
     }
 
-    /// Lowers `best_t` to the nearest hit of the query's ray with the mesh BVH of level `l`.
+    /// Lowers `best_t` to the nearest hit of the query's ray with the mesh BVH of level `l`,
+    /// traversed on `stack` (the thread's: [`MeshBvh::take_stack`]).
     #[inline(always)]
     fn closest_in_meshes<const AVX2: bool>(
         &self,
         l: &LevelAccel,
         q: &Query<'_>,
+        stack: &mut Vec<(u32, f32)>,
         best_t: &mut f64,
         best: &mut Option<PrimRef>,
     ) {
         let Some(bvh) = &l.meshes else { return };
         let meshes = q.g.level(q.level).meshes;
         let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
-        if let Some(h) = bvh.closest::<AVX2>(meshes, &mray, round_up(*best_t), q.triangle_skip()) {
+        let (t_max, skip) = (round_up(*best_t), q.triangle_skip());
+        if let Some(h) = bvh.closest_on::<AVX2>(meshes, &mray, t_max, skip, stack) {
             // Mesh::refine_t, on the block's copy of the vertices.
             let t = plane_t(q.ray.origin, q.ray.dir, bvh.vertices(&h), h.hit.t as f64);
             let (mesh, tri) = h.id;
@@ -174,8 +181,8 @@ impl Accel {
     }
 
     /// [`Accel::closest_each`]'s loop where the world is one mesh BVH and nothing else (no
-    /// planes, analytic shapes or instances), its level's dispatch decided once for the batch;
-    /// `false`, doing nothing, for any other world.
+    /// planes, analytic shapes or instances), its level's dispatch decided and the traversal
+    /// stack taken once for the batch; `false`, doing nothing, for any other world.
     #[inline(always)]
     pub(super) fn closest_each_in_world_meshes<const AVX2: bool>(
         &self,
@@ -187,12 +194,14 @@ impl Accel {
         if self.planes != 0 || l.top.is_some() || !matches!(l.items[..], [TopItem::Meshes]) {
             return false;
         }
+        let mut stack = MeshBvh::take_stack();
         for (ray, hit) in rays.iter().zip(hits) {
             let (mut best_t, mut best) = (f64::INFINITY, None);
             let q = Query::new(g, 0, 0, ray, None);
-            self.closest_in_meshes::<AVX2>(l, &q, &mut best_t, &mut best);
+            self.closest_in_meshes::<AVX2>(l, &q, &mut stack, &mut best_t, &mut best);
             *hit = best.map(|p| (best_t, p));
         }
+        MeshBvh::put_stack(stack);
         true
     }
 

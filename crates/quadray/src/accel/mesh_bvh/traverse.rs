@@ -72,12 +72,9 @@ impl MeshBvh {
 
     /// The nearest triangle of `meshes` (those the BVH was built over) the ray meets in
     /// (0, `t_max`), skipping triangle `skip`, on the AVX2 path where `AVX2` is set (by callers
-    /// on that path only, chosen where the CPU has AVX2: [`super::simd_path`]).
-    ///
-    /// The AVX2 path's traversal is inlined into its caller (compiled for AVX2); the baseline's
-    /// is a function of its own, called once a query: inlined, it made the analytic scenes'
-    /// callers (which take the baseline path) too large to inline in turn.
-    #[inline(always)]
+    /// on that path only, chosen where the CPU has AVX2: [`super::simd_path`]), on this thread's
+    /// traversal stack (the tests' query; the scene's take the stack in their callers).
+    #[cfg(test)]
     pub(crate) fn closest<const AVX2: bool>(
         &self,
         meshes: &[Mesh],
@@ -85,14 +82,48 @@ impl MeshBvh {
         t_max: f32,
         skip: Option<TriId>,
     ) -> Option<MeshHit> {
+        let mut stack = MeshBvh::take_stack();
+        let hit = self.closest_on::<AVX2>(meshes, ray, t_max, skip, &mut stack);
+        MeshBvh::put_stack(stack);
+        hit
+    }
+
+    /// This thread's traversal stack, taken out of its cell for a batch of queries
+    /// ([`MeshBvh::closest_on`]) so the batch looks it up once; give it back with
+    /// [`MeshBvh::put_stack`] (a query in between finds an empty one, which is still correct).
+    #[inline(always)]
+    pub(crate) fn take_stack() -> Vec<(u32, f32)> {
+        local_cell(&STACK).take()
+    }
+
+    /// Gives back the stack of [`MeshBvh::take_stack`].
+    #[inline(always)]
+    pub(crate) fn put_stack(stack: Vec<(u32, f32)>) {
+        local_cell(&STACK).set(stack)
+    }
+
+    /// [`MeshBvh::closest`] on `stack` (emptied first).
+    ///
+    /// The AVX2 path's traversal is inlined into its caller (compiled for AVX2); the baseline's
+    /// is a function of its own, called once a query: inlined, it made the analytic scenes'
+    /// callers (which take the baseline path) too large to inline in turn.
+    #[inline(always)]
+    pub(crate) fn closest_on<const AVX2: bool>(
+        &self,
+        meshes: &[Mesh],
+        ray: &MeshRay,
+        t_max: f32,
+        skip: Option<TriId>,
+        stack: &mut Vec<(u32, f32)>,
+    ) -> Option<MeshHit> {
         if AVX2 {
-            self.traverse_closest::<true>(meshes, ray, t_max, skip)
+            self.traverse_closest::<true>(meshes, ray, t_max, skip, stack)
         } else {
-            self.closest_baseline(meshes, ray, t_max, skip)
+            self.closest_baseline(meshes, ray, t_max, skip, stack)
         }
     }
 
-    /// [`MeshBvh::closest`] compiled for the baseline.
+    /// [`MeshBvh::closest_on`] compiled for the baseline.
     #[inline(never)]
     fn closest_baseline(
         &self,
@@ -100,8 +131,9 @@ impl MeshBvh {
         ray: &MeshRay,
         t_max: f32,
         skip: Option<TriId>,
+        stack: &mut Vec<(u32, f32)>,
     ) -> Option<MeshHit> {
-        self.traverse_closest::<false>(meshes, ray, t_max, skip)
+        self.traverse_closest::<false>(meshes, ray, t_max, skip, stack)
     }
 
     /// The closest-hit traversal (`AVX2` as for [`MeshBvh::closest`]).
@@ -112,6 +144,7 @@ impl MeshBvh {
         ray: &MeshRay,
         t_max: f32,
         skip: Option<TriId>,
+        stack: &mut Vec<(u32, f32)>,
     ) -> Option<MeshHit> {
         if self.nodes.is_empty() || !ray.finite {
             return None;
@@ -120,8 +153,6 @@ impl MeshBvh {
         let mut best: Option<(u32, TriangleHit)> = None;
         // The best hit's block and lane, as block · 4 + lane.
         let mut best_lane = 0u32;
-        let cell = local_cell(&STACK);
-        let mut stack = cell.take();
         stack.clear();
         let mut current = 0u32;
         loop {
@@ -135,7 +166,7 @@ impl MeshBvh {
                     current = if mask & (mask - 1) == 0 {
                         node.children[mask.trailing_zeros() as usize]
                     } else {
-                        node.push_ordered(enter, mask, &mut stack, |c| self.prefetch(c))
+                        node.push_ordered(enter, mask, stack, |c| self.prefetch(c))
                     };
                     continue;
                 }
@@ -156,12 +187,11 @@ impl MeshBvh {
                 }
             }
             // Pop the next child that may still hold a nearer hit.
-            match pop_nearer(&mut stack, limit) {
+            match pop_nearer(stack, limit) {
                 Some(child) => current = child,
                 None => break,
             }
         }
-        cell.set(stack);
         best.map(|(number, hit)| MeshHit {
             id: self.id(number),
             hit,
