@@ -96,7 +96,12 @@ material = "flat"''')
 PY
 done
 
-# 6. Interleaved rounds: Embree then quadray on the same mesh, back to back, then the frame.
+# 6. Interleaved rounds: Embree then quadray on the same mesh, back to back, then the frame. The
+# tables read every round's log of a mesh, so an earlier run's logs go first (a run of more
+# rounds would otherwise leave its last rounds in this run's medians).
+for m in $MESHES; do
+  rm -f "$OUT/$m".*.txt
+done
 for r in $(seq "$ROUNDS"); do
   for m in $MESHES; do
     echo "round $r $m (load $(cut -d' ' -f1 /proc/loadavg))" >&2
