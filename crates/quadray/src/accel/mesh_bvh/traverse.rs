@@ -1,6 +1,6 @@
 //! The mesh BVH's traversals: the closest hit and any hit, nearest children first for the
 //! former, each compiled twice (the AVX2 path's copy inlined into its caller, the baseline's a
-//! function of its own: see [`MeshBvh::closest`]).
+//! function of its own: see [`MeshBvh::closest_on`]).
 
 use super::{MeshBvh, MeshHit, MeshRay, TriId};
 use crate::accel::stack::local_cell;
@@ -70,10 +70,8 @@ impl MeshBvh {
         (hits, mask)
     }
 
-    /// The nearest triangle of `meshes` (those the BVH was built over) the ray meets in
-    /// (0, `t_max`), skipping triangle `skip`, on the AVX2 path where `AVX2` is set (by callers
-    /// on that path only, chosen where the CPU has AVX2: [`super::simd_path`]), on this thread's
-    /// traversal stack (the tests' query; the scene's take the stack in their callers).
+    /// [`MeshBvh::closest_on`] on this thread's traversal stack: the tests' query (the scene's
+    /// queries take the stack in their callers, once a batch where they can).
     #[cfg(test)]
     pub(crate) fn closest<const AVX2: bool>(
         &self,
@@ -102,7 +100,10 @@ impl MeshBvh {
         local_cell(&STACK).set(stack)
     }
 
-    /// [`MeshBvh::closest`] on `stack` (emptied first).
+    /// The nearest triangle of `meshes` (those the BVH was built over) the ray meets in
+    /// (0, `t_max`), skipping triangle `skip`, traversed on `stack` (emptied first; the thread's:
+    /// [`MeshBvh::take_stack`]), on the AVX2 path where `AVX2` is set (by callers on that path
+    /// only, chosen where the CPU has AVX2: [`crate::simd::simd_path`]).
     ///
     /// The AVX2 path's traversal is inlined into its caller (compiled for AVX2); the baseline's
     /// is a function of its own, called once a query: inlined, it made the analytic scenes'
@@ -136,7 +137,7 @@ impl MeshBvh {
         self.traverse_closest::<false>(meshes, ray, t_max, skip, stack)
     }
 
-    /// The closest-hit traversal (`AVX2` as for [`MeshBvh::closest`]).
+    /// The closest-hit traversal (`AVX2` as for [`MeshBvh::closest_on`]).
     #[inline(always)]
     fn traverse_closest<const AVX2: bool>(
         &self,
@@ -201,7 +202,7 @@ impl MeshBvh {
     }
 
     /// Whether any triangle other than `skip` meets the ray in (0, `t_max`) (`AVX2` and the
-    /// two compiled paths as for [`MeshBvh::closest`]).
+    /// two compiled paths as for [`MeshBvh::closest_on`]).
     #[inline(always)]
     pub(crate) fn occluded<const AVX2: bool>(
         &self,
@@ -229,7 +230,7 @@ impl MeshBvh {
         self.traverse_occluded::<false>(meshes, ray, t_max, skip)
     }
 
-    /// The any-hit traversal (`AVX2` as for [`MeshBvh::closest`]).
+    /// The any-hit traversal (`AVX2` as for [`MeshBvh::closest_on`]).
     #[inline(always)]
     fn traverse_occluded<const AVX2: bool>(
         &self,
