@@ -20,6 +20,10 @@
 //! numbered, so a shared triangle placed twice is two primitives and a ray spawned on one copy
 //! still meets the other.
 //!
+//! The queries answer one ray ([`Accel::closest`], [`Accel::occluded`]) or a batch of rays
+//! spawned on nothing ([`Accel::closest_each`]: camera rays, one call and one set-up a batch),
+//! each ray's answer the same either way.
+//!
 //! A triangle hit found in f32 is refined in f64 (the ray against the triangle's plane) before it
 //! is compared with hits of other items. Culling uses f32 distances rounded up, so hits of
 //! different items are ordered by their f64 distances except within f32 rounding of each other.
