@@ -394,8 +394,8 @@ impl Scene {
             }
     }
 
-    /// [`Scene::closest`] for each of `rays` from the camera's eye (spawned on nothing) into
-    /// `hits`, one each.
+    /// [`Scene::closest`] for each of `rays`, spawned on nothing, into `hits`, one each (rays
+    /// from the camera's eye through the eye buffer where the scene asks it).
     #[inline]
     pub(crate) fn closest_each(&self, rays: &[Ray], hits: &mut [Option<(f64, PrimRef)>]) {
         if self.accel.eye_answers_rays()

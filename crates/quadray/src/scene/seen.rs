@@ -244,9 +244,10 @@ mod tests {
     }
 
     /// Phase one for a batch of camera rays (`Scene::closest_each`) followed by `seen_given`
-    /// finds each ray's hit as `Scene::intersect` does ray by ray, unlit and lit; with a single-sided triangle over the spheres
-    /// facing away from the camera, which every ray passes through: the same as without it
-    /// (the eye buffer's path included where the process takes the baseline path).
+    /// finds each ray's hit as `Scene::intersect` does ray by ray, unlit and lit; with a
+    /// single-sided triangle over the spheres facing away from the camera, which every ray passes
+    /// through: the same as without it (the eye buffer's path included where the process takes
+    /// the baseline path).
     #[test]
     fn batched_phase_one_sees_what_each_ray_sees() {
         let p = vec![
