@@ -3,7 +3,8 @@
 #   - `reflective`: scenes/reflective.toml, the hand port checked against POV-Ray's image;
 #   - `grid` (ten clipped quadrics) and `mesh` (the 57k-triangle kitchen): converted at run time
 #     from the harness's renderer-neutral ../shared/peers/povray/scenes.json (into a temp dir);
-#   - scenes/defense.toml alone (quadray only; no POV-Ray file exists for it).
+#   - `defense`: scenes/defense.toml, translated at run time by scenes/pov/toml2pov.py (the
+#     translation scenes/pov/verify.sh checks the bundled scenes' images with).
 # All at 1280x720, 1 sample per pixel, max trace level 8, on 1 and 2 threads. Reports medians over
 # REPS runs of render wall time, CPU-seconds and Mrays/s, and POV-Ray / quadray CPU-time ratios.
 #   scripts/bench-render.sh [REPS=5]      (POV-Ray: apt-get install povray; pairs skipped if absent)
@@ -20,16 +21,17 @@ log=$out/log.txt
 # The kitchen mesh, and quadray ports of the harness's grid and mesh scenes.
 zstd -q -d -f ../shared/assets/meshes/obvhs_kitchen/kitchen.obj.zst -o "$out/kitchen.obj"
 python3 scripts/harness_scenes.py "$harness/scenes.json" "$out"
+python3 scenes/pov/toml2pov.py scenes/defense.toml "$out/defense.pov" 1280 720
 
 quadray_run() { # label, scene, threads
   printf 'quadray %s t=%s ' "$1" "$3" >>"$log"
   "$bin" render "$2" -o "$out/q.png" --res 1280x720 --spp 1 -t "$3" --stats 2>&1 | tr '\n' ' ' >>"$log"
   echo >>"$log"
 }
-pov_run() { # label, pov file, threads
-  if command -v povray >/dev/null && [ -f "$pov_dir/$2" ]; then
-    printf 'povray %s t=%s ' "$1" "$3" >>"$log"
-    (cd "$pov_dir" && povray +I"$2" +O"$out/p.png" +W1280 +H720 -D -V +FN File_Gamma=sRGB -A +WT"$3" 2>&1) \
+pov_run() { # label, directory, pov file in it, threads
+  if command -v povray >/dev/null && [ -f "$2/$3" ]; then
+    printf 'povray %s t=%s ' "$1" "$4" >>"$log"
+    (cd "$2" && povray +I"$3" +O"$out/p.png" +W1280 +H720 -D -V +FN File_Gamma=sRGB -A +WT"$4" 2>&1) \
       | grep -E "Trace Time|CPU-seconds total" | tail -2 | tr '\n' ' ' >>"$log"
     echo >>"$log"
   fi
@@ -38,12 +40,13 @@ for rep in $(seq "$reps"); do
   echo "round $rep (load $(cut -d' ' -f1 /proc/loadavg))" >&2
   for t in 1 2; do
     quadray_run defense scenes/defense.toml "$t"
+    pov_run defense "$out" defense.pov "$t"
     quadray_run reflective scenes/reflective.toml "$t"
-    pov_run reflective reflective.pov "$t"
+    pov_run reflective "$pov_dir" reflective.pov "$t"
     quadray_run grid "$out/grid.toml" "$t"
-    pov_run grid grid.pov "$t"
+    pov_run grid "$pov_dir" grid.pov "$t"
     quadray_run mesh "$out/mesh.toml" "$t"
-    pov_run mesh mesh.pov "$t"
+    pov_run mesh "$pov_dir" mesh.pov "$t"
   done
 done
 python3 - "$log" <<'PY'
@@ -67,7 +70,7 @@ for k, v in rows.items():
     med = lambda i: statistics.median(x[i] for x in v)
     print(f"| {k} | {med(0):.3f} | {med(1):.3f} | {med(2):.2f} | {len(v)} | {v[0][3]} |")
 print()
-for scene in ("reflective", "grid", "mesh"):
+for scene in ("defense", "reflective", "grid", "mesh"):
     for t in (1, 2):
         q = [x[1] for x in rows.get(f"quadray {scene} t={t}", [])]
         p = [x[1] for x in rows.get(f"povray {scene} t={t}", [])]
