@@ -8,11 +8,15 @@
 # All at 1280x720, 1 sample per pixel, max trace level 8, on 1 and 2 threads. Reports medians over
 # REPS runs of render wall time, CPU-seconds and Mrays/s, and POV-Ray / quadray CPU-time ratios.
 #   scripts/bench-render.sh [REPS=5]      (POV-Ray: apt-get install povray; pairs skipped if absent)
+# QUADRAY=path times that binary instead of building target/release/quadray (say the
+# profile-guided target/pgo/quadray of scripts/build-pgo.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 reps=${1:-5}
-cargo build --release -q -p quadray-cli --features bench
-bin=target/release/quadray
+if [ -z "${QUADRAY:-}" ]; then
+  cargo build --release -q -p quadray-cli --features bench
+fi
+bin=${QUADRAY:-target/release/quadray}
 harness=../shared/peers/povray
 pov_dir=$harness/pov
 out=$(mktemp -d)
