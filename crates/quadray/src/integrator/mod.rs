@@ -68,6 +68,36 @@ impl Default for Whitted {
     }
 }
 
+/// A secondary ray's cone, or what makes it: a mirror's reflected cone needs the mirror's
+/// curvature, which is worked out only once the reflected ray is known to meet something (three
+/// in four of scenes/reflective.toml's reflection rays leave for the sky, which needs no cone).
+#[derive(Clone, Copy)]
+enum ConeOf<'h> {
+    /// The cone itself.
+    Known(RayCone),
+    /// The cone `incoming`, reflected `distance` along it by the mirror hit `mirror`.
+    Reflected {
+        incoming: RayCone,
+        distance: f64,
+        mirror: &'h SurfaceHit,
+    },
+}
+
+impl ConeOf<'_> {
+    /// The cone.
+    #[inline(always)]
+    fn made(self, scene: &Scene) -> RayCone {
+        match self {
+            ConeOf::Known(cone) => cone,
+            ConeOf::Reflected {
+                incoming,
+                distance,
+                mirror,
+            } => incoming.reflected(distance, scene.curvature(mirror)),
+        }
+    }
+}
+
 impl Whitted {
     /// Radiance arriving along a camera ray whose sample stands for `cone` ([`RayCone::POINT`]
     /// in scenes without filtered textures).
@@ -189,7 +219,7 @@ impl Whitted {
         &self,
         scene: &Scene,
         ray: &Ray,
-        cone: RayCone,
+        cone: ConeOf<'_>,
         from: Option<PrimRef>,
         depth: u32,
         throughput: f32,
@@ -201,7 +231,15 @@ impl Whitted {
         let (leaving, t) = match scene.seen_from(ray, from) {
             Seen::Surface(hit) => (
                 self.shade::<CONES, GLASS>(
-                    scene, ray, cone, &hit, depth, throughput, backdrop, key, counts,
+                    scene,
+                    ray,
+                    cone.made(scene),
+                    &hit,
+                    depth,
+                    throughput,
+                    backdrop,
+                    key,
+                    counts,
                 ),
                 hit.t,
             ),
@@ -269,9 +307,13 @@ impl Whitted {
                 counts.reflection += 1;
                 let reflected = Ray::new(offset_origin(g.point, s.ng, g.error, dir), dir);
                 let reflected_cone = if CONES {
-                    cone.reflected(distance, scene.curvature(hit))
+                    ConeOf::Reflected {
+                        incoming: cone,
+                        distance,
+                        mirror: hit,
+                    }
                 } else {
-                    RayCone::POINT
+                    ConeOf::Known(RayCone::POINT)
                 };
                 // Reflected inside a solid, the ray stays in it.
                 let medium = s.glass.as_ref().and_then(|g| g.inside_after_reflection());
@@ -400,11 +442,11 @@ impl Whitted {
         );
         // The footprint carries on as if the surface were flat (refraction's own spread of a
         // cone is not modelled).
-        let refracted_cone = if CONES {
+        let refracted_cone = ConeOf::Known(if CONES {
             cone.reflected(hit.t * ray.dir.length(), 0.0)
         } else {
             RayCone::POINT
-        };
+        });
         self.radiance::<CONES, true>(
             scene,
             &refracted,
