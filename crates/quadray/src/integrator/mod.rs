@@ -356,6 +356,11 @@ impl Whitted {
         counts: &mut RayCounts,
     ) -> Vec3 {
         let m = &scene.materials()[hit.material as usize];
+        // A surface with neither a diffuse share nor highlights (a perfect mirror) takes nothing
+        // from the lights: no shadow rays for it.
+        if m.diffuse * matte == 0.0 && m.specular <= 0.0 {
+            return color;
+        }
         let g = &hit.geometry;
         // Phong and Blinn scale their lobe by the highlight colour; GGX's Fresnel starts from F₀.
         let highlight = match m.specular_model {
@@ -459,5 +464,93 @@ impl Whitted {
             key,
             counts,
         ) * glass.through
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::{Camera, Projection};
+    use crate::geometry::Geometry;
+    use crate::light::Light;
+    use crate::material::Material;
+    use crate::plane::Plane;
+    use crate::scene::SceneDescription;
+    use crate::texture::Texture;
+    use crate::{Scene, Sphere};
+    use glam::DVec3;
+
+    /// A sphere of material `ball` on a grey floor, seen from straight above, with `lights`.
+    fn ball_on_floor(ball: Material, lights: Vec<Light>) -> Scene {
+        Scene::new(SceneDescription {
+            camera: Camera {
+                from: DVec3::new(0.0, 0.0, 10.0),
+                to: DVec3::ZERO,
+                up: DVec3::Y,
+                projection: Projection::Perspective { vfov_deg: 30.0 },
+            },
+            background: Vec3::new(0.05, 0.1, 0.2),
+            environment: Some(Vec3::new(0.3, 0.2, 0.1)),
+            materials: vec![ball, Material::default()],
+            lights,
+            geometry: Geometry {
+                spheres: vec![Sphere {
+                    center: DVec3::new(0.0, 0.0, 1.0),
+                    radius: 1.0,
+                    material: 0,
+                }],
+                planes: vec![Plane {
+                    point: DVec3::ZERO,
+                    normal: DVec3::Z,
+                    material: 1,
+                }],
+                ..Geometry::default()
+            },
+        })
+        .unwrap()
+    }
+
+    /// A perfect mirror (no diffuse share, no highlight) takes nothing from the lights, so its
+    /// hit casts no shadow ray, and it shows the same radiance lit as unlit; a mirror with a
+    /// diffuse share casts one towards the light it faces.
+    #[test]
+    fn a_perfect_mirror_casts_no_shadow_rays() {
+        let mirror = Material {
+            texture: Texture::Constant(Vec3::splat(0.9)),
+            ambient: 0.0,
+            diffuse: 0.0,
+            specular: 0.0,
+            reflectivity: 0.8,
+            ..Material::default()
+        };
+        let light = Light::Point {
+            position: DVec3::new(3.0, 0.0, 8.0),
+            intensity: Vec3::splat(50.0),
+        };
+        // Straight down onto the ball's top, reflected straight up into the environment.
+        let ray = Ray::new(DVec3::new(0.0, 0.0, 10.0), DVec3::new(0.0, 0.0, -1.0));
+        let key = SampleKey {
+            pattern: 0,
+            index: 0,
+            count: Some(1),
+        };
+        let trace = |ball: &Material, lights: Vec<Light>| {
+            let scene = ball_on_floor(ball.clone(), lights);
+            let mut counts = RayCounts::default();
+            let radiance =
+                Whitted::default().camera_ray(&scene, &ray, RayCone::POINT, key, &mut counts);
+            (radiance, counts)
+        };
+        let (lit, counts) = trace(&mirror, vec![light.clone()]);
+        let (unlit, _) = trace(&mirror, Vec::new());
+        assert_eq!((counts.shadow, counts.reflection), (0, 1));
+        assert_eq!(lit, unlit);
+        assert!(lit.max_element() > 0.0, "the mirror shows the environment");
+        let half_matte = Material {
+            diffuse: 0.5,
+            ..mirror
+        };
+        let (_, counts) = trace(&half_matte, vec![light]);
+        assert_eq!((counts.shadow, counts.reflection), (1, 1));
     }
 }
