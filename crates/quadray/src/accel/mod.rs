@@ -219,23 +219,30 @@ impl Accel {
             // SAFETY: the CPU supports AVX2 and FMA (checked by `simd_path`).
             return unsafe { self.closest_each_avx2(g, rays, hits) };
         }
-        if self.closest_each_in_world_meshes::<false>(g, rays, hits) {
-            return;
-        }
-        for (ray, hit) in rays.iter().zip(hits) {
-            *hit = self.closest_impl::<false>(g, ray, f64::INFINITY, None);
-        }
+        self.closest_each_impl::<false>(g, rays, hits)
     }
 
     /// [`Accel::closest_each`] compiled for AVX2, the traversal inlined into the loop.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn closest_each_avx2(&self, g: &Geometry, rays: &[Ray], hits: &mut [Option<(f64, PrimRef)>]) {
-        if self.closest_each_in_world_meshes::<true>(g, rays, hits) {
+        self.closest_each_impl::<true>(g, rays, hits)
+    }
+
+    /// [`Accel::closest_each`]'s loop: a world of one mesh BVH with its dispatch decided once,
+    /// else ray by ray through the world level.
+    #[inline(always)]
+    fn closest_each_impl<const AVX2: bool>(
+        &self,
+        g: &Geometry,
+        rays: &[Ray],
+        hits: &mut [Option<(f64, PrimRef)>],
+    ) {
+        if self.closest_each_in_world_meshes::<AVX2>(g, rays, hits) {
             return;
         }
         for (ray, hit) in rays.iter().zip(hits) {
-            *hit = self.closest_impl::<true>(g, ray, f64::INFINITY, None);
+            *hit = self.closest_impl::<AVX2>(g, ray, f64::INFINITY, None);
         }
     }
 

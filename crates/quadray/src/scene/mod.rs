@@ -546,10 +546,10 @@ impl Scene {
             self.closest_each(rays, firsts);
             for ((ray, out), &first) in rays.iter().zip(out).zip(&*firsts) {
                 *out = first.and_then(|(t, prim)| {
-                    let mut slot = None;
-                    let path = self.path_in(prim.placement, &mut slot);
-                    let material = self.geometry.material(prim, path);
-                    self.hit_seen(ray, (t, prim), path, material)
+                    self.with_path(prim, |path| {
+                        let material = self.geometry.material(prim, path);
+                        self.hit_seen(ray, (t, prim), path, material)
+                    })
                 });
             }
         }
