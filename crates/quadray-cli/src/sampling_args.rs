@@ -157,6 +157,17 @@ mod tests {
         };
         let a = small.resolve(None, Some(scene_32)).unwrap().unwrap();
         assert_eq!((a.min_spp, a.max_spp), (16, 16));
+        // A maximum that is not a power of two lowers the first round to the largest one within
+        // it, which a first round must be: `--max-spp 3` renders, first round 2.
+        for (max, first) in [(3, 2), (7, 4), (12, 8), (48, 8)] {
+            let odd = SamplingArgs {
+                target_error: Some(0.01),
+                max_spp: Some(max),
+                ..SamplingArgs::default()
+            };
+            let a = odd.resolve(None, None).unwrap().unwrap();
+            assert_eq!((a.min_spp, a.max_spp), (first, max));
+        }
     }
 
     #[test]

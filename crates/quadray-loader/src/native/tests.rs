@@ -385,6 +385,10 @@ fn render_tables_choose_adaptive_sampling() {
     let s = parse("[render]\ntime_limit = 1\nmax_spp = 8\n").unwrap();
     let a = s.settings.adaptive.unwrap();
     assert_eq!((a.target_error, a.min_spp, a.max_spp), (0.0, 8, 8));
+    // A maximum that is not a power of two: the first round is the largest power of two within it.
+    let s = parse("[render]\ntarget_error = 0.01\nmax_spp = 6\n").unwrap();
+    let a = s.settings.adaptive.unwrap();
+    assert_eq!((a.min_spp, a.max_spp), (4, 6));
     assert_eq!(
         parse("[render]\nspp = 4\n").unwrap().settings.adaptive,
         None

@@ -155,12 +155,15 @@ impl Adaptive {
         Ok(())
     }
 
-    /// These settings with `max_spp` as the maximum, and the first round's count lowered to it
-    /// where it was above (an explicit `min_spp` is set after this).
+    /// These settings with `max_spp` as the maximum, and the first round's count lowered to the
+    /// largest power of two within it where it was above (an explicit `min_spp` is set after
+    /// this).
     pub fn with_max_spp(self, max_spp: u32) -> Adaptive {
+        // The first round stays a power of two: at most the largest one within the maximum.
+        let first_round_cap = max_spp.checked_ilog2().map_or(0, |k| 1 << k);
         Adaptive {
             max_spp,
-            min_spp: self.min_spp.min(max_spp),
+            min_spp: self.min_spp.min(first_round_cap),
             ..self
         }
     }

@@ -178,9 +178,13 @@ impl SamplingStats {
         let Some(e) = self.error else {
             return format!("{} spp", self.min_spp);
         };
+        let rounds = match e.rounds {
+            1 => "1 round".to_string(),
+            n => format!("{n} rounds"),
+        };
         let spp = format!(
-            "{:.1} spp mean ({}..{}) in {} rounds",
-            self.mean_spp, self.min_spp, self.max_spp, e.rounds
+            "{:.1} spp mean ({}..{}) in {rounds}",
+            self.mean_spp, self.min_spp, self.max_spp
         );
         match e.rule {
             ErrorRule::Image => {
