@@ -19,6 +19,7 @@
 
 mod classify;
 mod conditioning;
+mod four;
 mod given;
 mod quadratic;
 #[cfg(test)]

@@ -401,10 +401,7 @@ impl Scene {
         if self.accel.eye_answers_rays()
             && let Some(eye) = &self.eye_buffer
         {
-            for (ray, hit) in rays.iter().zip(hits) {
-                *hit = (self.accel).closest_from_eye(&self.geometry, eye, ray);
-            }
-            return;
+            return (self.accel).closest_each_from_eye(&self.geometry, eye, rays, hits);
         }
         (self.accel).closest_each(&self.geometry, rays, hits)
     }

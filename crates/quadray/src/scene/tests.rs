@@ -393,6 +393,50 @@ fn light_buffers_answer_as_the_bvh() {
 /// [`buffered_world`] seen from outside, from among the shapes and from inside a sphere's box:
 /// rays in every direction, and rays aimed at the shapes, some of them through cells that list
 /// several shapes.
+/// Batches of camera rays through the eye buffer answer as the BVH ray by ray, bit for bit:
+/// batches of 32 neighbouring directions (so runs of four share a cell's list of one quadric or
+/// of several shapes, tested four rays at once) and of scattered ones, from eyes outside the
+/// shapes and among them.
+#[test]
+fn eye_buffer_batches_answer_as_the_bvh() {
+    let mut next = uniform(0xba7c_4e5e_0f0e_7e5a);
+    let (mut alike, mut rays_seen) = (0, 0);
+    for eye in [
+        DVec3::new(0.0, 0.0, 10.0),
+        DVec3::new(-14.0, 9.0, 3.0),
+        DVec3::new(0.4, -0.3, 2.2),
+    ] {
+        let scene = buffered_world(eye);
+        let buffer = scene.eye_buffer.as_ref().expect("an eye buffer");
+        for batch in 0..400 {
+            let aim = DVec3::new(next(), next(), next() + 0.5) * 8.0 - eye;
+            let rays: Vec<Ray> = (0..32)
+                .map(|k| {
+                    let spread = if batch % 4 == 3 { 0.5 } else { 1e-3 };
+                    let jitter = DVec3::new(next(), next(), next()) * spread * aim.length();
+                    Ray::new(eye, aim + jitter + DVec3::X * (k as f64 * 1e-3))
+                })
+                .collect();
+            let mut got = vec![None; rays.len()];
+            (scene.accel).closest_each_from_eye(&scene.geometry, buffer, &rays, &mut got);
+            for (ray, got) in rays.iter().zip(&got) {
+                let want = (scene.accel).closest(&scene.geometry, ray, f64::INFINITY, None);
+                let bits = |h: Option<(f64, PrimRef)>| h.map(|(t, p)| (t.to_bits(), p));
+                assert_eq!(bits(*got), bits(want), "eye {eye}, ray {ray:?}");
+            }
+            for four in rays.chunks_exact(4) {
+                alike += usize::from(buffer.lists_alike(four.try_into().unwrap()));
+                rays_seen += 4;
+            }
+        }
+    }
+    // Many runs of four share a list: the four-ray tests answered them.
+    assert!(
+        alike * 16 > rays_seen,
+        "{alike} runs of four alike in {rays_seen} rays"
+    );
+}
+
 #[test]
 fn the_eye_buffer_answers_as_the_bvh() {
     let mut next = uniform(0x0ddb_1a5e_55ee_d001);

@@ -32,6 +32,9 @@ const MANY_SHAPES: u8 = u8::MAX - 1;
 /// Most shapes a cell lists.
 const MAX_LISTED: u32 = 4;
 
+/// A ray's nearest hit among a list's shapes: its distance (∞ for none) and its shape.
+type Nearest = (f64, Option<PrimRef>);
+
 /// For rays from one point, the few shapes each direction can meet.
 #[derive(Clone, Debug)]
 pub struct EyeBuffer {
@@ -122,6 +125,25 @@ impl EyeBuffer {
         }
     }
 
+    /// Whether the cells of four rays list the same spheres and quadrics (at least one): what
+    /// [`Accel::closest_each_from_eye`] tests four rays at once.
+    #[cfg(test)]
+    pub(crate) fn lists_alike(&self, rays: &[Ray; 4]) -> bool {
+        let first = self.seen_finite(&rays[0]);
+        first.is_some_and(|list| !list.is_empty())
+            && rays[1..].iter().all(|ray| {
+                self.seen_finite(ray)
+                    .zip(first)
+                    .is_some_and(|(s, f)| std::ptr::eq(s, f))
+            })
+    }
+
+    /// [`EyeBuffer::seen`] for a ray that is also finite in f32, as the BVH traverses it.
+    #[inline(always)]
+    fn seen_finite(&self, ray: &Ray) -> Option<&[Shape]> {
+        self.seen(ray).filter(|_| finite_in_f32(ray))
+    }
+
     /// List `k` of those the cells hold.
     #[inline(always)]
     fn list(&self, k: u8) -> &[Shape] {
@@ -185,6 +207,48 @@ impl EyeBuffer {
             ),
             _ => level.intersect(shape, ray, t_max, false),
         }
+    }
+
+    /// For four rays from the eye whose cells list the same spheres and quadrics `shapes`: each
+    /// ray's nearest hit among them (its distance, ∞ for none, and its shape) as
+    /// [`EyeBuffer::nearest_listed`] finds it, or `None` for a ray that meets two at exactly the
+    /// same distance. A quadric is tested against the four rays at once
+    /// ([`Quadric::intersect_four_from_local_point`](crate::quadric::Quadric)), the same hits
+    /// bit for bit. `None` when a shape is neither.
+    #[inline(always)]
+    fn nearest_four(
+        &self,
+        level: Level<'_>,
+        shapes: &[Shape],
+        four: &[Ray; 4],
+    ) -> Option<[Option<Nearest>; 4]> {
+        let dirs = [four[0].dir, four[1].dir, four[2].dir, four[3].dir];
+        let (mut best_t, mut best, mut tied) = ([f64::INFINITY; 4], [None; 4], [false; 4]);
+        for &shape in shapes {
+            let Shape::Analytic(shape) = shape else {
+                return None;
+            };
+            // A limit just past each ray's nearest hit, as `nearest_listed` tests.
+            let limits = best_t.map(f64::next_up);
+            let ts = match shape {
+                LocalPrim::Quadric(q) => level.quadrics[q as usize]
+                    .intersect_four_from_local_point(self.eye_local[q as usize], &dirs, limits),
+                _ => std::array::from_fn(|k| self.intersect(level, shape, &four[k], limits[k])),
+            };
+            for (k, t) in ts.into_iter().enumerate() {
+                match t {
+                    Some(t) if t < best_t[k] => {
+                        best_t[k] = t;
+                        best[k] = Some(PrimRef::world(shape));
+                    }
+                    Some(t) if t == best_t[k] => tied[k] = true,
+                    _ => {}
+                }
+            }
+        }
+        Some(std::array::from_fn(|k| {
+            (!tied[k]).then_some((best_t[k], best[k]))
+        }))
     }
 
     /// Lowers `best_t` to the nearest hit of `ray` on the spheres and quadrics `shapes` and sets
@@ -260,6 +324,62 @@ impl Accel {
         !self.avx2
     }
 
+    /// [`Accel::closest_from_eye`] for each of `rays` into `hits` (one each), the same answers
+    /// bit for bit. On the AVX2 path four neighbouring rays whose cells list the same spheres and
+    /// quadrics are tested against each quadric at once ([`EyeBuffer::nearest_four`]); on the
+    /// baseline path, one by one.
+    pub(crate) fn closest_each_from_eye(
+        &self,
+        g: &Geometry,
+        eye: &EyeBuffer,
+        rays: &[Ray],
+        hits: &mut [Option<(f64, PrimRef)>],
+    ) {
+        if crate::simd::simd_path() != crate::simd::SimdPath::Avx2 {
+            for (ray, hit) in rays.iter().zip(hits) {
+                *hit = self.closest_from_eye(g, eye, ray);
+            }
+            return;
+        }
+        // Each ray's cell looked up once, a batch of up to 32 at a time.
+        const BATCH: usize = 32;
+        let level = g.level(0);
+        for (rays, hits) in rays.chunks(BATCH).zip(hits.chunks_mut(BATCH)) {
+            let mut seen = [None; BATCH];
+            for (s, ray) in seen.iter_mut().zip(rays) {
+                *s = eye.seen_finite(ray);
+            }
+            let mut k = 0;
+            while k < rays.len() {
+                // Four neighbouring rays whose cells list the same spheres and quadrics (each
+                // distinct list is stored once, so one address means one list).
+                if let (Some(list @ [_, ..]), Some(four)) = (seen[k], rays[k..].first_chunk::<4>())
+                    && seen[k + 1..k + 4]
+                        .iter()
+                        .all(|s| s.is_some_and(|s| std::ptr::eq(s, list)))
+                    && let Some(nearest) = eye.nearest_four(level, list, four)
+                {
+                    for (lane, nearest) in nearest.into_iter().enumerate() {
+                        let ray = &four[lane];
+                        hits[k + lane] = match nearest {
+                            Some((mut best_t, mut best)) => {
+                                // The planes after the shapes, as `Accel::closest` tests them.
+                                self.closest_plane(g, ray, None, &mut best_t, &mut best);
+                                best.map(|p| (best_t, p))
+                            }
+                            // Two shapes hit at the same distance: the BVH's order decides.
+                            None => self.closest_impl::<false>(g, ray, f64::INFINITY, None),
+                        };
+                    }
+                    k += 4;
+                    continue;
+                }
+                hits[k] = self.closest_seen_from_eye(g, eye, &rays[k], seen[k]);
+                k += 1;
+            }
+        }
+    }
+
     /// [`Accel::closest`] for a ray spawned on nothing: through `eye` when the ray starts there
     /// and its cell lists the shapes it can meet, else through the BVH.
     #[inline(never)]
@@ -269,7 +389,20 @@ impl Accel {
         eye: &EyeBuffer,
         ray: &Ray,
     ) -> Option<(f64, PrimRef)> {
-        if let Some(seen) = eye.seen(ray).filter(|_| finite_in_f32(ray)) {
+        self.closest_seen_from_eye(g, eye, ray, eye.seen_finite(ray))
+    }
+
+    /// [`Accel::closest_from_eye`] for a ray whose cell's shapes are `seen`
+    /// ([`EyeBuffer::seen_finite`]).
+    #[inline(always)]
+    fn closest_seen_from_eye(
+        &self,
+        g: &Geometry,
+        eye: &EyeBuffer,
+        ray: &Ray,
+        seen: Option<&[Shape]>,
+    ) -> Option<(f64, PrimRef)> {
+        if let Some(seen) = seen {
             let mut best_t = f64::INFINITY;
             let mut best = None;
             let answered = match *seen {
