@@ -83,7 +83,7 @@ fn accuracy(a: &AccuracyArgs) -> Result<()> {
     let quiet = a.quiet;
     let report = report::run(&settings, &mut |family| {
         if !quiet {
-            eprintln!("bench accuracy: {family}");
+            errln!("bench accuracy: {family}");
         }
     });
     let table = report.markdown();
@@ -99,7 +99,7 @@ fn accuracy(a: &AccuracyArgs) -> Result<()> {
         .context("drawing the plot")?;
     write_bytes_atomically(&svg, plot.as_bytes())?;
     if !quiet {
-        eprintln!("wrote {} and {}", md.display(), svg.display());
+        errln!("wrote {} and {}", md.display(), svg.display());
     }
     Ok(())
 }

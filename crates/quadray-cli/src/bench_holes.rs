@@ -150,7 +150,7 @@ pub fn run(a: &HolesArgs) -> Result<()> {
     let mut mapped = Vec::new();
     for s in &scenes {
         if !a.quiet {
-            eprintln!("bench holes: {} ({}x{})", s.name, s.width, s.height);
+            errln!("bench holes: {} ({}x{})", s.name, s.width, s.height);
         }
         let sc = pool
             .install(|| holes::scene_holes(s))
@@ -165,7 +165,7 @@ pub fn run(a: &HolesArgs) -> Result<()> {
     let path = a.out.join("holes.md");
     write_bytes_atomically(&path, md.as_bytes())?;
     if !a.quiet {
-        eprintln!("wrote {} and the hole maps beside it", path.display());
+        errln!("wrote {} and the hole maps beside it", path.display());
     }
     Ok(())
 }

@@ -19,7 +19,7 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         start.elapsed().as_secs_f64()
     );
     for note in &loaded.notes {
-        eprintln!("{}", crate::warnings::note_line(note));
+        errln!("{}", crate::warnings::note_line(note));
     }
     let settings = loaded.settings;
     let loaded_output = loaded.output;

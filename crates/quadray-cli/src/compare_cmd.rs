@@ -61,6 +61,13 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "--diff {} must be a .png",
             diff.display()
         );
+        let images = [args.reference.clone(), args.test.clone()];
+        crate::overwrite::refuse_replacing_an_input(
+            "--diff",
+            diff,
+            &images,
+            "one of the images compared",
+        )?;
     }
     let thresholds = Thresholds {
         pixel: args.threshold,

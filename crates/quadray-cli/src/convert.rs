@@ -6,10 +6,24 @@ use anyhow::{Context, Result};
 
 /// Runs the convert subcommand.
 pub fn run(args: &ConvertArgs) -> Result<()> {
-    let loaded = quadray_loader::load_any(&args.scene)?;
+    quadray_loader::confine::record_reads();
+    let loaded = quadray_loader::load_any(&args.scene);
+    let inputs = quadray_loader::confine::take_reads();
+    let loaded = loaded?;
+    // A .gltf output writes its buffer beside it: neither may replace a file the scene reads.
+    let gltf = (args.output.extension()).is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
+    let buffer = gltf.then(|| args.output.with_extension("bin"));
+    for output in std::iter::once(args.output.clone()).chain(buffer) {
+        crate::overwrite::refuse_replacing_an_input(
+            "-o",
+            &output,
+            &inputs,
+            "one of the files the scene reads",
+        )?;
+    }
     for note in &loaded.notes {
         if !args.quiet {
-            eprintln!("{}", crate::warnings::note_line(note));
+            errln!("{}", crate::warnings::note_line(note));
         }
     }
     // Validate first: a scene quadray would refuse to render is not worth exporting.
@@ -19,10 +33,10 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
         .with_context(|| format!("writing {}", args.output.display()))?;
     if !args.quiet {
         for note in notes {
-            eprintln!("{}", crate::warnings::note_line(&note));
+            errln!("{}", crate::warnings::note_line(&note));
         }
         let g = &loaded.description.geometry;
-        eprintln!(
+        errln!(
             "wrote {}: {}, {}, {}, {}, {}, {}",
             args.output.display(),
             crate::counted(g.meshes.len(), "mesh"),

@@ -107,7 +107,7 @@ pub fn render_sheet(args: &GalleryArgs) -> Result<(u32, u32, Vec<u8>)> {
         let eq = caption_equation(show);
         canvas.text_centred(cx, cap_y + 16 * scale as i64, eq, eq_scale, EQUATION_COLOUR);
         if !args.quiet {
-            eprintln!("rendered {} ({}/{})", show.name(), i + 1, shows.len());
+            errln!("rendered {} ({}/{})", show.name(), i + 1, shows.len());
         }
     }
     let mut canvas = Canvas {
@@ -143,7 +143,7 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
     let (w, h, bytes) = render_sheet(args)?;
     write_rgb8_png(w, h, &bytes, &args.output)?;
     if !args.quiet {
-        eprintln!("{w}x{h} contact sheet -> {}", args.output.display());
+        errln!("{w}x{h} contact sheet -> {}", args.output.display());
     }
     Ok(())
 }

@@ -11,6 +11,15 @@ macro_rules! outln {
     }};
 }
 
+/// `eprintln!` that never panics: with stderr closed (a pipe whose reader has gone) the message
+/// is lost and the command goes on, where `eprintln!` would abort it with exit status 101.
+macro_rules! errln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
+
 // The application layer's modules, under the names this crate's commands use for them.
 use quadray_app::{compare, exr_file, output, passes, showcase};
 pub use quadray_app::{logging, snippet};
@@ -32,6 +41,7 @@ mod convert;
 pub mod gallery;
 mod label;
 mod merge_cmd;
+mod overwrite;
 mod progress;
 pub mod quadric_cmd;
 pub mod render_cmd;

@@ -1,6 +1,7 @@
 //! `quadray`: render scene files to PNG or HDR EXR from the command line.
 
 use clap::Parser;
+use std::io::Write;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -13,10 +14,12 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) if quadray_cli::is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
-            // `{:#}` prints the whole context chain on one line.
-            eprintln!("error: {err:#}");
+            // `{:#}` prints the whole context chain on one line. A closed stderr loses the
+            // message but not the exit status (`eprintln!` would panic: status 101).
+            let mut stderr = std::io::stderr().lock();
+            let _ = writeln!(stderr, "error: {err:#}");
             if let Some(snippet) = quadray_cli::snippet::for_error(&err) {
-                eprintln!("{snippet}");
+                let _ = writeln!(stderr, "{snippet}");
             }
             ExitCode::from(quadray_cli::exit_status(&err, is_compare))
         }

@@ -31,24 +31,6 @@ pub struct MergeArgs {
     pub quiet: bool,
 }
 
-/// A usage error if `output` is one of the `pieces` (by its file, whatever the path's spelling):
-/// the merge would replace a piece that a retry still needs.
-fn refuse_overwriting_a_piece(output: &Path, pieces: &[PathBuf]) -> Result<()> {
-    let Ok(out) = std::fs::canonicalize(output) else {
-        return Ok(()); // not there yet, so no piece
-    };
-    for piece in pieces {
-        if std::fs::canonicalize(piece).is_ok_and(|p| p == out) {
-            return Err(crate::StatusError::usage(format!(
-                "-o {} is one of the pieces to merge; name another output",
-                output.display()
-            ))
-            .into());
-        }
-    }
-    Ok(())
-}
-
 /// One piece as read: which it is, what it came from, and its rectangles' channels.
 struct ReadPiece {
     path: PathBuf,
@@ -83,7 +65,13 @@ impl ReadPiece {
 pub fn run(args: &MergeArgs) -> Result<()> {
     let format = args.output.as_deref().map(check_writable).transpose()?;
     if let Some(output) = &args.output {
-        refuse_overwriting_a_piece(output, &args.pieces)?;
+        // The merge would replace a piece that a retry still needs.
+        crate::overwrite::refuse_replacing_an_input(
+            "-o",
+            output,
+            &args.pieces,
+            "one of the pieces to merge",
+        )?;
     }
     let pieces = args
         .pieces
@@ -142,7 +130,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         Format::Png => write_film(&film, output)?,
     }
     if !args.quiet {
-        eprintln!(
+        errln!(
             "{width}x{height} from {} -> {}",
             crate::counted(count, "piece"),
             output.display()

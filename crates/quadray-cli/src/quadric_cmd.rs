@@ -191,7 +191,7 @@ pub fn run(args: &QuadricArgs) -> Result<()> {
     let rendered = quadray::render(&scene, &settings, &quadray::NoProgress)?;
     write_film(&rendered.film, output)?;
     if !args.quiet {
-        eprintln!(
+        errln!(
             "{} {}: {}x{}, {} spp -> {}",
             show.name(),
             show.equation(),

@@ -79,7 +79,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         if args.stats {
             let cpu =
                 render_cpu.map_or("unknown".to_string(), |d| format!("{:.3}", d.as_secs_f64()));
-            eprintln!(
+            errln!(
                 "load {:.3} s, BVH build {:.3} s ({} bounded primitives, {:.1} MB), traversal {}, \
                  threads {}, render CPU {cpu} s",
                 job.loaded_in.as_secs_f64(),
@@ -89,7 +89,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 scene.accel().traversal_path(),
                 pool.current_num_threads(),
             );
-            eprintln!("{}", crate::check::structure_line(&scene));
+            errln!("{}", crate::check::structure_line(&scene));
         }
         let mut counts = RayCounts::default();
         for (rendered, _) in &parts {
@@ -100,7 +100,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             .map(|(r, _)| (r.sampling, r.film.pixels().len() as u64))
             .collect();
         let sampling = SamplingStats::merged(&windows).context("nothing was rendered")?;
-        eprintln!(
+        errln!(
             "{}",
             stats_line(
                 args,
@@ -128,13 +128,18 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
         scene: args.gltf_scene.clone(),
         ..Default::default()
     };
-    let mut loaded = quadray_app::scene_file::load(
+    // The files the scene reads (its own, includes, meshes, textures), which the output must
+    // not replace.
+    quadray_loader::confine::record_reads();
+    let loaded = quadray_app::scene_file::load(
         &args.scene,
         &args.set,
         &options,
         args.camera.as_ref(),
         args.res,
-    )?;
+    );
+    let inputs = quadray_loader::confine::take_reads();
+    let mut loaded = loaded?;
     let loaded_in = start.elapsed();
     log::info!(
         "loaded {} in {:.3} s",
@@ -166,10 +171,16 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
         *camera = camera.orbited(360.0 * frame as f64 / frames as f64);
     }
     let format = check_writable(&output)?;
+    crate::overwrite::refuse_replacing_an_input(
+        "the output",
+        &output,
+        &inputs,
+        "one of the files the scene reads",
+    )?;
     let selection = pass_selection(args, format)?;
     if !args.quiet {
         for note in &loaded.notes {
-            eprintln!("{}", crate::warnings::note_line(note));
+            errln!("{}", crate::warnings::note_line(note));
         }
     }
     // --res is already in the loaded settings: the loader needed it to frame a camera-less scene.
@@ -338,7 +349,7 @@ fn write_output(
                     .as_ref()
                     .and_then(|a| crate::passes::depth_display_range(a.samples(), &planes))
             {
-                eprintln!(
+                errln!(
                     "depth shown from {near:.4} (white, the nearest hit) to {far:.4} (dark grey, \
                      the farthest hit on anything but a plane; farther plane pixels clamp), \
                      misses black"

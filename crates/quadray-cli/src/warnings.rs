@@ -13,7 +13,7 @@ const PROBE: (u32, u32) = (32, 18);
 /// Prints [`scene_warnings`] on stderr, each after `warning: `.
 pub fn print(path: &Path, scene: &Scene, material_names: &[String], width: u32, height: u32) {
     for warning in scene_warnings(path, scene, material_names, width, height) {
-        eprintln!("warning: {warning}");
+        errln!("warning: {warning}");
     }
 }
 

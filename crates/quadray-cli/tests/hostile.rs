@@ -163,6 +163,176 @@ fn a_closed_pipe_ends_output_quietly() {
     }
 }
 
+/// A closed stderr (its reader gone, as `quadray … 2>&1 | head -1` leaves it) loses the messages
+/// but never turns into a panic (exit status 101): a render still writes its image and succeeds,
+/// an invalid scene still exits 1.
+#[test]
+fn a_closed_stderr_keeps_the_exit_status() {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let out = common::tmp(&dir, "out.png");
+    let bad = common::tmp(&dir, "bad.toml");
+    std::fs::write(&bad, "version = 1\n[[sphere]]\nradius = -1\n").unwrap();
+    let good = common::scene("sphere-on-plane.toml");
+    let cases: [(Vec<&str>, i32); 3] = [
+        (vec!["render", &good, "--res", "16x9"], 0),
+        (vec!["check", bad.to_str().unwrap()], 1),
+        (vec!["convert", bad.to_str().unwrap(), "-o"], 2),
+    ];
+    for (mut args, status) in cases {
+        if args[0] == "render" {
+            args.extend(["-o", out.to_str().unwrap()]);
+        }
+        let mut child = Command::new(env!("CARGO_BIN_EXE_quadray"))
+            .args(&args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stderr.take()); // the reader goes before anything is written
+        let done = child.wait().unwrap();
+        assert_eq!(done.code(), Some(status), "{args:?}");
+    }
+    assert!(out.exists(), "the render wrote its image");
+}
+
+/// An output that is one of the command's own inputs is refused (exit 2) before anything is
+/// written, whatever its spelling: the heat map of `compare` over an image it compares, a render
+/// over the texture its scene reads, a conversion over its source or the source's buffer.
+#[test]
+fn outputs_never_replace_the_commands_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let copy = |name: &str| {
+        let to = common::tmp(&dir, name);
+        std::fs::copy(common::scene(name), &to).unwrap();
+        to
+    };
+    let gltf = copy("gltf-quadrics.gltf");
+    let bin = copy("gltf-quadrics.bin");
+    let image = common::tmp(&dir, "a.png");
+    let made = common::quadray(&[
+        "render",
+        gltf.to_str().unwrap(),
+        "--res",
+        "16x9",
+        "-o",
+        image.to_str().unwrap(),
+    ]);
+    assert!(made.status.success(), "{made:?}");
+    // The OBJ scene, whose MTL reads a texture, copied with its folder.
+    let scene = copy("obj-mesh.toml");
+    std::fs::create_dir_all(common::tmp(&dir, "obj-mtl/textures")).unwrap();
+    for name in [
+        "obj-mtl/pedestal.obj",
+        "obj-mtl/pedestal.mtl",
+        "obj-mtl/textures/tiles.png",
+    ] {
+        copy(name);
+    }
+    let texture = common::tmp(&dir, "obj-mtl/textures/tiles.png");
+    let respelled = dir.path().join("obj-mtl/../obj-mtl/textures/tiles.png");
+    let cases: Vec<(Vec<String>, &Path)> = vec![
+        (
+            vec![
+                "compare".into(),
+                path(&image),
+                path(&image),
+                "--diff".into(),
+                path(&image),
+            ],
+            &image,
+        ),
+        (
+            vec![
+                "render".into(),
+                path(&scene),
+                "--res".into(),
+                "8x8".into(),
+                "-o".into(),
+                path(&respelled),
+            ],
+            &texture,
+        ),
+        (
+            vec!["convert".into(), path(&gltf), "-o".into(), path(&gltf)],
+            &gltf,
+        ),
+        (
+            vec![
+                "convert".into(),
+                path(&gltf),
+                "-o".into(),
+                path(&common::tmp(&dir, "gltf-quadrics.bin.gltf")),
+            ],
+            &gltf,
+        ),
+    ];
+    for (args, kept) in cases {
+        let before = std::fs::read(kept).unwrap();
+        let bin_before = std::fs::read(&bin).unwrap();
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = common::quadray(&args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        if args[0] == "convert" && args[3].ends_with(".bin.gltf") {
+            // Another name whose buffer is no input: written.
+            assert!(o.status.success(), "{args:?}: {stderr}");
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains("name another output"), "{args:?}: {stderr}");
+        assert_eq!(
+            std::fs::read(kept).unwrap(),
+            before,
+            "{args:?} changed {kept:?}"
+        );
+        assert_eq!(
+            std::fs::read(&bin).unwrap(),
+            bin_before,
+            "{args:?} changed the buffer"
+        );
+    }
+    // A .gltf output whose buffer would replace the source's buffer.
+    let twin = common::tmp(&dir, "gltf-quadrics.glb");
+    let o = common::quadray(&["convert", &path(&gltf), "-o", &path(&twin)]);
+    assert!(
+        o.status.success(),
+        "a .glb writes no buffer beside it: {o:?}"
+    );
+}
+
+fn path(p: &Path) -> String {
+    p.to_string_lossy().into_owned()
+}
+
+/// A .gltf and its .bin are replaced together: when the .gltf cannot be written (a folder in its
+/// place), the old .bin stays as it was and no temporary file is left.
+#[test]
+fn a_gltf_and_its_buffer_are_replaced_together() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(common::tmp(&dir, "out.gltf")).unwrap();
+    let bin = common::tmp(&dir, "out.bin");
+    std::fs::write(&bin, b"old buffer").unwrap();
+    let o = common::quadray(&[
+        "convert",
+        &common::scene("sphere-on-plane.toml"),
+        "-o",
+        &path(&common::tmp(&dir, "out.gltf")),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("out.gltf") && stderr.contains("folder"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read(&bin).unwrap(), b"old buffer");
+    let mut names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["out.bin", "out.gltf"]);
+}
+
 /// Pipes given where a file is read are refused at once instead of blocking forever (the loaders
 /// refuse them already: these are the merge and compare inputs).
 #[cfg(unix)]

@@ -40,41 +40,93 @@ pub fn replace_with<E: From<std::io::Error>>(
     path: &Path,
     write: impl FnOnce(&mut Writer<'_>) -> Result<(), E>,
 ) -> Result<(), E> {
-    crate::confine::check_write(path)?;
-    let dir = parent_dir(path);
-    let name = path
-        .file_name()
-        .and_then(|n| n.to_str())
-        .unwrap_or("output");
-    let suffix = match path.extension().and_then(|e| e.to_str()) {
-        Some(ext) => format!(".quadray-tmp.{ext}"),
-        None => ".quadray-tmp".to_string(),
-    };
-    // An extension too long for any temporary name leaves none of NAME; the write then fails
-    // with the file system's own error.
-    let room = NAME_MAX.saturating_sub(NAME_OVERHEAD + suffix.len());
-    let prefix = format!(".{}.p", cut_to(name, room));
-    remove_leftovers(&dir, &prefix, &suffix);
-    let pid_prefix = format!("{prefix}{}.", std::process::id());
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(&pid_prefix).suffix(&suffix);
-    ask_for_default_mode(&mut builder);
-    let mut tmp = builder.tempfile_in(&dir)?;
-    {
-        let mut writer = BufWriter::new(tmp.as_file_mut());
-        write(&mut writer)?;
-        writer.flush()?;
-    }
-    keep_existing_mode(path, tmp.as_file())?;
-    tmp.as_file().sync_all()?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    sync_dir(&dir);
-    Ok(())
+    Ok(Written::new(path, write)?.commit()?)
 }
 
 /// [`replace_with`] for contents already in memory.
 pub fn replace(path: &Path, contents: &[u8]) -> std::io::Result<()> {
     replace_with(path, |w| w.write_all(contents))
+}
+
+/// Replaces several files that belong together (a `.gltf` and its `.bin`) only once all their
+/// new contents are complete and on disk: a failure before the renames (a full disk, a target
+/// that is a folder) leaves every older file as it was. The renames then run in order; one that
+/// fails after another succeeded (the folder's permissions changed meanwhile) leaves the files
+/// renamed before it replaced. The error comes with the file it concerns.
+pub fn replace_all(files: &[(&Path, &[u8])]) -> Result<(), (PathBuf, std::io::Error)> {
+    // A folder in a target's place fails only at its rename: refused before any file is replaced.
+    for &(path, _) in files {
+        if std::fs::symlink_metadata(path).is_ok_and(|m| m.is_dir()) {
+            let e = std::io::Error::new(std::io::ErrorKind::IsADirectory, "a folder is there");
+            return Err((path.to_path_buf(), e));
+        }
+    }
+    let written = (files.iter())
+        .map(|&(path, contents)| {
+            Written::new(path, |w| w.write_all(contents)).map_err(|e| (path.to_path_buf(), e))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    for w in written {
+        let path = w.path.clone();
+        w.commit().map_err(|e| (path, e))?;
+    }
+    Ok(())
+}
+
+/// New contents complete and synced in a temporary file beside their target, not yet renamed
+/// over it; dropped, the temporary file is deleted.
+struct Written {
+    tmp: tempfile::NamedTempFile,
+    path: PathBuf,
+    dir: PathBuf,
+}
+
+impl Written {
+    /// Fills a temporary file beside `path` through `write`, then flushes and syncs it.
+    fn new<E: From<std::io::Error>>(
+        path: &Path,
+        write: impl FnOnce(&mut Writer<'_>) -> Result<(), E>,
+    ) -> Result<Written, E> {
+        crate::confine::check_write(path)?;
+        let dir = parent_dir(path);
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or("output");
+        let suffix = match path.extension().and_then(|e| e.to_str()) {
+            Some(ext) => format!(".quadray-tmp.{ext}"),
+            None => ".quadray-tmp".to_string(),
+        };
+        // An extension too long for any temporary name leaves none of NAME; the write then
+        // fails with the file system's own error.
+        let room = NAME_MAX.saturating_sub(NAME_OVERHEAD + suffix.len());
+        let prefix = format!(".{}.p", cut_to(name, room));
+        remove_leftovers(&dir, &prefix, &suffix);
+        let pid_prefix = format!("{prefix}{}.", std::process::id());
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&pid_prefix).suffix(&suffix);
+        ask_for_default_mode(&mut builder);
+        let mut tmp = builder.tempfile_in(&dir)?;
+        {
+            let mut writer = BufWriter::new(tmp.as_file_mut());
+            write(&mut writer)?;
+            writer.flush()?;
+        }
+        keep_existing_mode(path, tmp.as_file())?;
+        tmp.as_file().sync_all()?;
+        Ok(Written {
+            tmp,
+            path: path.to_path_buf(),
+            dir,
+        })
+    }
+
+    /// Renames the temporary file over the target, and makes the rename durable.
+    fn commit(self) -> std::io::Result<()> {
+        self.tmp.persist(&self.path).map_err(|e| e.error)?;
+        sync_dir(&self.dir);
+        Ok(())
+    }
 }
 
 fn parent_dir(path: &Path) -> PathBuf {
@@ -205,6 +257,29 @@ mod tests {
         replace(&target, b"new").unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"new");
         assert_eq!(entries(dir.path()), vec!["out.png"]);
+    }
+
+    /// Files replaced together: all or none. A folder in the second's place leaves the first
+    /// as it was and no temporary file; with the way clear both are replaced.
+    #[test]
+    fn files_that_belong_together_are_replaced_together() {
+        let dir = tempfile::tempdir().unwrap();
+        let (first, second) = (dir.path().join("a.bin"), dir.path().join("a.gltf"));
+        std::fs::write(&first, b"old").unwrap();
+        std::fs::create_dir(&second).unwrap();
+        let files: [(&Path, &[u8]); 2] = [(&first, b"new bin"), (&second, b"new gltf")];
+        let (path, e) = replace_all(&files).unwrap_err();
+        assert_eq!(
+            (path.as_path(), e.kind()),
+            (second.as_path(), std::io::ErrorKind::IsADirectory)
+        );
+        assert_eq!(std::fs::read(&first).unwrap(), b"old");
+        assert_eq!(entries(dir.path()), vec!["a.bin", "a.gltf"]);
+        std::fs::remove_dir(&second).unwrap();
+        replace_all(&files).unwrap();
+        assert_eq!(std::fs::read(&first).unwrap(), b"new bin");
+        assert_eq!(std::fs::read(&second).unwrap(), b"new gltf");
+        assert_eq!(entries(dir.path()), vec!["a.bin", "a.gltf"]);
     }
 
     /// The temporary file sits beside the target, hidden, with the target's extension.

@@ -13,15 +13,20 @@
 //!
 //! The same choke point can list what was read ([`record_reads`]), which `quadray check` prints.
 
+use std::cell::RefCell;
 use std::io::{Error, ErrorKind};
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, RwLock};
+use std::sync::RwLock;
 
 /// The environment variable that confines a process when no `--confine` is given.
 pub const ENV: &str = "QUADRAY_CONFINE";
 
 static ROOT: RwLock<Option<PathBuf>> = RwLock::new(None);
-static READS: Mutex<Option<Vec<PathBuf>>> = Mutex::new(None);
+thread_local! {
+    /// The files this thread has read since [`record_reads`], when they are being listed: the
+    /// loader reads on the thread that asked, so two loads on two threads keep their own lists.
+    static READS: RefCell<Option<Vec<PathBuf>>> = const { RefCell::new(None) };
+}
 
 /// Confines every later read and write to `dir` (resolved: it must exist and be a folder).
 pub fn confine_to(dir: &Path) -> std::io::Result<PathBuf> {
@@ -119,29 +124,27 @@ fn inside(root: &Path, resolved: &Path, asked: &Path) -> std::io::Result<()> {
     ))
 }
 
-/// Starts listing the files read from now on, for [`take_reads`].
+/// Starts listing the files this thread reads from now on, for [`take_reads`].
 pub fn record_reads() {
-    *READS.lock().unwrap_or_else(|e| e.into_inner()) = Some(Vec::new());
+    READS.with_borrow_mut(|reads| *reads = Some(Vec::new()));
 }
 
 /// Notes that `path` was read, if reads are being listed.
 pub(crate) fn note_read(path: &Path) {
-    if let Some(list) = READS.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
-        let resolved = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
-        if !list.contains(&resolved) {
-            list.push(resolved);
+    READS.with_borrow_mut(|reads| {
+        if let Some(list) = reads.as_mut() {
+            let resolved = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+            if !list.contains(&resolved) {
+                list.push(resolved);
+            }
         }
-    }
+    });
 }
 
-/// The files read since [`record_reads`] (resolved, each once, in order of first read), and
-/// stops listing.
+/// The files this thread read since [`record_reads`] (resolved, each once, in order of first
+/// read), and stops listing.
 pub fn take_reads() -> Vec<PathBuf> {
-    READS
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .take()
-        .unwrap_or_default()
+    READS.with_borrow_mut(Option::take).unwrap_or_default()
 }
 
 #[cfg(test)]

@@ -508,7 +508,7 @@ pub fn run(a: &ImagesArgs) -> Result<()> {
     let report = pool.install(|| {
         measure(a, &mut |what| {
             if !quiet {
-                eprintln!("bench images: {what}");
+                errln!("bench images: {what}");
             }
         })
     })?;
@@ -518,7 +518,7 @@ pub fn run(a: &ImagesArgs) -> Result<()> {
     }
     write_outputs(&report, &a.out, &a.name, &table)?;
     if !quiet {
-        eprintln!(
+        errln!(
             "wrote {}.md, {0}.svg and {0}-reference.png",
             a.out.join(&a.name).display(),
         );

@@ -40,7 +40,9 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
     /// The output file (or its .bin) could not be written.
-    #[error("cannot write `{}`: {source}", path.display())]
+    // The cause is the error's source, not repeated in its own message: a chain printed whole
+    // (`{:#}`) would say it twice.
+    #[error("cannot write `{}`", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -271,12 +273,13 @@ fn write_files(
     let text =
         serde_json::to_vec_pretty(gltf).map_err(|e| ExportError::Unsupported(e.to_string()))?;
     if binary {
-        write_atomically(out, &glb(&text, bin))?;
+        write_atomically(out, &glb(&text, bin))
     } else {
-        write_atomically(&bin_path, bin)?;
-        write_atomically(out, &text)?;
+        // The pair is replaced together: a .gltf that cannot be written leaves the old .bin.
+        let files: [(&Path, &[u8]); 2] = [(&bin_path, bin), (out, &text)];
+        crate::atomic_file::replace_all(&files)
+            .map_err(|(path, source)| ExportError::Io { path, source })
     }
-    Ok(())
 }
 
 /// Characters escaped in the .bin file name written as a URI.
