@@ -5,6 +5,7 @@ use std::io::Write;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    remove_temporaries_on_signals();
     // clap prints its own usage errors and exits with status 2.
     let cli = quadray_cli::args::Cli::parse();
     quadray_cli::logging::init(quadray_cli::logging::level(cli.verbose));
@@ -25,3 +26,24 @@ fn main() -> ExitCode {
         }
     }
 }
+
+/// Ends the process on SIGINT (Ctrl-C), SIGTERM (`kill`, `timeout`) or SIGHUP (a closed
+/// terminal) as those signals would, with status 128 + the signal's number, after deleting the
+/// temporary files of outputs being written: older outputs are untouched either way, and no
+/// hidden half-written file is left beside them.
+#[cfg(unix)]
+fn remove_temporaries_on_signals() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return; // the default actions then stay
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            quadray_loader::atomic_file::remove_pending();
+            std::process::exit(128 + signal);
+        }
+    });
+}
+
+#[cfg(not(unix))]
+fn remove_temporaries_on_signals() {}

@@ -91,6 +91,80 @@ fn killed_renders_leave_the_previous_output_intact() {
     }
 }
 
+/// A render ended by SIGINT (Ctrl-C), SIGTERM (`kill`, `timeout`) or SIGHUP at moments spread
+/// over its run, its image and passes being written at some of them: it exits with 128 + the
+/// signal's number, leaves the previous output byte for byte, and, unlike a SIGKILL, leaves no
+/// temporary file at all.
+#[cfg(unix)]
+#[test]
+fn interrupted_renders_leave_no_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = tmp(&dir, "stop.exr");
+    let o = quadray(&[
+        "render",
+        &scene("defense.toml"),
+        "-o",
+        out.to_str().unwrap(),
+        "--res",
+        "32x24",
+    ]);
+    assert!(o.status.success());
+    let mut before = std::fs::read(&out).unwrap();
+    let mut stopped = 0;
+    for (k, (signal, number)) in [("INT", 2), ("TERM", 15), ("HUP", 1)]
+        .iter()
+        .cycle()
+        .take(24)
+        .enumerate()
+    {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_quadray"))
+            .args([
+                "render",
+                &scene("defense.toml"),
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .args([
+                "--res",
+                "400x300",
+                "-t",
+                "1",
+                "-q",
+                "--aov",
+                "depth,normal,albedo,variance",
+            ])
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(10 * k as u64));
+        let sent = Command::new("kill")
+            .args([format!("-{signal}"), child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(sent.success());
+        let status = child.wait().unwrap();
+        let now = std::fs::read(&out).unwrap();
+        if status.success() {
+            before = now; // finished before the signal
+        } else {
+            assert_eq!(
+                status.code(),
+                Some(128 + number),
+                "SIG{signal} after {} ms",
+                10 * k
+            );
+            assert_eq!(now, before, "SIG{signal} after {} ms", 10 * k);
+            stopped += 1;
+        }
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["stop.exr"], "SIG{signal} after {} ms", 10 * k);
+    }
+    assert!(stopped > 6, "{stopped} renders stopped by a signal");
+}
+
 /// A 64 KiB tmpfs mounted on a temporary folder, unmounted when dropped: a disk that fills up.
 struct SmallDisk {
     dir: tempfile::TempDir,

@@ -13,13 +13,16 @@
 //! else `0666` less the process's umask, as `cp` or `touch` would create it.
 //!
 //! On any error the temporary file is deleted (the `tempfile` crate deletes it when dropped), and
-//! an older target survives untouched. A process killed outright (SIGKILL) cannot delete it; the
+//! an older target survives untouched. A process ending on a signal it can handle deletes the
+//! temporary files being written through [`remove_pending`] (the CLI's handler of SIGINT, SIGTERM
+//! and SIGHUP). A process killed outright (SIGKILL) cannot delete it; the
 //! next write of the same target removes such leftovers, but only those whose process (the PID in
 //! the name) is gone, so a render still running into the same file is never disturbed.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 /// The buffered writer a [`replace_with`] writer fills; it is flushed, checked and synced after.
 pub type Writer<'a> = BufWriter<&'a mut File>;
@@ -73,12 +76,50 @@ pub fn replace_all(files: &[(&Path, &[u8])]) -> Result<(), (PathBuf, std::io::Er
     Ok(())
 }
 
+/// The temporary files being written now, by any thread: what [`remove_pending`] deletes.
+static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Deletes every temporary file being written now. For a process about to end on a signal
+/// (Ctrl-C, `kill`, a closed terminal), which runs no destructors: older outputs are untouched,
+/// and no half-written temporary file is left. Best effort: a file already renamed over its
+/// target, or that cannot be removed, stays.
+pub fn remove_pending() {
+    let pending = PENDING.lock().unwrap_or_else(|e| e.into_inner());
+    for path in pending.iter() {
+        let _ = std::fs::remove_file(path);
+    }
+}
+
+/// A temporary file listed in [`PENDING`] while it lives.
+struct Listed(PathBuf);
+
+impl Listed {
+    fn new(path: &Path) -> Listed {
+        PENDING
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(path.to_path_buf());
+        Listed(path.to_path_buf())
+    }
+}
+
+impl Drop for Listed {
+    fn drop(&mut self) {
+        let mut pending = PENDING.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(k) = pending.iter().position(|p| *p == self.0) {
+            pending.swap_remove(k);
+        }
+    }
+}
+
 /// New contents complete and synced in a temporary file beside their target, not yet renamed
 /// over it; dropped, the temporary file is deleted.
 struct Written {
     tmp: tempfile::NamedTempFile,
     path: PathBuf,
     dir: PathBuf,
+    /// Listed for [`remove_pending`] until renamed or deleted.
+    _listed: Listed,
 }
 
 impl Written {
@@ -107,6 +148,7 @@ impl Written {
         builder.prefix(&pid_prefix).suffix(&suffix);
         ask_for_default_mode(&mut builder);
         let mut tmp = builder.tempfile_in(&dir)?;
+        let listed = Listed::new(tmp.path());
         {
             let mut writer = BufWriter::new(tmp.as_file_mut());
             write(&mut writer)?;
@@ -118,6 +160,7 @@ impl Written {
             tmp,
             path: path.to_path_buf(),
             dir,
+            _listed: listed,
         })
     }
 
