@@ -189,13 +189,19 @@ impl SamplingStats {
         match e.rule {
             ErrorRule::Image => {
                 let target = if e.target > 0.0 {
-                    format!(" (target {})", e.target)
+                    format!(" (target {})", short_number(e.target))
                 } else {
                     String::new()
                 };
                 let stop = match e.stop {
                     // The plan (the pilot) met the target; the audit, which reports the image's
                     // own error, may still say otherwise, and the line says so.
+                    // Without a target (a time limit or a budget alone), rounds end early only
+                    // when no pixel has samples left to take or error left to lose.
+                    Stop::Converged if e.target <= 0.0 => format!(
+                        "no pixel left to refine (each at max spp {} or without error)",
+                        self.max_spp
+                    ),
                     Stop::Converged if e.estimated_rmse > e.target => format!(
                         "the rounds planned for the target done, the estimate {:.2}x the target",
                         e.estimated_rmse / e.target
@@ -233,7 +239,10 @@ impl SamplingStats {
                 };
                 format!(
                     "adaptive per pixel, {spp}, error target {}, worst {:.3}, mean {:.4}, estimated image error {:.2e} RMSE: {stop}",
-                    e.target, p.worst, p.mean, e.estimated_rmse
+                    short_number(e.target),
+                    p.worst,
+                    p.mean,
+                    e.estimated_rmse
                 )
             }
         }
@@ -285,6 +294,16 @@ pub fn estimated_rmse(estimates: &[PixelEstimate], calibration: &Calibration) ->
 /// The largest of the pixels' relative errors (0 for none).
 pub(super) fn worst_error(errors: &[f64]) -> f64 {
     errors.iter().copied().fold(0.0, f64::max)
+}
+
+/// `x` as a user would write it: plainly from 10⁻⁴ to 10⁶ (0.002, 16), else in scientific
+/// notation (1e-300, where the plain form has 300 digits).
+fn short_number(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 #[cfg(test)]
@@ -358,5 +377,22 @@ mod tests {
                 .ends_with("the rounds planned for the target done, the estimate 1.20x the target"),
             "{above}"
         );
+    }
+
+    /// Without a target (a time limit alone), rounds that end early say that nothing is left to
+    /// refine, not a ratio to a target of 0 ("infx"); a target far from 1 is written in
+    /// scientific notation, not in 300 digits.
+    #[test]
+    fn the_line_needs_no_target_and_writes_any_target_short() {
+        let untargeted = converged(0.0, 2e-4).summary();
+        assert!(
+            untargeted.ends_with("no pixel left to refine (each at max spp 64 or without error)")
+                && !untargeted.contains("inf"),
+            "{untargeted}"
+        );
+        let tiny = converged(1e-300, 2e-4).summary();
+        assert!(tiny.contains("(target 1e-300)"), "{tiny}");
+        assert_eq!(short_number(0.002), "0.002");
+        assert_eq!(short_number(2e6), "2e6");
     }
 }
