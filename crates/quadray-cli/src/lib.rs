@@ -12,12 +12,31 @@ macro_rules! outln {
 }
 
 /// `eprintln!` that never panics: with stderr closed (a pipe whose reader has gone) the message
-/// is lost and the command goes on, where `eprintln!` would abort it with exit status 101.
+/// is lost and the command goes on, where `eprintln!` would abort it with exit status 101. Control
+/// characters in the message are written as escapes ([`terminal_safe`]).
 macro_rules! errln {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+        let message = format!($($arg)*);
+        let _ = writeln!(std::io::stderr().lock(), "{}", $crate::terminal_safe(&message));
     }};
+}
+
+/// `text` with every control character but the line break written as an escape (`\u{1b}`):
+/// names from a scene (a material, a file, an OBJ group) are echoed in messages, and a scene from
+/// a stranger must not be able to move the cursor, clear the screen or retitle the terminal.
+pub fn terminal_safe(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.chars().any(|c| c.is_control() && c != '\n') {
+        return text.into();
+    }
+    text.chars()
+        .map(|c| match c {
+            '\n' => "\n".to_string(),
+            c if c.is_control() => c.escape_unicode().to_string(),
+            c => c.to_string(),
+        })
+        .collect::<String>()
+        .into()
 }
 
 // The application layer's modules, under the names this crate's commands use for them.
@@ -205,6 +224,22 @@ where
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    /// Escapes and other control characters from a scene come out as text; line breaks and
+    /// plain text stay.
+    #[test]
+    fn control_characters_are_written_as_escapes() {
+        assert_eq!(terminal_safe("plain\nlines"), "plain\nlines");
+        let hostile = "\u{1b}[2J\u{1b}]0;title\u{7}boom\r";
+        let safe = terminal_safe(hostile);
+        assert!(!safe.chars().any(|c| c.is_control()), "{safe}");
+        assert!(
+            safe.contains("\\u{1b}[2J") && safe.contains("boom"),
+            "{safe}"
+        );
+    }
+
     #[test]
     fn counts_agree_with_their_nouns() {
         assert_eq!(super::counted(1, "plane"), "1 plane");

@@ -18,9 +18,10 @@ fn main() -> ExitCode {
             // `{:#}` prints the whole context chain on one line. A closed stderr loses the
             // message but not the exit status (`eprintln!` would panic: status 101).
             let mut stderr = std::io::stderr().lock();
-            let _ = writeln!(stderr, "error: {err:#}");
+            let safe = |text: String| quadray_cli::terminal_safe(&text).into_owned();
+            let _ = writeln!(stderr, "error: {}", safe(format!("{err:#}")));
             if let Some(snippet) = quadray_cli::snippet::for_error(&err) {
-                let _ = writeln!(stderr, "{snippet}");
+                let _ = writeln!(stderr, "{}", safe(snippet.to_string()));
             }
             ExitCode::from(quadray_cli::exit_status(&err, is_compare))
         }
