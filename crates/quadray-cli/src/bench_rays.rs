@@ -36,7 +36,11 @@ pub struct RaysArgs {
 
 /// Reads a `RAYS` file.
 pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    // A regular file of at most 4 GiB (about 179 million rays): never a device or a pipe, whose
+    // read would not end.
+    let limit = quadray_loader::read_limited::MAX_MESH_BYTES;
+    let bytes = quadray_loader::read_limited::read(path, limit)
+        .with_context(|| format!("cannot read {}", path.display()))?;
     if bytes.len() < 8 || &bytes[..4] != b"RAYS" {
         bail!(
             "{}: not a ray file (expected the magic bytes RAYS)",
@@ -191,4 +195,26 @@ fn cast(scene: &Scene, rays: &[Ray], occlusion: bool) -> (u64, f64) {
             acc
         })
         .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A device or a folder as the ray file is refused at once (`/dev/zero` was read until
+    /// memory ran out); a short file is refused by its header.
+    #[test]
+    fn ray_files_are_regular_files() {
+        #[cfg(unix)]
+        {
+            let e = read_rays(Path::new("/dev/zero")).unwrap_err();
+            assert!(format!("{e:#}").contains("not a regular file"), "{e:#}");
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let e = read_rays(dir.path()).unwrap_err();
+        assert!(format!("{e:#}").contains("not a regular file"), "{e:#}");
+        let short = dir.path().join("short.rays");
+        std::fs::write(&short, b"RAYS\x02\0\0\0").unwrap();
+        assert!(read_rays(&short).is_err());
+    }
 }
