@@ -92,16 +92,49 @@ fn render_hints(
     scene: Option<&gltf::Scene<'_>>,
     path: &Path,
 ) -> Result<RenderHints, LoadError> {
-    let Some(extras) = scene
-        .and_then(|s| file.scene_extras.get(s.index()))
-        .and_then(Option::as_ref)
-    else {
+    let Some((index, extras)) = scene.and_then(|s| {
+        let extras = file.scene_extras.get(s.index())?.as_ref()?;
+        Some((s.index(), extras))
+    }) else {
         return Ok(RenderHints::default());
     };
-    serde_json::from_value(extras.clone()).map_err(|e| {
+    let key = format!("scenes[{index}].extras.quadray");
+    let hints: RenderHints = serde_json::from_value(extras.clone()).map_err(|e| {
         let message = crate::plain_words::in_plain_words(&e.to_string());
-        LoadError::invalid(path, None, "scenes[].extras.quadray", message)
-    })
+        LoadError::invalid(path, None, key.clone(), message)
+    })?;
+    check_render_hints(&hints).map_err(|(field, problem)| {
+        LoadError::invalid(path, None, format!("{key}.{field}"), problem)
+    })?;
+    Ok(hints)
+}
+
+/// The render hints' values within the limits a native scene's `[render]` keeps (resolution,
+/// samples, depth, colours), so `check` refuses what `render` would; the field and the problem
+/// when not.
+fn check_render_hints(hints: &RenderHints) -> Result<(), (&'static str, String)> {
+    use quadray::render::{MAX_DEPTH, MAX_SPP, check_resolution};
+    if let Some([w, h]) = hints.resolution {
+        check_resolution(w, h).map_err(|e| ("resolution", e.to_string()))?;
+    }
+    let count = |field, value: Option<u32>, max: u32| match value {
+        Some(n) if !(1..=max).contains(&n) => {
+            Err((field, format!("must be between 1 and {max}, got {n}")))
+        }
+        _ => Ok(()),
+    };
+    count("spp", hints.spp, MAX_SPP)?;
+    count("maxDepth", hints.max_depth, MAX_DEPTH)?;
+    for (field, colour) in [
+        ("background", hints.background),
+        ("environment", hints.environment),
+    ] {
+        if let Some(c) = colour.filter(|c| !c.iter().all(|x| x.is_finite() && *x >= 0.0)) {
+            let problem = format!("colour components must be finite and non-negative, got {c:?}");
+            return Err((field, problem));
+        }
+    }
+    Ok(())
 }
 
 /// The file's quadric shapes (the root extension), or none.
