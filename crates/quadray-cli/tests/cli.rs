@@ -237,6 +237,20 @@ fn set_overrides_scene_values() {
     );
     let o = quadray(&["check", &scene("defense.toml"), "--set", "render.spd=4"]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("did you mean \"spp\""));
+    // A value of the wrong type names its override, not the file's line of the key, which holds
+    // a valid value.
+    let o = quadray(&[
+        "check",
+        &scene("defense.toml"),
+        "--set",
+        "camera.from=\"abc\"",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("(the value comes from --set camera.from=\"abc\")") && !err.contains("-->"),
+        "{err}"
+    );
 }
 
 /// `--seed` gives independent renders: the same seed the same bytes, another seed other jitter.

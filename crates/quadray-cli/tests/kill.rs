@@ -147,14 +147,15 @@ fn interrupted_renders_leave_no_temporary_file() {
         if status.success() {
             before = now; // finished before the signal
         } else {
-            assert_eq!(
-                status.code(),
-                Some(128 + number),
-                "SIG{signal} after {} ms",
-                10 * k
-            );
+            // A signal that lands before `main` sets its handler (at once after the spawn, on a
+            // loaded host) ends the process itself, before any output was begun.
+            use std::os::unix::process::ExitStatusExt;
+            if status.signal() != Some(*number) {
+                let code = status.code();
+                assert_eq!(code, Some(128 + number), "SIG{signal} after {} ms", 10 * k);
+                stopped += 1;
+            }
             assert_eq!(now, before, "SIG{signal} after {} ms", 10 * k);
-            stopped += 1;
         }
         let names: Vec<_> = std::fs::read_dir(dir.path())
             .unwrap()

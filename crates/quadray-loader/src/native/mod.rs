@@ -141,6 +141,18 @@ pub fn load_scene_with(
         LoadError::new(path, None, LoadErrorKind::Override { set, message })
     })?;
     parse_scene(&edited, path).map_err(|mut e| {
+        // A value of the wrong type fails the parse, at a place in the edited text, which is not
+        // the file's. When the file itself parses, the overrides made the error: name them, not
+        // a place; when it does not, its own error is the one to report.
+        if let LoadErrorKind::Syntax(message) = &mut e.kind {
+            if toml::from_str::<SceneFile>(&text).is_err() {
+                return parse_scene(&text, path).err().unwrap_or(e);
+            }
+            e.location = None;
+            let sets: Vec<String> = overrides.iter().map(ToString::to_string).collect();
+            message.push_str(&format!(" (the value comes from {})", sets.join(", ")));
+            return e;
+        }
         // The edited line is not what the file says: name the override instead of a place.
         if let LoadErrorKind::Invalid { key, message } = &mut e.kind
             && let Some(o) = overrides.iter().rev().find(|o| {
