@@ -22,9 +22,8 @@ impl Quadric {
         #[cfg(target_arch = "x86_64")]
         if crate::simd::simd_path() == crate::simd::SimdPath::Avx2 {
             // SAFETY: the CPU has AVX2 (checked by `simd_path`).
-            let (hits, near_tangent) =
+            let (mut hits, near_tangent) =
                 unsafe { avx2::intersect_four(self, eye_local, dirs, t_max) };
-            let mut hits = hits;
             for (lane, hit) in hits.iter_mut().enumerate() {
                 if near_tangent & (1 << lane) != 0 {
                     *hit = self.intersect_from_local_point(eye_local, dirs[lane], t_max[lane]);
@@ -91,6 +90,7 @@ mod avx2 {
         dot(v4_splat(a), b)
     }
 
+    /// The same vector in every lane.
     #[target_feature(enable = "avx2")]
     fn v4_splat(v: DVec3) -> V4 {
         V4 {
