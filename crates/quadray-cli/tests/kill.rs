@@ -2,8 +2,25 @@
 //! disk, and keep the permissions a user expects.
 
 use crate::common;
-use common::{quadray, scene, tmp};
+use common::{quadray, render_to, scene, tmp};
 use std::process::Command;
+
+/// A render of scenes/defense.toml into `out` on one thread with `args`, started and not waited
+/// for (its messages dropped).
+fn start_render(out: &std::path::Path, args: &[&str]) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_quadray"))
+        .args([
+            "render",
+            &scene("defense.toml"),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .args(["-t", "1", "-q"])
+        .args(args)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap()
+}
 
 /// A render killed outright (SIGKILL, which no handler sees) at several moments never damages the
 /// previous output: it stays byte for byte and decodes; any leftover is a recognisable hidden
@@ -13,15 +30,7 @@ fn killed_renders_leave_the_previous_output_intact() {
     let dir = tempfile::tempdir().unwrap();
     for ext in ["png", "exr"] {
         let out = tmp(&dir, &format!("kill.{ext}"));
-        let o = quadray(&[
-            "render",
-            &scene("defense.toml"),
-            "-o",
-            out.to_str().unwrap(),
-            "--res",
-            "64x48",
-        ]);
-        assert!(o.status.success());
+        assert!(render_to("defense.toml", &out, "64x48").status.success());
         let mut before = std::fs::read(&out).unwrap();
         let first = before.clone();
         // Kills while rendering (a long render), then at moments spread over short renders, so
@@ -29,17 +38,7 @@ fn killed_renders_leave_the_previous_output_intact() {
         let long = [0u64, 30, 120, 400].map(|d| (d, "1600x1200"));
         let short = (0..24u64).map(|i| (i * 4, "480x360"));
         for (delay_ms, res) in long.into_iter().chain(short) {
-            let mut child = Command::new(env!("CARGO_BIN_EXE_quadray"))
-                .args([
-                    "render",
-                    &scene("defense.toml"),
-                    "-o",
-                    out.to_str().unwrap(),
-                ])
-                .args(["--res", res, "--spp", "4", "-t", "1", "-q"])
-                .stderr(std::process::Stdio::null())
-                .spawn()
-                .unwrap();
+            let mut child = start_render(&out, &["--res", res, "--spp", "4"]);
             std::thread::sleep(std::time::Duration::from_millis(delay_ms));
             let _ = child.kill(); // SIGKILL on Unix; the render may have finished already
             let finished = child.wait().unwrap().success();
@@ -100,15 +99,7 @@ fn killed_renders_leave_the_previous_output_intact() {
 fn interrupted_renders_leave_no_temporary_file() {
     let dir = tempfile::tempdir().unwrap();
     let out = tmp(&dir, "stop.exr");
-    let o = quadray(&[
-        "render",
-        &scene("defense.toml"),
-        "-o",
-        out.to_str().unwrap(),
-        "--res",
-        "32x24",
-    ]);
-    assert!(o.status.success());
+    assert!(render_to("defense.toml", &out, "32x24").status.success());
     let mut before = std::fs::read(&out).unwrap();
     let mut stopped = 0;
     for (k, (signal, number)) in [("INT", 2), ("TERM", 15), ("HUP", 1)]
@@ -117,25 +108,8 @@ fn interrupted_renders_leave_no_temporary_file() {
         .take(24)
         .enumerate()
     {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_quadray"))
-            .args([
-                "render",
-                &scene("defense.toml"),
-                "-o",
-                out.to_str().unwrap(),
-            ])
-            .args([
-                "--res",
-                "400x300",
-                "-t",
-                "1",
-                "-q",
-                "--aov",
-                "depth,normal,albedo,variance",
-            ])
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .unwrap();
+        let passes = ["--res", "400x300", "--aov", "depth,normal,albedo,variance"];
+        let mut child = start_render(&out, &passes);
         std::thread::sleep(std::time::Duration::from_millis(10 * k as u64));
         let sent = Command::new("kill")
             .args([format!("-{signal}"), child.id().to_string()])

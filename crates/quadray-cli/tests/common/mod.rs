@@ -13,6 +13,18 @@ pub fn quadray(args: &[&str]) -> Output {
         .expect("the quadray binary runs")
 }
 
+/// Renders the bundled scene `name` to `out` at `res` (`WxH`), waiting for the binary.
+pub fn render_to(name: &str, out: &Path, res: &str) -> Output {
+    quadray(&[
+        "render",
+        &scene(name),
+        "-o",
+        out.to_str().unwrap(),
+        "--res",
+        res,
+    ])
+}
+
 /// Path of a bundled scene in `scenes/`.
 pub fn scene(name: &str) -> String {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
