@@ -22,17 +22,18 @@ macro_rules! errln {
     }};
 }
 
-/// `text` with every control character but the line break written as an escape (`\u{1b}`):
-/// names from a scene (a material, a file, an OBJ group) are echoed in messages, and a scene from
-/// a stranger must not be able to move the cursor, clear the screen or retitle the terminal.
+/// `text` with every control character but the line break and the tab written as an escape
+/// (`\u{1b}`): names from a scene (a material, a file, an OBJ group) are echoed in messages, and
+/// a scene from a stranger must not be able to move the cursor, clear the screen or retitle the
+/// terminal.
 pub fn terminal_safe(text: &str) -> std::borrow::Cow<'_, str> {
-    if !text.chars().any(|c| c.is_control() && c != '\n') {
+    let harmful = |c: char| c.is_control() && c != '\n' && c != '\t';
+    if !text.chars().any(harmful) {
         return text.into();
     }
     text.chars()
         .map(|c| match c {
-            '\n' => "\n".to_string(),
-            c if c.is_control() => c.escape_unicode().to_string(),
+            c if harmful(c) => c.escape_unicode().to_string(),
             c => c.to_string(),
         })
         .collect::<String>()
@@ -230,7 +231,10 @@ mod tests {
     /// plain text stay.
     #[test]
     fn control_characters_are_written_as_escapes() {
-        assert_eq!(terminal_safe("plain\nlines"), "plain\nlines");
+        assert_eq!(
+            terminal_safe("plain\nlines\tand tabs"),
+            "plain\nlines\tand tabs"
+        );
         let hostile = "\u{1b}[2J\u{1b}]0;title\u{7}boom\r";
         let safe = terminal_safe(hostile);
         assert!(!safe.chars().any(|c| c.is_control()), "{safe}");
