@@ -58,6 +58,13 @@ pub(crate) fn locate_parse_error(bytes: &[u8], e: &tobj::LoadError) -> Option<Lo
             "a texture coordinate (vt) needs u v, optionally w",
         ),
         T::FaceParseError => locate_bad_face(bytes),
+        // tobj's polygon of no corners: an `f` with nothing after it.
+        T::InvalidPolygon => {
+            statements(&String::from_utf8_lossy(bytes)).find_map(|(line, k, words)| {
+                (k == "f" && words.is_empty())
+                    .then(|| (line, "a face (f) with no corners".to_string()))
+            })
+        }
         _ => None,
     }
 }
