@@ -43,7 +43,7 @@ use glam::{DVec3, Vec3};
 use rounds::Rounds;
 pub use settings::{
     Adaptive, AdaptiveError, DEFAULT_MAX_SPP, DEFAULT_MIN_SPP, ErrorRule, MAX_TIME_LIMIT_SECS,
-    MIN_FIRST_ROUND, time_limit_from_secs,
+    MIN_FIRST_ROUND, MIN_TIME_LIMIT_SECS, time_limit_from_secs,
 };
 pub use stats::{ErrorStats, PixelErrors, RoundSummary, SamplingStats, Stop, estimated_rmse};
 use std::borrow::Cow;

@@ -48,6 +48,9 @@ pub const DEFAULT_MIN_SPP: u32 = 8;
 pub const MIN_FIRST_ROUND: u32 = MIN_ERROR_SAMPLES;
 /// The most samples a pixel takes unless told otherwise.
 pub const DEFAULT_MAX_SPP: u32 = 1024;
+/// The shortest time limit, in seconds: a microsecond (a shorter one, 10⁻³⁰⁰ say, rounded to no
+/// time at all and was refused as zero).
+pub const MIN_TIME_LIMIT_SECS: f64 = 1e-6;
 /// The longest time limit, in seconds (about 11.6 days): far beyond any render's need, and well
 /// inside what a `Duration` holds.
 pub const MAX_TIME_LIMIT_SECS: f64 = 1e6;
@@ -87,9 +90,10 @@ pub enum AdaptiveError {
     /// A time limit that is zero.
     #[error("the time limit must be more than 0 seconds")]
     TimeLimit,
-    /// A time limit in seconds that is not a number in `(0, MAX_TIME_LIMIT_SECS]`.
+    /// A time limit in seconds that is not a number in
+    /// `[MIN_TIME_LIMIT_SECS, MAX_TIME_LIMIT_SECS]`.
     #[error(
-        "the time limit must be a number of seconds above 0 and at most {MAX_TIME_LIMIT_SECS:e} (about 11.6 days), got {0:?}"
+        "the time limit must be a number of seconds from {MIN_TIME_LIMIT_SECS:e} (a microsecond) to {MAX_TIME_LIMIT_SECS:e} (about 11.6 days), got {0:?}"
     )]
     TimeLimitSecs(f64),
     /// A sample budget outside `[min_spp, max_spp]`.
@@ -111,9 +115,10 @@ pub enum AdaptiveError {
     BudgetWithPixelRule,
 }
 
-/// The time limit of `secs` seconds, if that is a number in `(0, MAX_TIME_LIMIT_SECS]`.
+/// The time limit of `secs` seconds, if that is a number in
+/// `[MIN_TIME_LIMIT_SECS, MAX_TIME_LIMIT_SECS]`.
 pub fn time_limit_from_secs(secs: f64) -> Result<Duration, AdaptiveError> {
-    if secs > 0.0 && secs <= MAX_TIME_LIMIT_SECS {
+    if (MIN_TIME_LIMIT_SECS..=MAX_TIME_LIMIT_SECS).contains(&secs) {
         Ok(Duration::from_secs_f64(secs))
     } else {
         Err(AdaptiveError::TimeLimitSecs(secs))
