@@ -119,6 +119,16 @@ fn convert_writes_gltf_and_glb_that_render_like_the_native_scene() {
         if name.ends_with(".gltf") {
             assert!(dir.path().join("defense.bin").is_file());
         }
+        // Instanced shapes are counted as placed, not as the world's none.
+        let columns = dir.path().join(name.replace("defense", "columns"));
+        let o = quadray(&[
+            "convert",
+            &repo("scenes/columns.toml"),
+            "-o",
+            columns.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stderr(&o).contains(" placed by "), "{}", stderr(&o));
         let out = dir.path().join(format!("{name}.png"));
         let o = quadray(&[
             "render",
