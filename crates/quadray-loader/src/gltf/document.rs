@@ -364,7 +364,7 @@ fn validation_error(path: &Path, e: gltf::Error) -> LoadError {
         gltf::Error::Validation(errors) => {
             let (key, first) = errors
                 .first()
-                .map(|(p, e)| (p.to_string(), e.to_string()))
+                .map(|(p, e)| (extension_names(&p.to_string()), e.to_string()))
                 .unwrap_or_default();
             let more = if errors.len() > 1 {
                 format!(" (and {} more problems)", errors.len() - 1)
@@ -375,6 +375,29 @@ fn validation_error(path: &Path, e: gltf::Error) -> LoadError {
         }
         other => LoadError::new(path, None, LoadErrorKind::Syntax(other.to_string())),
     }
+}
+
+/// A validation error's path with the Khronos extensions spelt as the file spells them: the gltf
+/// crate names them by its fields (`extensions.khrLightsPunctual`), a key no file has
+/// (`extensions.KHR_lights_punctual`).
+fn extension_names(path: &str) -> String {
+    let spelt = |part: &str| {
+        let Some(rest) = part
+            .strip_prefix("khr")
+            .filter(|r| r.starts_with(char::is_uppercase))
+        else {
+            return part.to_string();
+        };
+        let mut name = String::from("KHR");
+        for c in rest.chars() {
+            if c.is_uppercase() {
+                name.push('_');
+            }
+            name.push(c.to_ascii_lowercase());
+        }
+        name
+    };
+    path.split('.').map(spelt).collect::<Vec<_>>().join(".")
 }
 
 /// Why a URI could not be read.
@@ -476,6 +499,20 @@ pub fn read_image(
 
 #[cfg(test)]
 mod tests {
+    /// Khronos extensions in validation paths are spelt as in the file.
+    #[test]
+    fn extension_names_are_the_files() {
+        assert_eq!(
+            super::extension_names("extensions.khrLightsPunctual.lights[0].spot"),
+            "extensions.KHR_lights_punctual.lights[0].spot"
+        );
+        assert_eq!(
+            super::extension_names("materials[2].extensions.khrMaterialsEmissiveStrength"),
+            "materials[2].extensions.KHR_materials_emissive_strength"
+        );
+        assert_eq!(super::extension_names("nodes[3].scale"), "nodes[3].scale");
+    }
+
     use super::*;
 
     fn err(json: &str) -> String {
