@@ -1,17 +1,16 @@
 //! Opening a glTF file: the GLB container, the JSON checks quadray makes before the gltf crate
-//! sees it (version, required extensions), validation, and the buffers and images it refers to.
+//! sees it (version, required extensions), validation, and the buffers it refers to (read as
+//! [`super::resources`] reads URIs).
 //!
 //! The GLB container and the URIs are handled here rather than by the gltf crate's importer,
 //! because that importer panics on malformed input (a GLB header shorter than itself, an invalid
 //! percent-encoded URI) and fails a whole file over one missing texture, which quadray reports
 //! as a warning instead.
 
+use super::resources::{UriError, read_uri};
 use crate::error::{LoadError, LoadErrorKind, Location};
-use crate::image_file::{decode_image, resolve_reference};
-use base64::Engine;
 use glam::{DAffine3, DMat4, DQuat, DVec3};
 use gltf::json::Value;
-use quadray::{ColorEncoding, Image};
 use std::path::{Path, PathBuf};
 
 /// Extensions quadray can honour when a file requires them.
@@ -400,120 +399,23 @@ fn extension_names(path: &str) -> String {
     path.split('.').map(spelt).collect::<Vec<_>>().join(".")
 }
 
-/// Why a URI could not be read.
-pub enum UriError {
-    /// The file it names could not be read.
-    Io(PathBuf, std::io::Error),
-    /// The URI itself is malformed or of a kind quadray does not fetch.
-    Invalid(String),
-}
-
-/// The bytes a URI refers to: a base64 data URI, a `file:` URI, or a path relative to `base`
-/// (percent-decoded, Windows separators accepted).
-pub fn read_uri(base: &Path, uri: &str) -> Result<Vec<u8>, UriError> {
-    if let Some(rest) = uri.strip_prefix("data:") {
-        let (_, data) = rest
-            .split_once(";base64,")
-            .ok_or_else(|| UriError::Invalid("a data URI must be base64 (`;base64,`)".into()))?;
-        return base64::engine::general_purpose::STANDARD
-            .decode(data.trim())
-            .map_err(|e| UriError::Invalid(format!("bad base64 in data URI: {e}")));
-    }
-    let local = if let Some(rest) = uri.strip_prefix("file://") {
-        rest
-    } else if let Some(rest) = uri.strip_prefix("file:") {
-        rest
-    } else if let Some((scheme, _)) = uri.split_once("://") {
-        return Err(UriError::Invalid(format!(
-            "`{scheme}://` URIs are not fetched; only relative paths, file: and data: URIs are read"
-        )));
-    } else {
-        uri
-    };
-    let decoded = percent_encoding::percent_decode_str(local)
-        .decode_utf8()
-        .map_err(|_| UriError::Invalid(format!("`{uri}` is not valid percent-encoded UTF-8")))?;
-    let file = resolve_reference(base, &decoded);
-    crate::read_limited::read(&file, crate::read_limited::MAX_MESH_BYTES)
-        .map_err(|e| UriError::Io(file, e))
-}
-
-/// Decodes image `image` of the document as sRGB, or says why it cannot be.
-pub fn read_image(
-    file: &GltfFile,
-    image: &gltf::Image<'_>,
-    budget: &crate::image_file::TextureBudget,
-) -> Result<Image, String> {
-    // The gltf crate's `source` unwraps: an image with a bufferView needs a mimeType, and one
-    // without needs a uri (the spec says so; hostile files do not). Checked here first.
-    let json = file.document.as_json();
-    let raw = json
-        .images
-        .get(image.index())
-        .ok_or_else(|| format!("image {} does not exist", image.index()))?;
-    match (&raw.buffer_view, &raw.mime_type, &raw.uri) {
-        (Some(_), None, _) => {
-            return Err(format!(
-                "image {} reads a bufferView but has no mimeType (glTF requires one)",
-                image.index()
-            ));
-        }
-        (None, _, None) => {
-            return Err(format!(
-                "image {} has neither a uri nor a bufferView",
-                image.index()
-            ));
-        }
-        _ => {}
-    }
-    let bytes = match image.source() {
-        gltf::image::Source::Uri { uri, .. } => {
-            let bytes = read_uri(&file.base, uri).map_err(|e| match e {
-                UriError::Io(p, e) => format!("cannot read `{}`: {e}", p.display()),
-                UriError::Invalid(m) => m,
-            })?;
-            // Name the file: a decoder's message alone ("format could not be determined") does
-            // not say which of a model's images it is about.
-            let shown = if uri.starts_with("data:") {
-                "data URI"
-            } else {
-                uri
-            };
-            return decode_image(&bytes, ColorEncoding::Srgb, budget)
-                .map_err(|e| format!("cannot decode `{shown}`: {e}"));
-        }
-        gltf::image::Source::View { view, .. } => {
-            let buffer = file
-                .buffers
-                .get(view.buffer().index())
-                .ok_or_else(|| format!("buffer {} is missing", view.buffer().index()))?;
-            buffer
-                .get(view.offset()..)
-                .and_then(|b| b.get(..view.length()))
-                .ok_or_else(|| format!("buffer view {} lies outside its buffer", view.index()))?
-                .to_vec()
-        }
-    };
-    decode_image(&bytes, ColorEncoding::Srgb, budget)
-}
-
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     /// Khronos extensions in validation paths are spelt as in the file.
     #[test]
     fn extension_names_are_the_files() {
         assert_eq!(
-            super::extension_names("extensions.khrLightsPunctual.lights[0].spot"),
+            extension_names("extensions.khrLightsPunctual.lights[0].spot"),
             "extensions.KHR_lights_punctual.lights[0].spot"
         );
         assert_eq!(
-            super::extension_names("materials[2].extensions.khrMaterialsEmissiveStrength"),
+            extension_names("materials[2].extensions.khrMaterialsEmissiveStrength"),
             "materials[2].extensions.KHR_materials_emissive_strength"
         );
-        assert_eq!(super::extension_names("nodes[3].scale"), "nodes[3].scale");
+        assert_eq!(extension_names("nodes[3].scale"), "nodes[3].scale");
     }
-
-    use super::*;
 
     fn err(json: &str) -> String {
         match open_bytes(json.as_bytes(), Path::new("t.gltf")) {

@@ -22,8 +22,9 @@
 //! | metallicRoughnessTexture | its mean metalness and roughness, with a note |
 //! | occlusionTexture | ignored, with a note |
 
-use crate::gltf::document::{GltfFile, read_image};
+use crate::gltf::document::GltfFile;
 use crate::gltf::quadrics_ext::{self, MaterialExtension};
+use crate::gltf::resources::read_image;
 use glam::{Vec2, Vec3};
 use quadray::{
     AlphaMask, ColorEncoding, Filter, Image, ImageMap, ImageTexture, Material, NormalMap,

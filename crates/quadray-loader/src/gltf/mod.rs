@@ -20,6 +20,7 @@ pub(crate) mod material;
 mod mesh;
 mod node_graph;
 pub mod quadrics_ext;
+pub(crate) mod resources;
 pub mod transmission;
 
 pub use accessor::{MAX_ELEMENTS, MAX_UNBACKED_BYTES};
