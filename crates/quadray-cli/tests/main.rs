@@ -8,5 +8,6 @@ mod farm;
 mod hostile;
 mod import;
 mod kill;
+mod outputs;
 mod passes;
 mod tools;
