@@ -102,33 +102,26 @@ fn convert_writes_gltf_and_glb_that_render_like_the_native_scene() {
         "1",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // Converts a bundled scene to `out`, successfully; its summary line.
+    let convert = |scene: &str, out: &std::path::Path| {
+        let o = quadray(&["convert", &repo(scene), "-o", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
     for name in ["defense.gltf", "defense.glb"] {
         let converted = dir.path().join(name);
-        let o = quadray(&[
-            "convert",
-            &repo("scenes/defense.toml"),
-            "-o",
-            converted.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", stderr(&o));
+        let summary = convert("scenes/defense.toml", &converted);
         assert!(
-            stderr(&o).contains("4 quadrics, 2 spheres, 1 plane"),
-            "{}",
-            stderr(&o)
+            summary.contains("4 quadrics, 2 spheres, 1 plane"),
+            "{summary}"
         );
         if name.ends_with(".gltf") {
             assert!(dir.path().join("defense.bin").is_file());
         }
         // Instanced shapes are counted as placed, not as the world's none.
         let columns = dir.path().join(name.replace("defense", "columns"));
-        let o = quadray(&[
-            "convert",
-            &repo("scenes/columns.toml"),
-            "-o",
-            columns.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", stderr(&o));
-        assert!(stderr(&o).contains(" placed by "), "{}", stderr(&o));
+        let summary = convert("scenes/columns.toml", &columns);
+        assert!(summary.contains(" placed by "), "{summary}");
         let out = dir.path().join(format!("{name}.png"));
         let o = quadray(&[
             "render",
