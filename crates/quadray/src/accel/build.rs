@@ -161,6 +161,8 @@ pub(super) fn build_single_leaves(boxes: &[Aabb]) -> Bvh2 {
         ..BvhBuildParams::fast_build()
     };
     let mut build_time = Duration::ZERO;
+    // Every build sees the boxes grown apart ([`tie_broken`]).
+    let mut build = |boxes: &[Aabb]| build_bvh2(&tie_broken(boxes), params, &mut build_time);
     let key = |b: &Aabb| {
         let (lo, hi) = (b.min.to_array(), b.max.to_array());
         [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]].map(f32::to_bits)
@@ -183,7 +185,7 @@ pub(super) fn build_single_leaves(boxes: &[Aabb]) -> Bvh2 {
         *c as usize >= GROUP_RUN
     });
     if !crowded {
-        return build_bvh2(&tie_broken(boxes), params, &mut build_time);
+        return build(boxes);
     }
     let mut sorted: Vec<(u64, u32)> = boxes
         .iter()
@@ -209,7 +211,7 @@ pub(super) fn build_single_leaves(boxes: &[Aabb]) -> Bvh2 {
         );
     }
     if runs.is_empty() {
-        return build_bvh2(&tie_broken(boxes), params, &mut build_time);
+        return build(boxes);
     }
     // Each long run becomes one box; every other box stays itself.
     let mut grouped = vec![false; boxes.len()];
@@ -224,7 +226,7 @@ pub(super) fn build_single_leaves(boxes: &[Aabb]) -> Bvh2 {
         unique.push(*b);
         members.push(vec![i as u32]);
     }
-    let mut bvh = build_bvh2(&tie_broken(&unique), params, &mut build_time);
+    let mut bvh = build(&unique);
     let groups = std::mem::take(&mut bvh.primitive_indices);
     let mut indices = Vec::with_capacity(boxes.len());
     for n in 0..bvh.nodes.len() {
