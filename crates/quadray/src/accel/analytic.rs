@@ -157,6 +157,7 @@ impl AnalyticBvh {
         let (nodes, blocks) = collapse(
             &bvh2,
             leaf_weight,
+            None,
             weight,
             |prims, blocks: &mut Vec<Block>| {
                 pack_leaf(blocks, level, prims, sphere_items, &spheres_of)

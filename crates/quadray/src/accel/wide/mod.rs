@@ -17,9 +17,11 @@
 //! the owning BVH defines (which leaf block, or which primitive).
 
 mod collapse;
+mod sah_plan;
 
 pub(super) use collapse::{LEAF_WEIGHT, collapse, leaf_blocks};
 use glam::{Vec3A, Vec4};
+pub(super) use sah_plan::SahCosts;
 
 /// A child reference with this bit set is a leaf; the other bits are the owner's payload.
 pub(super) const LEAF: u32 = 1 << 31;
