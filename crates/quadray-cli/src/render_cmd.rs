@@ -81,12 +81,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 render_cpu.map_or("unknown".to_string(), |d| format!("{:.3}", d.as_secs_f64()));
             errln!(
                 "load {:.3} s, BVH build {:.3} s ({} bounded primitives, {:.1} MB), traversal {}, \
-                 threads {}, render CPU {cpu} s",
+                 kernels {}, threads {}, render CPU {cpu} s",
                 job.loaded_in.as_secs_f64(),
                 built_in.as_secs_f64(),
                 scene.accel().bounded_count(),
                 scene.accel().memory_bytes() as f64 / 1e6,
                 scene.accel().traversal_path(),
+                // The four-ray quadric test and the sample points take this path whatever the
+                // BVH's (analytic scenes traverse on the baseline).
+                quadray::simd::simd_path(),
                 pool.current_num_threads(),
             );
             errln!("{}", crate::check::structure_line(&scene));

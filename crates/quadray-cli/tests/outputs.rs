@@ -193,3 +193,29 @@ fn a_gltf_and_its_buffer_are_replaced_together() {
     names.sort();
     assert_eq!(names, ["out.bin", "out.gltf"]);
 }
+
+/// An output that is a symbolic link is written through, as `cp` and a shell's `>` write: the
+/// file it names gets the image and the link stays a link. A loop of links is an error naming the
+/// output, exit 1, and writes nothing.
+#[cfg(unix)]
+#[test]
+fn a_linked_output_is_written_through() {
+    use std::os::unix::fs::symlink;
+    let dir = tempfile::tempdir().unwrap();
+    let (real, link) = (common::tmp(&dir, "real.png"), common::tmp(&dir, "link.png"));
+    std::fs::write(&real, b"old image").unwrap();
+    symlink("real.png", &link).unwrap();
+    let o = common::render_to("sphere-on-plane.toml", &link, "16x9");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(link.symlink_metadata().unwrap().file_type().is_symlink());
+    assert_eq!(image::open(&real).unwrap().width(), 16);
+    let looped = common::tmp(&dir, "loop.png");
+    symlink("loop.png", &looped).unwrap();
+    let o = common::render_to("sphere-on-plane.toml", &looped, "16x9");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("loop.png") && stderr.contains("loop of them"),
+        "{stderr}"
+    );
+}

@@ -12,6 +12,10 @@
 //! The file gets the target's permission bits when the target exists (as an editor keeps them),
 //! else `0666` less the process's umask, as `cp` or `touch` would create it.
 //!
+//! A target that is a symbolic link is written through: the file its chain of links ends at is
+//! replaced (beside itself, in its own folder), and the link stays a link, as `cp` and a shell's
+//! `>` treat one.
+//!
 //! On any error the temporary file is deleted (the `tempfile` crate deletes it when dropped), and
 //! an older target survives untouched. A process ending on a signal it can handle deletes the
 //! temporary files being written through [`remove_pending`] (the CLI's handler of SIGINT, SIGTERM
@@ -128,6 +132,8 @@ impl Written {
         path: &Path,
         write: impl FnOnce(&mut Writer<'_>) -> Result<(), E>,
     ) -> Result<Written, E> {
+        let target = link_target(path)?;
+        let path = target.as_path();
         crate::confine::check_write(path)?;
         let dir = parent_dir(path);
         let name = path
@@ -170,6 +176,28 @@ impl Written {
         sync_dir(&self.dir);
         Ok(())
     }
+}
+
+/// The most symbolic links followed from one target (Linux's own limit).
+const MAX_LINKS: usize = 40;
+
+/// Where `path`'s chain of symbolic links ends (`path` itself when it is no link), whether that
+/// file exists or not.
+fn link_target(path: &Path) -> std::io::Result<PathBuf> {
+    let mut target = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        match std::fs::symlink_metadata(&target) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                // A relative link is relative to its own folder; an absolute one replaces it all.
+                target = parent_dir(&target).join(std::fs::read_link(&target)?);
+            }
+            _ => return Ok(target),
+        }
+    }
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        format!("more than {MAX_LINKS} symbolic links, or a loop of them"),
+    ))
 }
 
 fn parent_dir(path: &Path) -> PathBuf {
@@ -283,6 +311,44 @@ mod tests {
             .collect();
         names.sort();
         names
+    }
+
+    /// A link is written through: the file it ends at gets the contents, beside itself, and the
+    /// link stays; a dangling link makes its file; a loop of links is an error.
+    #[cfg(unix)]
+    #[test]
+    fn links_are_written_through() {
+        use std::os::unix::fs::symlink;
+        let dir = tempfile::tempdir().unwrap();
+        let (real, sub) = (dir.path().join("real.png"), dir.path().join("renders"));
+        std::fs::create_dir(&sub).unwrap();
+        std::fs::write(&real, b"old").unwrap();
+        // A relative link, reached through a second link in another folder.
+        symlink("real.png", dir.path().join("first.png")).unwrap();
+        symlink("../first.png", sub.join("out.png")).unwrap();
+        replace(&sub.join("out.png"), b"new").unwrap();
+        assert_eq!(std::fs::read(&real).unwrap(), b"new");
+        assert!(
+            sub.join("out.png")
+                .symlink_metadata()
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(entries(&sub), vec!["out.png"]);
+        assert_eq!(
+            entries(dir.path()),
+            vec!["first.png", "real.png", "renders"]
+        );
+        // A dangling link makes the file it names.
+        symlink(dir.path().join("made.png"), dir.path().join("dangling.png")).unwrap();
+        replace(&dir.path().join("dangling.png"), b"made").unwrap();
+        assert_eq!(std::fs::read(dir.path().join("made.png")).unwrap(), b"made");
+        // A loop is refused, and nothing is written.
+        symlink("b.png", dir.path().join("a.png")).unwrap();
+        symlink("a.png", dir.path().join("b.png")).unwrap();
+        let error = replace(&dir.path().join("a.png"), b"x").unwrap_err();
+        assert!(error.to_string().contains("loop"), "{error}");
     }
 
     #[test]

@@ -503,6 +503,7 @@ mod tests {
                 };
             }
         }
+        // Every block was counted: each belongs to one leaf.
         assert_eq!(
             blocks.len(),
             nodes

@@ -6,14 +6,15 @@
 //! For a BVH2 node n of surface area A(n), C(n, i) is the least cost of covering n's subtree by
 //! at most i subtrees, each a leaf or a wide node, that hang from one wide node:
 //!
-//! - C(n, 1) = min(leaf(n), A(n)·`node` + D(n, N)),
+//! - C(n, 1) = min(leaf(n), A(n)·`node` + M(node) + D(n, N)),
 //! - C(n, i) = min(C(n, 1), D(n, i)) for 1 < i ≤ N,
 //! - D(n, i) = min over 0 < k < i of C(left, k) + C(right, i − k), and ∞ for a BVH2 leaf,
 //!
-//! where leaf(n) = A(n)·`block`·⌈weight(n) / [`LEAF_WEIGHT`]⌉ for a subtree no heavier than a
-//! leaf may be, and ∞ for a heavier one. A(n) is the chance, up to one factor for the whole
-//! tree, that a ray meeting the root meets n's box, so C(root, 1) is the expected cost of a ray.
-//! Memory enters as a cost every ray pays ([`SahCosts`]).
+//! where leaf(n) = (A(n)·`block` + M(block))·⌈weight(n) / [`LEAF_WEIGHT`]⌉ for a subtree no
+//! heavier than a leaf may be, and ∞ for a heavier one, and M(x) = `per_byte`·A(root)·(bytes of
+//! x): memory as a cost every ray pays ([`SahCosts`]). A(n) is the chance, up to one factor for
+//! the whole tree, that a ray meeting the root meets n's box, so C(root, 1) is the expected cost
+//! of a ray.
 //!
 //! The costs are computed children first and handed up, not stored: each node keeps one word of
 //! choices (whether it is a leaf; for each i > 1 whether one subtree is cheapest, and the k of
