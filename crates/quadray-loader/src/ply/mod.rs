@@ -19,6 +19,7 @@ use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{
     ElementDef, Encoding, Header, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType,
 };
+use std::collections::HashSet;
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
@@ -90,6 +91,14 @@ impl SphereFile {
             })?;
         let body_start = bytes.len() - rest.len();
         let body_line = bytes[..body_start].iter().filter(|&&b| b == b'\n').count() + 1;
+        check_declarations(
+            &bytes[..body_start],
+            (header.version.major, header.version.minor),
+        )
+        .map_err(|(line, message)| {
+            let location = Some(Location { line, column: 1 });
+            LoadError::new(path, location, LoadErrorKind::Syntax(message))
+        })?;
         let invalid = |key: &str, message: String| LoadError::invalid(path, None, key, message);
         let vertex_element = header
             .elements
@@ -358,6 +367,42 @@ impl SphereFile {
 
 /// One row of `def` read by `parser`: from `rest` in a binary file, from the line `text` already
 /// taken from `rest` in an ASCII one.
+/// What the PLY parser lets pass in a header (`header`, its text): a version other than 1.0, the
+/// only one there is, and an element or a property declared twice, which the parser keeps once
+/// while the rows still hold both, so every value after it would be read from the wrong place.
+/// The error gives the line and the problem.
+fn check_declarations(header: &[u8], (major, minor): (u16, u8)) -> Result<(), (usize, String)> {
+    let lines = header
+        .split(|&b| b == b'\n')
+        .map(|l| String::from_utf8_lossy(l));
+    let mut elements = HashSet::new();
+    let mut properties = HashSet::new();
+    let mut element = String::new();
+    for (number, text) in (1..).zip(lines) {
+        let words: Vec<&str> = text.split_whitespace().collect();
+        match words.as_slice() {
+            ["format", _, version] if (major, minor) != (1, 0) => {
+                return Err((number, format!("PLY version {version}: only 1.0 exists")));
+            }
+            ["element", name, ..] => {
+                if !elements.insert(name.to_string()) {
+                    return Err((number, format!("element `{name}` is declared twice")));
+                }
+                element = name.to_string();
+                properties.clear();
+            }
+            ["property", .., name] if !properties.insert(name.to_string()) => {
+                return Err((
+                    number,
+                    format!("property `{element}.{name}` is declared twice"),
+                ));
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 fn read_row<P: PropertyAccess>(
     parser: &Parser<P>,
     encoding: Encoding,

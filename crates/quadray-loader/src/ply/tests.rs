@@ -403,3 +403,33 @@ fn missing_files_and_folders_are_io_errors() {
     let e = read_all(dir.path(), Some(1.0)).unwrap_err();
     assert!(e.to_string().contains("not a regular file"), "{e}");
 }
+
+/// What the PLY parser lets pass is refused with its line: a version other than 1.0, and an
+/// element or property declared twice (the parser keeps one, the rows hold both, so the values
+/// after it would be read from the wrong place).
+#[test]
+fn other_versions_and_twice_declared_names_are_errors_with_their_line() {
+    let e = error(
+        b"ply\nformat ascii 2.0\nelement vertex 0\nproperty float x\nend_header\n",
+        Some(1.0),
+    );
+    assert!(
+        e.contains("bad.ply:2:1") && e.contains("PLY version 2.0: only 1.0 exists"),
+        "{e}"
+    );
+    let props = ["float x", "float y", "float x", "float z"];
+    let e = error(&header("binary_little_endian", 1, &props), Some(1.0));
+    assert!(
+        e.contains("bad.ply:7:1") && e.contains("property `vertex.x` is declared twice"),
+        "{e}"
+    );
+    let e = error(
+        b"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n\
+          property float z\nelement vertex 0\nend_header\n",
+        Some(1.0),
+    );
+    assert!(
+        e.contains("bad.ply:7:1") && e.contains("element `vertex` is declared twice"),
+        "{e}"
+    );
+}
