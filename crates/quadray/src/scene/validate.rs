@@ -65,6 +65,21 @@ pub(super) fn checked_layout(
         origins.push(d.camera.from.abs() + glam::DVec3::splat(height * crate::limits::MAX_ASPECT));
     }
     let origin_extent = max_abs_coordinate(&origins);
+    // The camera alone can break the limit only through an orthographic image plane (its `from`
+    // and `to` are checked when it is prepared); said as the camera's, not as the geometry's.
+    if let Projection::Orthographic { height } = d.camera.projection
+        && (origin_extent.is_nan() || origin_extent > MAX_COORDINATE)
+    {
+        return Err(invalid(
+            "camera",
+            format!(
+                "an orthographic image plane of height {height:e} at `from` (up to {} times as \
+                 wide) reaches {origin_extent:e} from the origin; quadray supports magnitudes up \
+                 to {MAX_COORDINATE:e}",
+                crate::limits::MAX_ASPECT
+            ),
+        ));
+    }
     // Planes are not in the BVHs' boxes, but their points enter the same f32 arithmetic of ray
     // offsets and textures: the same limit.
     for (i, plane) in d.geometry.planes.iter().enumerate() {
