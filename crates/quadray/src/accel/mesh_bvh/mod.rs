@@ -40,8 +40,8 @@ const MESH_LEAF_TRIANGLES: u32 = 8;
 /// blocks held 2.6 triangles rather than 3.2 and the BVH took a fifth more bytes, for 0.5% fewer
 /// instructions a ray. Against the greedy collapse, instructions a ray (callgrind, `bench rays`),
 /// closest and any hit: bunny incoherent −8.7% and −5.4%, kitchen incoherent −6.0% and −4.5%,
-/// dragon incoherent −2.6% and −0.9%, coherent −1.7% to −12.7%; any node test cost from 1 to 3
-/// blocks gave the same within 0.5%.
+/// dragon incoherent −2.6% and −0.9%, coherent −1.6% to −12.7%; a block test costing 1 to 3 node
+/// tests gave the same within 0.5%.
 const MESH_COSTS: SahCosts = SahCosts {
     node: 1.0,
     block: 1.5,
