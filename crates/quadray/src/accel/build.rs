@@ -8,6 +8,7 @@ use crate::geometry::Geometry;
 use crate::geometry::instance::{Instance, Placements};
 use glam::{DVec3, Vec3A};
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, bvh2::builder::build_bvh2};
+use rayon::prelude::*;
 use std::time::Duration;
 
 /// Most boxes a level offers its instances' bounds ([`LevelAccel::covering`]).
@@ -247,7 +248,7 @@ pub(super) fn build_single_leaves(boxes: &[Aabb]) -> Bvh2 {
 /// pairs again. A grown box still holds its primitive, and the growth is far below what the
 /// tree's quality notices.
 fn tie_broken(boxes: &[Aabb]) -> Vec<Aabb> {
-    (boxes.iter().enumerate())
+    (boxes.par_iter().enumerate())
         .map(|(i, b)| {
             let steps = (i as u32).wrapping_mul(0x9e37_79b9) >> 29;
             if steps == 0 {

@@ -14,7 +14,7 @@ use super::{EMPTY, LEAF, Node};
 use obvhs::bvh2::Bvh2;
 use rayon::prelude::*;
 use std::ops::Range;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The weight of one block: four lanes.
 pub(in crate::accel) const LEAF_WEIGHT: u32 = 4;
@@ -51,67 +51,101 @@ pub(in crate::accel) fn leaf_blocks(leaf: u32) -> Range<usize> {
 /// Subtrees of at least this many nodes have their weights summed in parallel halves.
 const PARALLEL_WEIGHTS: usize = 1 << 14;
 
-/// Total weight of the primitives under each BVH2 node, and with a plan, each node's choices
-/// made: one pass over the tree.
-fn subtree_weights<const N: usize>(
+/// A subtree's total weight and number of primitives.
+type Size = (u32, u32);
+
+/// What the collapse reads of every BVH2 node's subtree, found in one pass over the tree.
+struct Subtrees {
+    /// Per node, the total weight of its primitives (low 32 bits) and their number (high 32).
+    sizes: Vec<u64>,
+    /// Every primitive in tree order (left subtree first), so a subtree's are one run of them.
+    primitives: Vec<u32>,
+}
+
+impl Subtrees {
+    /// The total weight of node `i`'s primitives.
+    fn weight(&self, i: u32) -> u32 {
+        self.sizes[i as usize] as u32
+    }
+
+    /// The number of node `i`'s primitives.
+    fn count(&self, i: u32) -> u32 {
+        (self.sizes[i as usize] >> 32) as u32
+    }
+}
+
+/// Each BVH2 node's subtree ([`Subtrees`]), and with a plan, each node's choices made: one pass
+/// over the tree.
+fn subtrees<const N: usize>(
     bvh2: &Bvh2,
     weight: &(impl Fn(u32) -> u32 + Sync),
     plan: Option<&Plan<N>>,
-) -> Vec<u32> {
-    let counts: Vec<AtomicU32> = (0..bvh2.nodes.len()).map(|_| AtomicU32::new(0)).collect();
-    let leaf_weight = |i: u32| {
-        let node = &bvh2.nodes[i as usize];
-        let first = node.first_index as usize;
-        (bvh2.primitive_indices[first..first + node.prim_count as usize].iter())
-            .map(|&p| weight(p))
-            .sum()
+) -> Subtrees {
+    let sizes: Vec<AtomicU64> = (0..bvh2.nodes.len()).map(|_| AtomicU64::new(0)).collect();
+    // A node's weight and count, recorded.
+    let size = |i: u32, children: Option<(Size, Size)>| {
+        let (weight, count) = children.map_or_else(
+            || {
+                let prims = bvh2_leaf(bvh2, i);
+                (prims.iter().map(|&p| weight(p)).sum(), prims.len() as u32)
+            },
+            |(a, b)| (a.0 + b.0, a.1 + b.1),
+        );
+        sizes[i as usize].store(weight as u64 | (count as u64) << 32, Ordering::Relaxed);
+        (weight, count)
     };
-    match plan {
-        None => {
-            fold(bvh2, 0, 0, &|i, children: Option<(u32, u32)>| {
-                let sum = children.map_or_else(|| leaf_weight(i), |(a, b)| a + b);
-                counts[i as usize].store(sum, Ordering::Relaxed);
-                sum
-            });
-        }
+    let pieces = match plan {
+        None => fold(bvh2, 0, 0, &size).1,
         Some(plan) => {
-            fold(bvh2, 0, 0, &|i, children: Option<((u32, _), (u32, _))>| {
-                let sum = children.map_or_else(|| leaf_weight(i), |(a, b)| a.0 + b.0);
-                counts[i as usize].store(sum, Ordering::Relaxed);
-                (
-                    sum,
-                    plan.solve(i, sum, children.as_ref().map(|(a, b)| (&a.1, &b.1))),
-                )
-            });
+            let visit = |i, children: Option<((Size, _), (Size, _))>| {
+                let sizes = children.as_ref().map(|(a, b)| (a.0, b.0));
+                let (weight, count) = size(i, sizes);
+                let costs = plan.solve(i, weight, children.as_ref().map(|(a, b)| (&a.1, &b.1)));
+                ((weight, count), costs)
+            };
+            fold(bvh2, 0, 0, &visit).1
         }
+    };
+    Subtrees {
+        sizes: sizes.into_iter().map(AtomicU64::into_inner).collect(),
+        primitives: pieces.concat(),
     }
-    counts.into_iter().map(AtomicU32::into_inner).collect()
+}
+
+/// The primitives of BVH2 leaf `i`.
+fn bvh2_leaf(bvh2: &Bvh2, i: u32) -> &[u32] {
+    let node = &bvh2.nodes[i as usize];
+    let first = node.first_index as usize;
+    &bvh2.primitive_indices[first..first + node.prim_count as usize]
 }
 
 /// Folds the BVH2 subtree at `index` children first: `visit` gets a node and its two children's
-/// values (none for a leaf) and returns the node's. The root's halves go in parallel to a depth
-/// of a few levels; below that the fold runs on a stack of its own, without recursion (trees of
+/// values (none for a leaf) and returns the node's. Returns the root's value and the subtree's
+/// primitives in tree order, in pieces. The root's halves go in parallel to a depth of a few
+/// levels; below that the fold runs on a stack of its own, without recursion (trees of
 /// degenerate input can be deep).
 fn fold<T: Copy + Send>(
     bvh2: &Bvh2,
     index: u32,
     depth: u32,
     visit: &(impl Fn(u32, Option<(T, T)>) -> T + Sync),
-) -> T {
+) -> (T, Vec<Vec<u32>>) {
     let node = &bvh2.nodes[index as usize];
     // Each BVH2 node's subtree has fewer nodes than the tree by about a half a level.
     if !node.is_leaf() && depth < 6 && bvh2.nodes.len() >> depth >= PARALLEL_WEIGHTS {
-        let (a, b) = rayon::join(
+        let ((a, mut pieces), (b, right)) = rayon::join(
             || fold(bvh2, node.first_index, depth + 1, visit),
             || fold(bvh2, node.first_index + 1, depth + 1, visit),
         );
-        return visit(index, Some((a, b)));
+        pieces.extend(right);
+        return (visit(index, Some((a, b))), pieces);
     }
     // Nodes to visit, each with whether its children are done; the values of done subtrees.
-    let (mut todo, mut values) = (vec![(index, false)], Vec::new());
+    let (mut todo, mut values, mut primitives) = (vec![(index, false)], Vec::new(), Vec::new());
     while let Some((i, children_done)) = todo.pop() {
         let node = &bvh2.nodes[i as usize];
         if node.is_leaf() {
+            primitives.extend_from_slice(bvh2_leaf(bvh2, i));
             values.push(visit(i, None));
         } else if children_done {
             let (b, a) = (values.pop(), values.pop());
@@ -125,32 +159,27 @@ fn fold<T: Copy + Send>(
             ]);
         }
     }
-    values.pop().expect("the subtree was folded")
+    let value = values.pop().expect("the subtree was folded");
+    (value, vec![primitives])
 }
 
-/// The BVH2's primitives under node `index`, in tree order, into `out` (`stack` is scratch).
-fn subtree_primitives(bvh2: &Bvh2, index: u32, out: &mut Vec<u32>, stack: &mut Vec<u32>) {
-    out.clear();
-    stack.clear();
-    stack.push(index);
-    while let Some(i) = stack.pop() {
-        let node = &bvh2.nodes[i as usize];
-        if node.is_leaf() {
-            let first = node.first_index as usize;
-            out.extend(&bvh2.primitive_indices[first..first + node.prim_count as usize]);
-        } else {
-            stack.extend([node.first_index + 1, node.first_index]);
-        }
-    }
+/// A BVH2 node to collapse.
+#[derive(Clone, Copy)]
+struct Work {
+    /// The node.
+    index: u32,
+    /// Where its primitives start in [`Subtrees::primitives`].
+    start: u32,
+    /// The wide node it becomes a child of.
+    parent: usize,
+    /// Its lane there.
+    lane: usize,
 }
 
-/// A BVH2 node to collapse: (its index, the wide node it becomes a child of, the lane there).
-type Work = (u32, usize, usize);
-
-/// The BVH2 and its subtrees' weights, and the rules of the collapse.
+/// The BVH2 and its subtrees, and the rules of the collapse.
 struct Collapse<'a, const N: usize> {
     bvh2: &'a Bvh2,
-    counts: Vec<u32>,
+    subtrees: Subtrees,
     /// The most weight a leaf holds.
     leaf_weight: u32,
     /// The leaves and children chosen by cost, where the caller gave costs.
@@ -164,42 +193,62 @@ impl<const N: usize> Collapse<'_, N> {
         match &self.plan {
             Some(plan) => plan.is_leaf(i),
             None => {
-                self.counts[i as usize] <= self.leaf_weight || self.bvh2.nodes[i as usize].is_leaf()
+                self.subtrees.weight(i) <= self.leaf_weight || self.bvh2.nodes[i as usize].is_leaf()
             }
         }
     }
 
-    /// The BVH2 nodes a wide node over BVH2 node `index` takes as children: the plan's, or
-    /// without one, open the largest internal one until there are `N` (Embree's BVH4 and BVH8
-    /// collapse).
-    fn children_of(&self, index: u32) -> ([u32; N], usize) {
+    /// The BVH2 nodes a wide node over BVH2 node `index`, whose primitives start at `start`,
+    /// takes as children, each with where its primitives start: the plan's, or without one, open
+    /// the largest internal one until there are `N` (Embree's BVH4 and BVH8 collapse).
+    fn children_of(&self, index: u32, start: u32) -> ([(u32, u32); N], usize) {
+        let mut kids = [(0, 0); N];
         if let Some(plan) = &self.plan {
-            return plan.children(index);
+            // The plan's children come in tree order, so each starts where the one before ends.
+            let (indices, n) = plan.children(index);
+            let mut next = start;
+            for (kid, &i) in kids.iter_mut().zip(&indices[..n]) {
+                *kid = (i, next);
+                next += self.subtrees.count(i);
+            }
+            return (kids, n);
         }
         let nodes = &self.bvh2.nodes;
-        let node = &nodes[index as usize];
-        let mut kids = [0; N];
-        kids[..2].copy_from_slice(&[node.first_index, node.first_index + 1]);
+        // Node `first`'s two children, with where their primitives start.
+        let halves = |first: u32, start: u32| {
+            [
+                (first, start),
+                (first + 1, start + self.subtrees.count(first)),
+            ]
+        };
+        kids[..2].copy_from_slice(&halves(nodes[index as usize].first_index, start));
         let mut n = 2;
         while n < N {
             let area = |k: u32| nodes[k as usize].aabb().half_area();
             let open = (0..n)
-                .filter(|&i| !self.is_leaf(kids[i]))
-                .max_by(|&a, &b| area(kids[a]).total_cmp(&area(kids[b])));
+                .filter(|&i| !self.is_leaf(kids[i].0))
+                .max_by(|&a, &b| area(kids[a].0).total_cmp(&area(kids[b].0)));
             let Some(i) = open else { break };
-            let first = nodes[kids[i] as usize].first_index;
+            let (opened, opened_start) = kids[i];
+            let [first, second] = halves(nodes[opened as usize].first_index, opened_start);
             kids[i] = kids[n - 1];
             kids[n - 1] = first;
-            kids[n] = first + 1;
+            kids[n] = second;
             n += 1;
         }
         (kids, n)
     }
 
-    /// The work of a wide node at `slot` over BVH2 node `index`.
-    fn children_work(&self, index: u32, slot: usize) -> impl Iterator<Item = Work> {
-        let (kids, n) = self.children_of(index);
-        (0..n).map(move |lane| (kids[lane], slot, lane))
+    /// The work of a wide node at `slot` over BVH2 node `index`, whose primitives start at
+    /// `start`.
+    fn children_work(&self, index: u32, start: u32, slot: usize) -> impl Iterator<Item = Work> {
+        let (kids, n) = self.children_of(index, start);
+        (0..n).map(move |lane| Work {
+            index: kids[lane].0,
+            start: kids[lane].1,
+            parent: slot,
+            lane,
+        })
     }
 
     /// Collapses `work` into `nodes` and `blocks`; subtrees weighing at most `split` (more than a
@@ -215,26 +264,26 @@ impl<const N: usize> Collapse<'_, N> {
             Some((weight, tasks)) => (weight, Some(tasks)),
             None => (0, None),
         };
-        let (mut prims, mut scratch) = (Vec::new(), Vec::new());
-        while let Some((index, parent, lane)) = work.pop() {
-            let reference = if self.is_leaf(index) {
-                subtree_primitives(self.bvh2, index, &mut prims, &mut scratch);
+        while let Some(w) = work.pop() {
+            let reference = if self.is_leaf(w.index) {
+                let start = w.start as usize;
+                let count = self.subtrees.count(w.index) as usize;
                 let first = blocks.len();
-                pack(&prims, blocks);
+                pack(&self.subtrees.primitives[start..start + count], blocks);
                 leaf_reference(first, blocks.len() - first)
             } else if let Some(tasks) = tasks
                 .as_mut()
-                .filter(|_| self.counts[index as usize] <= split)
+                .filter(|_| self.subtrees.weight(w.index) <= split)
             {
-                tasks.push((index, parent, lane));
+                tasks.push(w);
                 continue;
             } else {
                 let slot = nodes.len();
                 nodes.push(Node::EMPTY);
-                work.extend(self.children_work(index, slot));
+                work.extend(self.children_work(w.index, w.start, slot));
                 slot as u32
             };
-            self.set_child(&mut nodes[parent], lane, index, reference);
+            self.set_child(&mut nodes[w.parent], w.lane, w.index, reference);
         }
     }
 
@@ -249,13 +298,45 @@ impl<const N: usize> Collapse<'_, N> {
     }
 }
 
+/// Where each of `parts` starts in their concatenation.
+fn part_starts<T>(parts: &[Vec<T>]) -> Vec<usize> {
+    (parts.iter())
+        .scan(0, |start, part| {
+            let this = *start;
+            *start += part.len();
+            Some(this)
+        })
+        .collect()
+}
+
+/// `parts` one after another, each item through `copy` (given its part's number), written in
+/// parallel.
+fn concatenate<T: Sync, U: Send>(
+    parts: &[Vec<T>],
+    starts: &[usize],
+    copy: impl Fn(usize, &T) -> U + Sync,
+) -> Vec<U> {
+    let total = starts
+        .last()
+        .zip(parts.last())
+        .map_or(0, |(s, p)| s + p.len());
+    (0..total)
+        .into_par_iter()
+        .with_min_len(1 << 12)
+        .map(|j| {
+            let part = starts.partition_point(|&s| s <= j) - 1;
+            copy(part, &parts[part][j - starts[part]])
+        })
+        .collect()
+}
+
 /// Collapses a BVH2 (built down to single primitives) into `N`-wide nodes and leaf blocks, whose
 /// blocks `pack` appends from a leaf's primitives (one to 8 blocks; [`leaf_blocks`] gives them
 /// back from the reference). No leaf weighs more than `leaf_weight`, and a primitive that weighs
 /// that much is a leaf of its own. With `costs`, leaves and each wide node's children are those
 /// of least cost ([`SahCosts`]); without, every subtree light enough becomes a leaf, and each
 /// wide node takes the `N` largest subtrees below a BVH2 node (Embree's BVH4 and BVH8 collapse).
-pub(in crate::accel) fn collapse<const N: usize, B: Send>(
+pub(in crate::accel) fn collapse<const N: usize, B: Clone + Send + Sync>(
     bvh2: &Bvh2,
     leaf_weight: u32,
     costs: Option<SahCosts>,
@@ -266,18 +347,24 @@ pub(in crate::accel) fn collapse<const N: usize, B: Send>(
     let plan = costs.map(|costs| Plan::new(bvh2, leaf_weight, costs, sizes));
     let c = Collapse {
         bvh2,
-        counts: subtree_weights(bvh2, &weight, plan.as_ref()),
+        subtrees: subtrees(bvh2, &weight, plan.as_ref()),
         leaf_weight,
         plan,
     };
     let (mut nodes, mut blocks) = (vec![Node::EMPTY], Vec::new());
     // The root wide node takes the BVH2 root's children (or the root itself when it is a leaf).
     let work = if c.is_leaf(0) {
-        vec![(0, 0, 0)]
+        let root = Work {
+            index: 0,
+            start: 0,
+            parent: 0,
+            lane: 0,
+        };
+        vec![root]
     } else {
-        c.children_work(0, 0).collect()
+        c.children_work(0, 0, 0).collect()
     };
-    let split = (c.counts[0] / TASKS).max(MIN_TASK_WEIGHT);
+    let split = (c.subtrees.weight(0) / TASKS).max(MIN_TASK_WEIGHT);
     let mut tasks = Vec::new();
     c.run(
         (&mut nodes, &mut blocks),
@@ -287,33 +374,45 @@ pub(in crate::accel) fn collapse<const N: usize, B: Send>(
     );
     let collapsed: Vec<(Vec<Node<N>>, Vec<B>)> = tasks
         .par_iter()
-        .map(|&(index, _, _)| {
+        .map(|task| {
             let (mut nodes, mut blocks) = (vec![Node::EMPTY], Vec::new());
-            let work = c.children_work(index, 0).collect();
+            let work = c.children_work(task.index, task.start, 0).collect();
             c.run((&mut nodes, &mut blocks), work, &pack, None);
             (nodes, blocks)
         })
         .collect();
-    // Each task's nodes and blocks follow the ones before, its references moved with them.
-    nodes.reserve(collapsed.iter().map(|(n, _)| n.len()).sum());
-    blocks.reserve(collapsed.iter().map(|(_, b)| b.len()).sum());
-    for ((index, parent, lane), (task_nodes, task_blocks)) in tasks.into_iter().zip(collapsed) {
-        let (node_offset, block_offset) = (nodes.len(), blocks.len());
-        nodes.extend(task_nodes.into_iter().map(|mut node| {
+    // Each task's nodes and blocks follow the ones before, its references moved with them. The
+    // parts are copied in parallel: for the dragon 50 MB, whose copy into fresh pages took 40 ms
+    // on one core.
+    let (mut node_parts, mut block_parts) = (vec![nodes], vec![blocks]);
+    for (task_nodes, task_blocks) in collapsed {
+        node_parts.push(task_nodes);
+        block_parts.push(task_blocks);
+    }
+    let node_starts = part_starts(&node_parts);
+    let block_starts = part_starts(&block_parts);
+    let mut nodes: Vec<Node<N>> = concatenate(&node_parts, &node_starts, |part, node| {
+        let mut node = *node;
+        if part > 0 {
             for child in &mut node.children {
                 *child = match *child {
                     EMPTY => EMPTY,
                     leaf if leaf & LEAF != 0 => {
                         let range = leaf_blocks(leaf);
-                        leaf_reference(range.start + block_offset, range.len())
+                        leaf_reference(range.start + block_starts[part], range.len())
                     }
-                    inner => inner + node_offset as u32,
+                    inner => inner + node_starts[part] as u32,
                 };
             }
-            node
-        }));
-        blocks.extend(task_blocks);
-        c.set_child(&mut nodes[parent], lane, index, node_offset as u32);
+        }
+        node
+    });
+    drop(node_parts);
+    let blocks = concatenate(&block_parts, &block_starts, |_, block| block.clone());
+    drop(block_parts);
+    for (part, task) in tasks.iter().enumerate() {
+        let reference = node_starts[part + 1] as u32;
+        c.set_child(&mut nodes[task.parent], task.lane, task.index, reference);
     }
     (nodes, blocks)
 }
