@@ -42,6 +42,7 @@ mod analytic;
 mod buffers;
 mod build;
 mod corner_cone;
+mod huge_pages;
 mod level;
 mod mesh_bvh;
 mod sphere4;

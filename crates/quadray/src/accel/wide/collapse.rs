@@ -9,6 +9,7 @@
 //! were set aside. Which subtrees become tasks depends on the tree alone, so the nodes and blocks
 //! are the same for any number of threads.
 
+use super::super::huge_pages;
 use super::sah_plan::{Plan, SahCosts};
 use super::{EMPTY, LEAF, Node};
 use obvhs::bvh2::Bvh2;
@@ -310,7 +311,7 @@ fn part_starts<T>(parts: &[Vec<T>]) -> Vec<usize> {
 }
 
 /// `parts` one after another, each item through `copy` (given its part's number), written in
-/// parallel.
+/// parallel into memory advised for huge pages (the traversal's reads: [`huge_pages`]).
 fn concatenate<T: Sync, U: Send>(
     parts: &[Vec<T>],
     starts: &[usize],
@@ -320,6 +321,7 @@ fn concatenate<T: Sync, U: Send>(
         .last()
         .zip(parts.last())
         .map_or(0, |(s, p)| s + p.len());
+    let mut all = huge_pages::vec_with_capacity(total);
     (0..total)
         .into_par_iter()
         .with_min_len(1 << 12)
@@ -327,7 +329,8 @@ fn concatenate<T: Sync, U: Send>(
             let part = starts.partition_point(|&s| s <= j) - 1;
             copy(part, &parts[part][j - starts[part]])
         })
-        .collect()
+        .collect_into_vec(&mut all);
+    all
 }
 
 /// Collapses a BVH2 (built down to single primitives) into `N`-wide nodes and leaf blocks, whose
