@@ -98,6 +98,21 @@ pub fn import_obj_bytes(
         notes.push(format!(
             "warning: {unmatched} object(s) name no material, or one their libraries do not define{named}; they use a default grey"
         ));
+    } else if materials.is_empty() && !options.skip_materials {
+        // No library read defines a material (none named, none found, or none in them): tobj
+        // then drops every `usemtl` without a word, so the names are found here.
+        let said = memchr::memmem::find(bytes, b"usemtl").is_some();
+        let undefined = if said {
+            undefined_materials(bytes, &[])
+        } else {
+            Vec::new()
+        };
+        if !undefined.is_empty() {
+            notes.push(format!(
+                "warning: `usemtl` names {}, which no material library read defines; those faces use a default grey",
+                undefined.join(", ")
+            ));
+        }
     }
     if out
         .geometry
@@ -461,6 +476,21 @@ mod tests {
             "{notes}"
         );
         assert!(notes.contains("2 object(s) name no material"), "{notes}");
+        // With no library read at all (none named, or only one not found), the names a `usemtl`
+        // gives are still warned about, each once; a file that names none gets no warning.
+        for libraries in ["", "mtllib gone.mtl\n"] {
+            let obj = format!(
+                "{libraries}{QUAD}usemtl red\nf 1 2 3\nusemtl nope\nf 1 3 4\nusemtl red\nf 2 3 4\n"
+            );
+            std::fs::write(dir.join("b.obj"), obj).unwrap();
+            let got = import_obj(&dir.join("b.obj"), &ImportOptions::default()).unwrap();
+            let notes = got.notes.join("\n");
+            let expected = "`usemtl` names red, nope, which no material library read defines";
+            assert!(notes.contains(expected), "{notes}");
+        }
+        std::fs::write(dir.join("c.obj"), format!("{QUAD}f 1 2 3\n")).unwrap();
+        let got = import_obj(&dir.join("c.obj"), &ImportOptions::default()).unwrap();
+        assert!(!got.notes.join("\n").contains("usemtl"), "{:?}", got.notes);
         // A broken library is an error naming it.
         std::fs::write(dir.join("m.mtl"), "newmtl red\nKd 1 1\n").unwrap();
         let e = import_obj(&dir.join("a.obj"), &ImportOptions::default())
