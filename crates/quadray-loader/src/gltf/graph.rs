@@ -16,7 +16,7 @@ use crate::gltf::quadrics_ext::{self, RootExtension};
 use crate::gltf::{camera as gltf_camera, light as gltf_light, mesh as gltf_mesh};
 use crate::import::{Imported, PlacedShape};
 use glam::DAffine3;
-use quadray::{Instance, Plane, Prototype, Transform};
+use quadray::{Instance, MAX_COORDINATE, Plane, Prototype, Transform};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
@@ -200,6 +200,7 @@ impl<'a> GraphBuild<'a> {
                 format!("the node hierarchy is deeper than {MAX_DEPTH} levels"),
             ));
         }
+        let before = (out.spheres.len(), out.quadrics.len(), out.meshes.len());
         if let Some(shape) = self.graph.node_shapes[node.index()] {
             self.place_shape(shape, m, &key, out, planes.as_deref_mut(), prototypes)?;
         } else if let Some(mesh) = node.mesh() {
@@ -223,6 +224,20 @@ impl<'a> GraphBuild<'a> {
             } else {
                 let copies = self.graph.placements[node.index()];
                 self.build_mesh(&mesh, m, out, copies)?;
+            }
+        }
+        // In the world (where `planes` go), what the node placed itself is checked here, so the
+        // error can name the node; instanced content is left to the scene's own check.
+        if planes.is_some() {
+            let reach = placed_reach(out, before);
+            if reach.is_nan() || reach > MAX_COORDINATE {
+                return Err(self.invalid(
+                    key,
+                    format!(
+                        "its transform, with its parents', places its contents at coordinates up \
+                         to {reach:.3e}; quadray supports magnitudes up to {MAX_COORDINATE:e}"
+                    ),
+                ));
             }
         }
         for child in node.children() {
@@ -427,6 +442,24 @@ impl<'a> GraphBuild<'a> {
 }
 
 /// Whether a prototype places nothing.
+/// The largest coordinate magnitude of the spheres, quadrics and meshes `out` holds past the
+/// counts `before` (NaN where one is not a number).
+fn placed_reach(out: &Prototype, (spheres, quadrics, meshes): (usize, usize, usize)) -> f64 {
+    let boxes = (out.spheres[spheres..].iter().map(|s| s.bounds()))
+        .chain(out.quadrics[quadrics..].iter().map(|q| q.bounds()));
+    let points = out.meshes[meshes..]
+        .iter()
+        .flat_map(|m| m.positions().iter().map(|p| p.as_dvec3()));
+    boxes
+        .flat_map(|(lo, hi)| [lo, hi])
+        .chain(points)
+        .map(|p| p.abs().max_element())
+        .fold(
+            0.0,
+            |reach, x| if x > reach || x.is_nan() { x } else { reach },
+        )
+}
+
 fn is_empty(p: &Prototype) -> bool {
     p.spheres.is_empty() && p.quadrics.is_empty() && p.meshes.is_empty() && p.instances.is_empty()
 }
