@@ -13,6 +13,7 @@ use crate::gltf::document::GltfFile;
 use crate::gltf::material::{MaterialUse, Materials};
 use crate::gltf::node_graph::NodeGraph;
 use crate::gltf::quadrics_ext::{self, RootExtension};
+use crate::gltf::reach::{self, Mark, PrototypeBoxes};
 use crate::gltf::{camera as gltf_camera, light as gltf_light, mesh as gltf_mesh};
 use crate::import::{Imported, PlacedShape};
 use glam::DAffine3;
@@ -38,6 +39,8 @@ pub(crate) struct GraphBuild<'a> {
     node_protos: HashMap<usize, Option<u32>>,
     mesh_protos: HashMap<usize, u32>,
     shape_protos: HashMap<usize, u32>,
+    /// The prototypes' boxes, for the reach of instances placed in the world.
+    prototype_boxes: PrototypeBoxes,
     /// The materials met so far.
     pub(crate) materials: Materials<'a>,
     /// Notes for the user.
@@ -74,6 +77,7 @@ impl<'a> GraphBuild<'a> {
             node_protos: HashMap::new(),
             mesh_protos: HashMap::new(),
             shape_protos: HashMap::new(),
+            prototype_boxes: PrototypeBoxes::default(),
             materials: Materials::new(file, options.textures.clone()),
             notes: Vec::new(),
             skipped_modes: BTreeMap::new(),
@@ -156,7 +160,11 @@ impl<'a> GraphBuild<'a> {
                 }
             };
             if let Some(proto) = proto {
+                let mark = Mark::of(out);
                 self.instance(proto, placed, &key, out);
+                if planes.is_some() {
+                    self.check_reach(&key, out, &mark, prototypes)?;
+                }
             }
             return Ok(());
         }
@@ -171,6 +179,27 @@ impl<'a> GraphBuild<'a> {
             .cloned()
             .unwrap_or(Ok(DAffine3::IDENTITY))
             .map_err(|m| self.invalid(format!("nodes[{}]", node.index()), m))
+    }
+
+    /// An error naming node `key` where what it added to the world's `out` past `mark` (its own
+    /// shape, mesh or instance) reaches past [`MAX_COORDINATE`].
+    fn check_reach(
+        &mut self,
+        key: &str,
+        out: &Prototype,
+        mark: &Mark,
+        prototypes: &[Prototype],
+    ) -> Result<(), LoadError> {
+        match reach::too_far(out, mark, prototypes, &mut self.prototype_boxes) {
+            None => Ok(()),
+            Some(reach) => Err(self.invalid(
+                key.to_string(),
+                format!(
+                    "its transform, with its parents', places its contents at coordinates up to \
+                     {reach:.3e}; quadray supports magnitudes up to {MAX_COORDINATE:e}"
+                ),
+            )),
+        }
     }
 
     /// An instance of `proto` placed by `m` (a singular map hides it, as it would a baked mesh).
@@ -200,7 +229,7 @@ impl<'a> GraphBuild<'a> {
                 format!("the node hierarchy is deeper than {MAX_DEPTH} levels"),
             ));
         }
-        let before = (out.spheres.len(), out.quadrics.len(), out.meshes.len());
+        let mark = Mark::of(out);
         if let Some(shape) = self.graph.node_shapes[node.index()] {
             self.place_shape(shape, m, &key, out, planes.as_deref_mut(), prototypes)?;
         } else if let Some(mesh) = node.mesh() {
@@ -227,18 +256,9 @@ impl<'a> GraphBuild<'a> {
             }
         }
         // In the world (where `planes` go), what the node placed itself is checked here, so the
-        // error can name the node; instanced content is left to the scene's own check.
+        // error can name the node.
         if planes.is_some() {
-            let reach = placed_reach(out, before);
-            if reach.is_nan() || reach > MAX_COORDINATE {
-                return Err(self.invalid(
-                    key,
-                    format!(
-                        "its transform, with its parents', places its contents at coordinates up \
-                         to {reach:.3e}; quadray supports magnitudes up to {MAX_COORDINATE:e}"
-                    ),
-                ));
-            }
+            self.check_reach(&key, out, &mark, prototypes)?;
         }
         for child in node.children() {
             self.place_node(&child, m, out, planes.as_deref_mut(), prototypes, depth + 1)?;
@@ -442,24 +462,6 @@ impl<'a> GraphBuild<'a> {
 }
 
 /// Whether a prototype places nothing.
-/// The largest coordinate magnitude of the spheres, quadrics and meshes `out` holds past the
-/// counts `before` (NaN where one is not a number).
-fn placed_reach(out: &Prototype, (spheres, quadrics, meshes): (usize, usize, usize)) -> f64 {
-    let boxes = (out.spheres[spheres..].iter().map(|s| s.bounds()))
-        .chain(out.quadrics[quadrics..].iter().map(|q| q.bounds()));
-    let points = out.meshes[meshes..]
-        .iter()
-        .flat_map(|m| m.positions().iter().map(|p| p.as_dvec3()));
-    boxes
-        .flat_map(|(lo, hi)| [lo, hi])
-        .chain(points)
-        .map(|p| p.abs().max_element())
-        .fold(
-            0.0,
-            |reach, x| if x > reach || x.is_nan() { x } else { reach },
-        )
-}
-
 fn is_empty(p: &Prototype) -> bool {
     p.spheres.is_empty() && p.quadrics.is_empty() && p.meshes.is_empty() && p.instances.is_empty()
 }
