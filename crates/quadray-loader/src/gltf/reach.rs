@@ -27,6 +27,16 @@ impl Mark {
             instances: level.instances.len(),
         }
     }
+
+    /// Nothing held.
+    fn empty() -> Mark {
+        Mark {
+            spheres: 0,
+            quadrics: 0,
+            meshes: 0,
+            instances: 0,
+        }
+    }
 }
 
 /// The prototypes' boxes in their own frames, each found once (`None`: the prototype holds
@@ -50,18 +60,6 @@ impl PrototypeBoxes {
         }
         self.0.insert(p, b);
         b
-    }
-}
-
-impl Mark {
-    /// Nothing held.
-    fn empty() -> Mark {
-        Mark {
-            spheres: 0,
-            quadrics: 0,
-            meshes: 0,
-            instances: 0,
-        }
     }
 }
 
@@ -94,8 +92,9 @@ fn contents_box(level: &Prototype, mark: &Mark) -> Option<Bounds> {
     boxes.chain(points).fold(None, union)
 }
 
-/// The largest coordinate magnitude of what `level` holds past `mark`, its instances placed
-/// (NaN where a coordinate is not a number), and whether it exceeds [`MAX_COORDINATE`].
+/// The largest coordinate magnitude of what `level` holds past `mark`, its instances placed,
+/// where it exceeds [`MAX_COORDINATE`] (or is not a number); `None` within the limit. Values that
+/// are not numbers are the loaders' and the scene's own checks to report.
 pub(super) fn too_far(
     level: &Prototype,
     mark: &Mark,
@@ -109,10 +108,8 @@ pub(super) fn too_far(
         }
     }
     let (lo, hi) = b?;
-    // NaN stays NaN through `abs` and wins the comparison below by failing it.
     let reach = lo.abs().max(hi.abs()).max_element();
-    let nan = lo.is_nan() || hi.is_nan();
-    (nan || reach > MAX_COORDINATE).then_some(if nan { f64::NAN } else { reach })
+    (reach.is_nan() || reach > MAX_COORDINATE).then_some(reach)
 }
 
 #[cfg(test)]
