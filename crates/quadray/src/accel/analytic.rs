@@ -267,7 +267,7 @@ impl AnalyticBvh {
                 let node = &self.nodes[current as usize];
                 let (_, mask) = node.intersect(&boxes, limit);
                 if mask != 0 {
-                    current = node.push_all_but_last(mask, &mut stack);
+                    current = node.push_all_but_last(mask, &mut stack, |_| {});
                     continue;
                 }
             } else {

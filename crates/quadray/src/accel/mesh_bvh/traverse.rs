@@ -251,7 +251,7 @@ impl MeshBvh {
                 let node = &self.nodes[current as usize];
                 let (_, mask) = node.intersect::<AVX2>(&ray.boxes, t_max);
                 if mask != 0 {
-                    current = node.push_all_but_last(mask, &mut stack);
+                    current = node.push_all_but_last(mask, &mut stack, |c| self.prefetch(c));
                     continue;
                 }
             } else {

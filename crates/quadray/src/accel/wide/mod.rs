@@ -264,14 +264,22 @@ impl<const N: usize> Node<N> {
 
     /// Pushes the children in `mask` (at least one) onto `stack` in lane order but the last,
     /// and returns the last: the any-hit traversals' order (no child ordering), the one
-    /// popping them all would give, without the last one's push and pop.
+    /// popping them all would give, without the last one's push and pop. `prefetch` is asked to
+    /// start loading each pushed child (as the closest-hit traversal's: the dragon's incoherent
+    /// any hits +6%).
     #[inline(always)]
-    pub(super) fn push_all_but_last(&self, mask: u32, stack: &mut Vec<(u32, f32)>) -> u32 {
+    pub(super) fn push_all_but_last(
+        &self,
+        mask: u32,
+        stack: &mut Vec<(u32, f32)>,
+        prefetch: impl Fn(u32),
+    ) -> u32 {
         let last = 31 - mask.leading_zeros();
         let mut rest = mask & !(1 << last);
         while rest != 0 {
             let lane = rest.trailing_zeros() as usize;
             rest &= rest - 1;
+            prefetch(self.children[lane]);
             stack.push((self.children[lane], 0.0));
         }
         self.children[last as usize]
