@@ -71,8 +71,8 @@ fn split_costs<const N: usize>(left: &Costs<N>, right: &Costs<N>) -> (Costs<N>, 
     // Costs never grow with the budget, so a side whose costs are all one (a subtree best a
     // leaf, as most small ones are) settles the choice without the search: with the left flat,
     // the sum never falls as k grows, and k = 1 is least; with the right flat, it never grows,
-    // and the least k is where it last fell. Both give the search's sums and k exactly, at a
-    // tenth of its work (the search was 40% of the dragon's collapse).
+    // and the least k is where it last fell. Both give the search's sums and k exactly, with
+    // N − 1 sums instead of N(N − 1)/2.
     if left[0] == left[N - 1] {
         for b in 1..N {
             d[b] = left[0] + right[b - 1];
