@@ -240,6 +240,19 @@ impl<const N: usize> Node<N> {
         stack: &mut Vec<(u32, f32)>,
         prefetch: impl Fn(u32),
     ) -> u32 {
+        let rest = mask & (mask - 1);
+        if rest & (rest - 1) == 0 {
+            // Two children, lanes a < b: the order the sort below gives (the farther pushed, the
+            // nearer kept; on a tie the later lane kept), without its loop over every lane.
+            let (a, b) = (
+                mask.trailing_zeros() as usize,
+                rest.trailing_zeros() as usize,
+            );
+            let (far, near) = if enter[a] < enter[b] { (b, a) } else { (a, b) };
+            prefetch(self.children[far]);
+            stack.push((self.children[far], enter[far]));
+            return self.children[near];
+        }
         let mut order = [(0u32, 0f32); N];
         let mut n = 0;
         for (lane, (&child, &t)) in self.children.iter().zip(&enter).enumerate() {
@@ -346,6 +359,39 @@ mod tests {
         let h =
             (i.wrapping_mul(0x9E37_79B9) ^ k.wrapping_mul(0x85EB_CA6B)).wrapping_mul(0xC2B2_AE35);
         (h >> 8) as f32 / (1 << 24) as f32
+    }
+
+    /// Children pushed far to near, the nearest returned, and on a tie the later lane nearer:
+    /// the order of every mask of entered lanes, two lanes (a path of its own) or more, with
+    /// ties, against a stable sort.
+    #[test]
+    fn children_are_ordered_far_to_near_with_ties_kept_stable() {
+        let mut node = Node8::EMPTY;
+        node.children = std::array::from_fn(|lane| 10 + lane as u32);
+        let mut stack = Vec::new();
+        for k in 0..500u32 {
+            // Distances from four values, so ties are common.
+            let enter: [f32; 8] = std::array::from_fn(|lane| (hash(k, lane as u32) * 4.0).floor());
+            for mask in 1u32..256 {
+                if mask.count_ones() < 2 {
+                    continue;
+                }
+                stack.clear();
+                let nearest = node.push_ordered(enter, mask, &mut stack, |_| {});
+                // Lanes by distance, far first; equal distances in lane order, so the last of
+                // them is the nearer.
+                let mut want: Vec<usize> = (0..8).filter(|l| mask & (1 << l) != 0).collect();
+                want.sort_by(|&a, &b| enter[b].total_cmp(&enter[a]));
+                let (last, pushed) = want.split_last().unwrap();
+                assert_eq!(nearest, node.children[*last], "k {k} mask {mask:#b}");
+                let got: Vec<(u32, f32)> = stack.clone();
+                let expected: Vec<(u32, f32)> = pushed
+                    .iter()
+                    .map(|&l| (node.children[l], enter[l]))
+                    .collect();
+                assert_eq!(got, expected, "k {k} mask {mask:#b}");
+            }
+        }
     }
 
     /// The 8-wide test agrees with the 4-wide one on each half, and (where the CPU has AVX2) its
