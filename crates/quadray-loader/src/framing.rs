@@ -162,37 +162,44 @@ fn corners((a, b): (DVec3, DVec3)) -> impl Iterator<Item = DVec3> {
 /// transforms.
 fn boxed_bounds(g: &Geometry) -> Option<(DVec3, DVec3)> {
     let mut boxes: Vec<Option<(DVec3, DVec3)>> = Vec::with_capacity(g.level_count());
-    let level_box = |level: quadray::Level<'_>, boxes: &[Option<(DVec3, DVec3)>]| {
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        let mut grow = |(a, b): (DVec3, DVec3)| {
-            lo = lo.min(a);
-            hi = hi.max(b);
-        };
-        level.spheres.iter().for_each(|s| grow(s.bounds()));
-        level.quadrics.iter().for_each(|q| grow(q.bounds()));
-        for m in level.meshes {
-            for p in m.positions() {
-                let p = p.as_dvec3();
-                grow((p, p));
-            }
-        }
-        for inst in level.instances {
-            let Some(Some((a, b))) = boxes.get(inst.prototype as usize) else {
-                continue;
-            };
-            for c in corners((*a, *b)) {
-                let w = inst.transform.to_world.transform_point3(c);
-                grow((w, w));
-            }
-        }
-        (lo.cmple(hi).all()).then_some((lo, hi))
-    };
     for i in 0..g.prototypes.len() {
         let b = level_box(g.level(i + 1), &boxes);
         boxes.push(b);
     }
     level_box(g.level(0), &boxes)
+}
+
+/// The box of what `level` holds, its instances' prototypes placed as the boxes in
+/// `prototype_boxes` (by prototype; `None`, or a prototype past the list, holds nothing); `None`
+/// when it holds nothing.
+pub(crate) fn level_box(
+    level: quadray::Level<'_>,
+    prototype_boxes: &[Option<(DVec3, DVec3)>],
+) -> Option<(DVec3, DVec3)> {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    let mut grow = |(a, b): (DVec3, DVec3)| {
+        lo = lo.min(a);
+        hi = hi.max(b);
+    };
+    level.spheres.iter().for_each(|s| grow(s.bounds()));
+    level.quadrics.iter().for_each(|q| grow(q.bounds()));
+    for m in level.meshes {
+        for p in m.positions() {
+            let p = p.as_dvec3();
+            grow((p, p));
+        }
+    }
+    for inst in level.instances {
+        let Some(Some((a, b))) = prototype_boxes.get(inst.prototype as usize) else {
+            continue;
+        };
+        for c in corners((*a, *b)) {
+            let w = inst.transform.to_world.transform_point3(c);
+            grow((w, w));
+        }
+    }
+    (lo.cmple(hi).all()).then_some((lo, hi))
 }
 
 /// Irradiance of the default key light: a white matte surface facing it shows 0.1 + 0.9·0.8 =

@@ -2,14 +2,12 @@
 //! quadray's limit ([`MAX_COORDINATE`]) are reported with the node that put them there rather
 //! than, later, as the whole scene's.
 
-use glam::{DAffine3, DVec3};
-use quadray::{MAX_COORDINATE, Prototype};
-use std::collections::HashMap;
-
-/// A box, corners low and high.
-type Bounds = (DVec3, DVec3);
+use crate::framing::level_box;
+use glam::DVec3;
+use quadray::{Level, MAX_COORDINATE, Prototype};
 
 /// How much a level held before a node's contents were added to it.
+#[derive(Default)]
 pub(super) struct Mark {
     spheres: usize,
     quadrics: usize,
@@ -27,94 +25,53 @@ impl Mark {
             instances: level.instances.len(),
         }
     }
+}
 
-    /// Nothing held.
-    fn empty() -> Mark {
-        Mark {
-            spheres: 0,
-            quadrics: 0,
-            meshes: 0,
-            instances: 0,
-        }
+/// What `level` holds past `mark`.
+fn since<'a>(level: &'a Prototype, mark: &Mark) -> Level<'a> {
+    Level {
+        spheres: &level.spheres[mark.spheres..],
+        quadrics: &level.quadrics[mark.quadrics..],
+        meshes: &level.meshes[mark.meshes..],
+        instances: &level.instances[mark.instances..],
     }
 }
 
-/// The prototypes' boxes in their own frames, each found once (`None`: the prototype holds
-/// nothing).
+/// The prototypes' boxes in their own frames, by prototype (`None`: it holds nothing), each
+/// found once. A prototype is complete once listed, and nests only earlier ones, so the list
+/// grows in order.
 #[derive(Default)]
-pub(super) struct PrototypeBoxes(HashMap<u32, Option<Bounds>>);
+pub(super) struct PrototypeBoxes(Vec<Option<(DVec3, DVec3)>>);
 
 impl PrototypeBoxes {
-    /// The box of everything prototype `p` of `prototypes` holds, in its own frame.
-    fn of(&mut self, prototypes: &[Prototype], p: u32) -> Option<Bounds> {
-        if let Some(&b) = self.0.get(&p) {
-            return b;
+    /// The boxes of every prototype in `prototypes`.
+    fn of_all(&mut self, prototypes: &[Prototype]) -> &[Option<(DVec3, DVec3)>] {
+        for p in &prototypes[self.0.len().min(prototypes.len())..] {
+            let b = level_box(since(p, &Mark::default()), &self.0);
+            self.0.push(b);
         }
-        let proto = &prototypes[p as usize];
-        let mut b = contents_box(proto, &Mark::empty());
-        // Nested prototypes come earlier in the list, so this ends.
-        for inst in &proto.instances {
-            if let Some(inner) = self.of(prototypes, inst.prototype) {
-                b = union(b, placed_box(inner, &inst.transform.to_world));
-            }
-        }
-        self.0.insert(p, b);
-        b
+        &self.0
     }
-}
-
-/// The union of two boxes, either missing.
-fn union(a: Option<Bounds>, b: Bounds) -> Option<Bounds> {
-    Some(a.map_or(b, |(lo, hi)| (lo.min(b.0), hi.max(b.1))))
-}
-
-/// The box of `b`'s eight corners placed by `m`.
-fn placed_box((lo, hi): Bounds, m: &DAffine3) -> Bounds {
-    let corners = (0..8).map(|i| {
-        let pick = |bit: u32, l: f64, h: f64| if i & bit == 0 { l } else { h };
-        m.transform_point3(DVec3::new(
-            pick(1, lo.x, hi.x),
-            pick(2, lo.y, hi.y),
-            pick(4, lo.z, hi.z),
-        ))
-    });
-    corners.fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), c| {
-        (l.min(c), h.max(c))
-    })
-}
-
-/// The box of the spheres, quadrics and meshes `level` holds past `mark` (not its instances).
-fn contents_box(level: &Prototype, mark: &Mark) -> Option<Bounds> {
-    let boxes = (level.spheres[mark.spheres..].iter().map(|s| s.bounds()))
-        .chain(level.quadrics[mark.quadrics..].iter().map(|q| q.bounds()));
-    let points = (level.meshes[mark.meshes..].iter())
-        .flat_map(|m| m.positions().iter().map(|p| (p.as_dvec3(), p.as_dvec3())));
-    boxes.chain(points).fold(None, union)
 }
 
 /// The largest coordinate magnitude of what `level` holds past `mark`, its instances placed,
-/// where it exceeds [`MAX_COORDINATE`] (or is not a number); `None` within the limit. Values that
-/// are not numbers are the loaders' and the scene's own checks to report.
+/// where it exceeds [`MAX_COORDINATE`]; `None` within the limit. Values that are not numbers are
+/// the loaders' and the scene's own checks to report.
 pub(super) fn too_far(
     level: &Prototype,
     mark: &Mark,
     prototypes: &[Prototype],
     boxes: &mut PrototypeBoxes,
 ) -> Option<f64> {
-    let mut b = contents_box(level, mark);
-    for inst in &level.instances[mark.instances..] {
-        if let Some(inner) = boxes.of(prototypes, inst.prototype) {
-            b = union(b, placed_box(inner, &inst.transform.to_world));
-        }
-    }
-    let (lo, hi) = b?;
+    let (lo, hi) = level_box(since(level, mark), boxes.of_all(prototypes))?;
     let reach = lo.abs().max(hi.abs()).max_element();
-    (reach.is_nan() || reach > MAX_COORDINATE).then_some(reach)
+    (reach > MAX_COORDINATE).then_some(reach)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DAffine3;
     use quadray::{Instance, Sphere, Transform};
 
     /// A sphere far out is found directly, and through two levels of instances; one within the
