@@ -365,8 +365,6 @@ impl SphereFile {
     }
 }
 
-/// One row of `def` read by `parser`: from `rest` in a binary file, from the line `text` already
-/// taken from `rest` in an ASCII one.
 /// What the PLY parser lets pass in a header (`header`, its text): a version other than 1.0, the
 /// only one there is, and an element or a property declared twice, which the parser keeps once
 /// while the rows still hold both, so every value after it would be read from the wrong place.
@@ -403,6 +401,8 @@ fn check_declarations(header: &[u8], (major, minor): (u16, u8)) -> Result<(), (u
     Ok(())
 }
 
+/// One row of `def` read by `parser`: from `rest` in a binary file, from the line `text` already
+/// taken from `rest` in an ASCII one.
 fn read_row<P: PropertyAccess>(
     parser: &Parser<P>,
     encoding: Encoding,

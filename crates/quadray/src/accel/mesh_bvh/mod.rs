@@ -102,6 +102,16 @@ impl MeshRay {
     }
 }
 
+/// (mesh, triangle) of triangle number `number`, the numbers running over the meshes in turn:
+/// `ids` names each where there are several meshes, and is empty for one.
+#[inline(always)]
+fn tri_id(ids: &[TriId], number: u32) -> TriId {
+    match ids.get(number as usize) {
+        Some(&id) => id,
+        None => (0, number),
+    }
+}
+
 impl MeshBvh {
     /// Builds the BVH over `meshes`.
     pub(crate) fn build(meshes: &[Mesh]) -> MeshBvh {
@@ -124,7 +134,7 @@ impl MeshBvh {
         // Read from the meshes where needed rather than copied out (for the dragon a copy was
         // 31 MB, whose pages alone took milliseconds to fault in).
         let triangle = |p: u32| {
-            let (m, tri) = ids.get(p as usize).copied().unwrap_or((0, p));
+            let (m, tri) = tri_id(&ids, p);
             meshes[m as usize].triangle_positions(tri).map(|v| *v)
         };
         let total: u32 = meshes.iter().map(|m| m.triangle_count() as u32).sum();
@@ -193,10 +203,7 @@ impl MeshBvh {
     /// (mesh, triangle) of triangle number `number`.
     #[inline(always)]
     fn id(&self, number: u32) -> TriId {
-        match self.ids.get(number as usize) {
-            Some(&id) => id,
-            None => (0, number),
-        }
+        tri_id(&self.ids, number)
     }
 
     /// The vertices of `hit`'s triangle, from the leaf block's copies: the mesh's own values, so
