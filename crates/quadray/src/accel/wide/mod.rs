@@ -18,6 +18,7 @@
 
 mod collapse;
 mod sah_plan;
+mod subtrees;
 
 pub(super) use collapse::{LEAF_WEIGHT, collapse, leaf_blocks};
 use glam::{Vec3A, Vec4};
