@@ -119,19 +119,13 @@ impl EyeBuffer {
     /// How many shapes the buffer tests for this ray, or `None` where the BVH answers.
     #[cfg(test)]
     pub(crate) fn listed(&self, ray: &Ray) -> Option<usize> {
-        self.seen(ray).map(<[Shape]>::len)
+        self.seen_finite(ray).map(<[Shape]>::len)
     }
 
-    /// For a ray: the shapes it can meet (none, when it starts at the eye and can meet none), or
-    /// `None` when the BVH must tell. The ray starts at the eye bit for bit (a zero's sign
-    /// included), so the eye's local points are its origin's.
-    #[inline]
-    fn seen(&self, ray: &Ray) -> Option<&[Shape]> {
-        let bits = |p: DVec3| p.to_array().map(f64::to_bits);
-        if bits(ray.origin) != bits(self.eye) {
-            return None;
-        }
-        match self.cells[CUBE.cell(ray.dir)?] {
+    /// The shapes listed in `cell`, or `None` where the BVH answers.
+    #[inline(always)]
+    fn in_cell(&self, cell: usize) -> Option<&[Shape]> {
+        match self.cells[cell] {
             NO_SHAPE => Some(&[]),
             MANY_SHAPES => None,
             k => Some(self.list(k)),
@@ -151,10 +145,32 @@ impl EyeBuffer {
             })
     }
 
-    /// [`EyeBuffer::seen`] for a ray that is also finite in f32, as the BVH traverses it.
+    /// For a ray: the shapes it can meet (none, when it starts at the eye and can meet none), or
+    /// `None` when the BVH must tell. The ray starts at the eye bit for bit (a zero's sign
+    /// included), so the eye's local points are its origin's, and is finite in f32, as the BVH
+    /// traverses it ([`Cube::cell_from`]).
     #[inline(always)]
     fn seen_finite(&self, ray: &Ray) -> Option<&[Shape]> {
-        self.seen(ray).filter(|_| finite_in_f32(ray))
+        self.in_cell(CUBE.cell_from(self.eye, ray)?)
+    }
+
+    /// [`EyeBuffer::seen_finite`] of each ray into `seen` (as long), the cells of four rays
+    /// found together. Out of line: inlined, its loop made the batch loop around it dearer than
+    /// the lookups saved.
+    #[inline(never)]
+    fn seen_finite_each<'a>(&'a self, rays: &[Ray], seen: &mut [Option<&'a [Shape]>]) {
+        let (fours, rest) = rays.as_chunks::<4>();
+        // Indexed loops: zipped iterators over the lanes kept their state on the stack.
+        for (k, four) in fours.iter().enumerate() {
+            let cells = CUBE.cells_from(self.eye, four);
+            for lane in 0..4 {
+                seen[4 * k + lane] = cells[lane].and_then(|cell| self.in_cell(cell));
+            }
+        }
+        let done = 4 * fours.len();
+        for (s, ray) in seen[done..].iter_mut().zip(rest) {
+            *s = self.seen_finite(ray);
+        }
     }
 
     /// List `k` of those the cells hold.
@@ -359,9 +375,7 @@ impl Accel {
         let level = g.level(0);
         for (rays, hits) in rays.chunks(BATCH).zip(hits.chunks_mut(BATCH)) {
             let mut seen = [None; BATCH];
-            for (s, ray) in seen.iter_mut().zip(rays) {
-                *s = eye.seen_finite(ray);
-            }
+            eye.seen_finite_each(rays, &mut seen[..rays.len()]);
             let mut k = 0;
             while k < rays.len() {
                 // Four neighbouring rays whose cells list the same spheres and quadrics (each

@@ -22,6 +22,7 @@
 //! pixels see nothing but traces its camera rays through the BVH ([`Accel::eye_answers_rays`]).
 
 mod eye;
+mod four;
 mod light;
 
 pub use eye::EyeBuffer;
