@@ -122,10 +122,10 @@ impl EyeBuffer {
         self.seen_finite(ray).map(<[Shape]>::len)
     }
 
-    /// The shapes listed in `cell`, or `None` where the BVH answers.
+    /// The shapes listed in `cell`, or `None` where the BVH answers or there is no such cell.
     #[inline(always)]
     fn in_cell(&self, cell: usize) -> Option<&[Shape]> {
-        match self.cells[cell] {
+        match *self.cells.get(cell)? {
             NO_SHAPE => Some(&[]),
             MANY_SHAPES => None,
             k => Some(self.list(k)),
@@ -164,7 +164,8 @@ impl EyeBuffer {
         for (k, four) in fours.iter().enumerate() {
             let cells = CUBE.cells_from(self.eye, four);
             for lane in 0..4 {
-                seen[4 * k + lane] = cells[lane].and_then(|cell| self.in_cell(cell));
+                // NO_CELL is beyond every cell: `in_cell` finds none there.
+                seen[4 * k + lane] = self.in_cell(cells[lane] as usize);
             }
         }
         let done = 4 * fours.len();

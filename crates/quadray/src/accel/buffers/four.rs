@@ -7,17 +7,26 @@ use super::{Cube, finite_in_f32};
 use crate::math::Ray;
 use glam::DVec3;
 
+/// What [`Cube::cells_from`] gives a ray [`Cube::cell_from`] gives no cell: beyond every cube's
+/// cells, so a lookup with `get` finds nothing.
+pub(super) const NO_CELL: u32 = u32::MAX;
+
 impl Cube {
-    /// [`Cube::cell`] of each ray's direction, `None` for a ray that does not start at `point` bit
-    /// for bit or is not finite in f32 ([`finite_in_f32`]), on either compiled path.
+    /// [`Cube::cell`] of each ray's direction, [`NO_CELL`] for a ray that does not start at
+    /// `point` bit for bit or is not finite in f32 ([`finite_in_f32`]), on either compiled path.
+    /// The cube has at most 2³¹ cells.
     #[inline]
-    pub(super) fn cells_from(self, point: DVec3, rays: &[Ray; 4]) -> [Option<usize>; 4] {
+    pub(super) fn cells_from(self, point: DVec3, rays: &[Ray; 4]) -> [u32; 4] {
+        debug_assert!(self.len() < 1 << 31);
         #[cfg(target_arch = "x86_64")]
         if crate::simd::simd_path() == crate::simd::SimdPath::Avx2 {
             // SAFETY: the CPU has AVX2 (checked by `simd_path`).
             return unsafe { avx2::cells_from(self, point, rays) };
         }
-        rays.each_ref().map(|ray| self.cell_from(point, ray))
+        rays.each_ref().map(|ray| {
+            self.cell_from(point, ray)
+                .map_or(NO_CELL, |cell| cell as u32)
+        })
     }
 
     /// One ray's [`Cube::cells_from`].
@@ -73,13 +82,24 @@ mod avx2 {
         ))
     }
 
+    /// The cell coordinate of face coordinate `c` (a component over the largest one's magnitude,
+    /// times `half_n`): c · scale + n/2 clamped to [0, `top`] and truncated. Where the quotient is
+    /// finite, MAXPD and MINPD clamp as `f64::max` and `min` do, and truncation gives the integer
+    /// conversion's value.
+    #[target_feature(enable = "avx2")]
+    fn cell_along(c: __m256d, scale: __m256d, half_n: __m256d, top: __m256d) -> __m256d {
+        let moved = _mm256_add_pd(_mm256_mul_pd(c, scale), half_n);
+        let clamped = _mm256_min_pd(_mm256_max_pd(moved, _mm256_setzero_pd()), top);
+        _mm256_round_pd::<{ _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC }>(clamped)
+    }
+
     /// [`Cube::cells_from`]: each ray's origin compared with `point` bit for bit and its six
     /// coordinates checked against f32's range, then [`Cube::cell`] of its direction: the axis of
     /// the largest magnitude (x on ties with y or z, then y on a tie with z), the two other
     /// components times n/2 over that magnitude, moved to [0, n] and clamped to [0, n − 1],
-    /// truncated; `None` also where that scale is not finite.
+    /// truncated; [`super::NO_CELL`] also where that scale is not finite.
     #[target_feature(enable = "avx2")]
-    pub(super) fn cells_from(cube: Cube, point: DVec3, rays: &[Ray; 4]) -> [Option<usize>; 4] {
+    pub(super) fn cells_from(cube: Cube, point: DVec3, rays: &[Ray; 4]) -> [u32; 4] {
         // No closures in this function: they would not inherit AVX2, and each became a call.
         let [r0, r1, r2, r3] = rays;
         let (o0, o1, o2, o3) = (r0.origin, r1.origin, r2.origin, r3.origin);
@@ -122,37 +142,26 @@ mod avx2 {
         let scale = _mm256_div_pd(half_n, abs(largest));
         // Finite in f32 implies finite: the direction needs no check of its own.
         let valid = _mm256_and_pd(_mm256_and_pd(at_point, in_f32), finite(scale));
-        let (zero, top) = (_mm256_setzero_pd(), _mm256_set1_pd((n - 1) as f64));
-        // The valid lanes' quotients are finite, so MAXPD and MINPD clamp as `f64::max` and `min`.
-        let moved_u = _mm256_add_pd(_mm256_mul_pd(u, scale), half_n);
-        let moved_v = _mm256_add_pd(_mm256_mul_pd(v, scale), half_n);
-        let cu = _mm256_cvttpd_epi32(_mm256_min_pd(_mm256_max_pd(moved_u, zero), top));
-        let cv = _mm256_cvttpd_epi32(_mm256_min_pd(_mm256_max_pd(moved_v, zero), top));
-        let (mut cu_lanes, mut cv_lanes) = ([0i32; 4], [0i32; 4]);
-        // SAFETY: each array holds four i32, the 16 bytes stored.
-        unsafe {
-            _mm_storeu_si128(cu_lanes.as_mut_ptr().cast(), cu);
-            _mm_storeu_si128(cv_lanes.as_mut_ptr().cast(), cv);
-        }
-        let valid = _mm256_movemask_pd(valid);
-        let x_wins = _mm256_movemask_pd(x_wins);
-        let y_wins = _mm256_movemask_pd(y_wins);
-        let negative = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(largest, zero));
-        let mut cells = [None; 4];
-        for (lane, cell) in cells.iter_mut().enumerate() {
-            if valid >> lane & 1 == 0 {
-                continue;
-            }
-            let axis = if x_wins >> lane & 1 == 1 {
-                0
-            } else if y_wins >> lane & 1 == 1 {
-                1
-            } else {
-                2
-            };
-            let face = 2 * axis + (negative >> lane & 1) as usize;
-            *cell = Some((face * n + cu_lanes[lane] as usize) * n + cv_lanes[lane] as usize);
-        }
+        let top = _mm256_set1_pd((n - 1) as f64);
+        let (cu, cv) = (
+            cell_along(u, scale, half_n, top),
+            cell_along(v, scale, half_n, top),
+        );
+        // (face · n + cu) · n + cv, face = 2 · axis + (largest < 0), each exact in f64 (below 2³¹).
+        let (zero, one) = (_mm256_setzero_pd(), _mm256_set1_pd(1.0));
+        let axis = select(x_wins, zero, select(y_wins, one, _mm256_set1_pd(2.0)));
+        let negative = _mm256_and_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(largest, zero), one);
+        let face = _mm256_add_pd(_mm256_add_pd(axis, axis), negative);
+        let n = _mm256_set1_pd(n as f64);
+        let cell = _mm256_add_pd(
+            _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(face, n), cu), n),
+            cv,
+        );
+        // −1, which converts to NO_CELL's bits, where invalid.
+        let cell = select(valid, cell, _mm256_set1_pd(-1.0));
+        let mut cells = [0u32; 4];
+        // SAFETY: `cells` holds four 32-bit lanes, the 16 bytes stored.
+        unsafe { _mm_storeu_si128(cells.as_mut_ptr().cast(), _mm256_cvttpd_epi32(cell)) };
         cells
     }
 }
@@ -217,7 +226,8 @@ mod tests {
                 let four = cube.cells_from(point, &rays);
                 for lane in 0..4 {
                     let one = cube.cell_from(point, &rays[lane]);
-                    assert_eq!(four[lane], one, "{:?}, n {n}", rays[lane]);
+                    let expected = one.map_or(NO_CELL, |cell| cell as u32);
+                    assert_eq!(four[lane], expected, "{:?}, n {n}", rays[lane]);
                     found += usize::from(one.is_some());
                 }
             }
