@@ -42,7 +42,7 @@ const FRAMING_VFOV: f64 = 40.0;
 /// a small part of its box's projection).
 ///
 /// Every placed vertex and shape box corner is sorted by its depth along the framing view into
-/// [`FRAMING_SLICES`] slices; each slice gives two points at its nearest depth, one at its least
+/// `FRAMING_SLICES` slices; each slice gives two points at its nearest depth, one at its least
 /// sideways and vertical offsets, one at its greatest. A point nearer the camera projects
 /// farther out, so a view that holds these points holds every vertex behind them. Within the
 /// same work budget as [`geometry_bounds`]; beyond it, the eight corners of the bounds.

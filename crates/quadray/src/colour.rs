@@ -88,7 +88,7 @@ static SRGB_BY_ROOT: std::sync::LazyLock<[f32; SRGB_TABLE_STEPS + 1]> =
 
 /// The sRGB transfer function (IEC 61966-2-1) applied to a clamped linear value, as an 8-bit code:
 /// `(encode_srgb(linear) · 255 + 0.5)` truncated, found from the linear values where the code
-/// steps up ([`Srgb8Steps`]) instead of by a `powf` (13% of a quadric-grid frame's profile; the
+/// steps up (`Srgb8Steps`) instead of by a `powf` (13% of a quadric-grid frame's profile; the
 /// frame's wall time fell 8%).
 pub fn encode_srgb8(linear: f32) -> u8 {
     SRGB8_STEPS.encode(linear)

@@ -3,7 +3,7 @@
 //! primitives, camera, light and `QUADRAY_quadrics` shape placed in quadray's z-up world.
 //!
 //! - Nodes, meshes and shapes used more than once become prototypes placed by instances
-//!   ([`crate::gltf::graph`]): the node graph is never expanded, except to place cameras and lights.
+//!   (`crate::gltf::graph`): the node graph is never expanded, except to place cameras and lights.
 //! - Scenes: the one chosen by [`ImportOptions::scene`] (index or name), else the file's default
 //!   `scene`, else its first; a file with several scenes says which one was used.
 //! - A node carrying a `QUADRAY_quadrics` shape renders the analytic shape; its `mesh` is the

@@ -2,7 +2,7 @@
 //! shading where the file has them), texture coordinates, vertex colours, and MTL materials.
 //!
 //! - One quadray mesh per OBJ object/group and material (tobj's models), in world space: the file is
-//!   rotated from y-up to z-up unless the caller says it is z-up already ([`crate::import`]).
+//!   rotated from y-up to z-up unless the caller says it is z-up already (`crate::import`).
 //! - Texture coordinates are flipped to the image convention (OBJ's v grows upwards, quadray's
 //!   downwards, as in glTF).
 //! - Vertex colours (`v x y z r g b`) are read as sRGB-encoded and decoded to linear.

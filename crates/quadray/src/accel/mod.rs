@@ -2,17 +2,17 @@
 //!
 //! The scene is a set of levels: the world, and prototypes placed by instances (in the world or in
 //! other prototypes, so instance graphs nest). Each level is built once, in its own space:
-//! - **Bottom level**: one wide BVH over the level's meshes ([`mesh_bvh`]: an 8-wide BVH of
+//! - **Bottom level**: one wide BVH over the level's meshes (`mesh_bvh`: an 8-wide BVH of
 //!   quadray's layout collapsed from obvhs' BVH2, with f32 watertight triangle tests four at a
 //!   time), and one 4-wide BVH of the same node layout over its spheres and quadrics
-//!   ([`analytic`]: f32 traversal over padded boxes, spheres four at a time and quadrics one by
+//!   (`analytic`: f32 traversal over padded boxes, spheres four at a time and quadrics one by
 //!   one in f64).
 //! - **Top**: those two and the level's instances, each an affine transform and the level it
 //!   places (rays are mapped into the placed level's space, where t is unchanged, and that level
 //!   is traversed the same way). Up to eight items are tested box by box (measured: an obvhs BVH2
 //!   over the two items of scenes/defense.toml cost several percent); more get an obvhs BVH2. The
 //!   world's infinite planes are tested in a short list beside it.
-//! - **Direction buffers** ([`buffers`]): in a world of few shapes, shadow rays towards a point
+//! - **Direction buffers** (`buffers`): in a world of few shapes, shadow rays towards a point
 //!   light and rays from a pinhole camera's eye test only the shapes listed for their direction
 //!   from that point.
 //!
@@ -104,7 +104,7 @@ struct LevelAccel {
     top: Option<Bvh2>,
     /// The items' boxes, for a top without a BVH.
     item_boxes: Vec<Aabb>,
-    /// A few boxes (at most [`MAX_COVERING`], in the level's space) whose union holds all its
+    /// A few boxes (at most `MAX_COVERING`, in the level's space) whose union holds all its
     /// content, tighter than one box: an instance's box is theirs, placed (a rotated bunny's
     /// box of its box overlapped its neighbours' and cost 2x in traversal).
     covering: Vec<Bounds>,
@@ -112,7 +112,7 @@ struct LevelAccel {
     placed: Vec<Placed>,
 }
 
-/// The scene's acceleration structure: one [`LevelAccel`] per level, plus the world's planes.
+/// The scene's acceleration structure: one `LevelAccel` per level, plus the world's planes.
 #[derive(Clone)]
 pub struct Accel {
     /// Per level: 0 is the world, `1 + i` prototype `i`.

@@ -1,6 +1,6 @@
 //! The wide node layout both bottom levels share (meshes and analytic shapes): children's f32
 //! boxes in structure-of-arrays form, tested against one ray all at once, and the collapse of
-//! obvhs' BVH2 into such nodes ([`collapse`]). A node has `N` children: 4 ([`Node4`], the
+//! obvhs' BVH2 into such nodes ([`collapse()`]). A node has `N` children: 4 ([`Node4`], the
 //! analytic level's) or 8 ([`Node8`], the meshes').
 //!
 //! A node holds its children's boxes as six rows of `N` f32 (structure of arrays): a 4-wide node

@@ -14,12 +14,12 @@
 //! expectation (a − μ)² given a: the pixel's actual squared error, whatever chose the pixel or
 //! stopped its sampling ([`Twin`]). The twins' weighted mean of those, at one count, estimates the
 //! mean error of the pixels at that count; over their summed batch-means estimates it is the
-//! factor ([`Calibration::factor`]) that makes the estimate unbiased there, and the rate the
-//! error falls at follows from it: factor = (k − 1) / (k^α − 1) with k = 8. One twin and half of
-//! (a − b)², unbiased only over pixels taken whatever their samples say, measured 0.54–0.84× the
-//! true image error on defense and reflective (480x270, targets 0.002 to 0.0005); the pair,
-//! 0.80–1.16×. The calibration steers the rounds; the error a render reports is measured by
-//! [`super::audit`], on pixels drawn when the rounds are over.
+//! factor (a [`Calibration`] keeps one a sample count) that makes the estimate unbiased there,
+//! and the rate the error falls at follows from it: factor = (k − 1) / (k^α − 1) with k = 8.
+//! One twin and half of (a − b)², unbiased only over pixels taken whatever their samples say,
+//! measured 0.54–0.84× the true image error on defense and reflective (480x270, targets 0.002 to
+//! 0.0005); the pair, 0.80–1.16×. The calibration steers the rounds; the error a render reports
+//! is measured by [`super::audit`], on pixels drawn when the rounds are over.
 //!
 //! Which pixels get twins ([`TwinOdds`]) is decided once, after the first samples, in two strata:
 //! pixels whose first samples disagree (rough) and those whose samples all agree (flat). Each
@@ -190,7 +190,7 @@ pub(super) fn is_flat_error(squared_error: f64) -> bool {
 /// Pixels at different counts need different corrections: those refined are overstated (about
 /// 3× in RMSE on the bundled scenes), while those left at the first round's count include the
 /// pixels whose estimate was low by chance, and are understated (up to 3× on the reflective
-/// scene). Each count with at least [`MIN_TWINS`] twins gets its own factor; the others take, in
+/// scene). Each count with at least `MIN_TWINS` twins gets its own factor; the others take, in
 /// this order, the fallback's factor at that count, the factor of all refined twins (the
 /// fallback's where there are too few), or that of all twins.
 ///

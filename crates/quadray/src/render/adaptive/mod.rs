@@ -4,8 +4,8 @@
 //! - **Image rule** (the default, `--target-error`): the image's mean squared error is the sum of
 //!   its pixels' ([`PixelEstimate::squared_error`]); each round doubles the pixels whose estimated
 //!   squared error per ray (sᵢ/cᵢ) is above a threshold chosen so that the predicted image
-//!   error meets the target, or the work meets the budget ([`image_rule`]). The thresholds come
-//!   from a pilot, a fixed lattice of the image's pixels ([`pilot`]).
+//!   error meets the target, or the work meets the budget (`image_rule`). The thresholds come
+//!   from a pilot, a fixed lattice of the image's pixels (`pilot`).
 //! - **Pixel rule** (`--pixel-error`): every pixel is brought to one relative error of its display
 //!   value ([`PixelEstimate::relative_error`]); round k brings the pixels it samples to
 //!   `min_spp`·2^k samples: every pixel still above the target (after the first round, above
@@ -15,7 +15,7 @@
 //!   is, by its own estimate, and it has no more samples than that neighbour.
 //! - **Slivers**: an edge along the border of two flat pixels (whose samples all agree) may
 //!   cross into either by a sliver every sample missed, so in the first [`SLIVER_ROUNDS`] rounds
-//!   a flat pixel beside a flat neighbour of another value is sampled too ([`missed`]).
+//!   a flat pixel beside a flat neighbour of another value is sampled too (`missed`).
 //! - **Samples**: a pixel's samples are the prefix of its own progressive sequence
 //!   ([`crate::sampler::progressive_2d`]), so samples added later keep the stratification of the
 //!   earlier ones, and a power-of-two count is a (0, k, 2)-net in the pixel.
@@ -26,9 +26,9 @@
 //!   the image) and computes the same pilot, so its pixels equal those of the whole render. A time
 //!   limit ([`Adaptive::time_limit`]) trades that for a bound: its rounds are planned from the
 //!   rendered pixels and the time left, and which pixels got the last one depends on timing.
-//! - **The reported error** is an audit of the finished window ([`audit`]): pixels drawn by their
+//! - **The reported error** is an audit of the finished window (`audit`): pixels drawn by their
 //!   estimated error are sampled twice more, which measures their actual error without bias.
-//!   The calibration by twins ([`calibration`]) steers the rounds; the audit says where they got.
+//!   The calibration by twins (`calibration`) steers the rounds; the audit says where they got.
 
 use crate::aov::{AovSample, Aovs};
 use crate::film::{Film, PixelEstimate, SecondMoment};
@@ -58,10 +58,10 @@ use window::WindowState;
 /// following neighbours in every round cost 1.2–1.4× the CPU time of this at equal RMSE.
 pub const NEIGHBOUR_ROUNDS: u32 = 3;
 /// The first refinement rounds in which a flat pixel beside a flat neighbour of another value is
-/// sampled ([`missed`]): an edge between them may cross into either by a sliver all their
+/// sampled (`missed`): an edge between them may cross into either by a sliver all their
 /// samples missed. On defense (480x270, one thread, seeds 1 to 3) it lowered the true error 5% at
 /// target 0.002, 13–17% at 0.001 and 27–40% at 0.0005 for 0.4% more rays (a horizon in one
-/// row); 3 rounds, or a least difference of 0.005 instead of [`missed::SLIVER_CONTRAST`], gave
+/// row); 3 rounds, or a least difference of 0.005 instead of `missed::SLIVER_CONTRAST`, gave
 /// the same images. At most [`NEIGHBOUR_ROUNDS`], whose border a crop or a tile is sampled with.
 pub const SLIVER_ROUNDS: u32 = 2;
 const _: () = assert!(SLIVER_ROUNDS <= NEIGHBOUR_ROUNDS);
@@ -252,7 +252,7 @@ impl<'a> InnerPixels<'a> {
 
 /// What the rounds left over the bordered window.
 struct Sampled {
-    /// The audited MSE of the inner window ([`audit`]).
+    /// The audited MSE of the inner window (`audit`).
     estimated_mse: f64,
     /// Under the pixel rule, each pixel's relative error as the rounds left it.
     relative_errors: Option<Vec<f64>>,
@@ -329,7 +329,7 @@ pub(crate) fn sampled_window(
 }
 
 /// How many pixels the pilot of a planned render of a `width` × `height` image holds
-/// ([`pilot`]), whatever window the render covers.
+/// (`pilot`), whatever window the render covers.
 pub(crate) fn pilot_pixels(width: u32, height: u32) -> u64 {
     let stride = pilot::stride(width, height);
     u64::from(width.div_ceil(stride)) * u64::from(height.div_ceil(stride))
