@@ -106,7 +106,9 @@ impl Material {
     #[inline]
     pub fn specular_lobe(&self, alignment: f32) -> f32 {
         let n = self.shininess;
-        if n.fract() == 0.0 && (0.0..=1024.0).contains(&n) {
+        // A whole number in range, told by a round trip through u32 (`fract` is a call to libm's
+        // `truncf` on baseline x86-64, 0.4% of the defense frame's instructions).
+        if (0.0..=1024.0).contains(&n) && (n as u32) as f32 == n {
             // `powi`'s own binary powering (compiler-builtins' `__powisf2`, the same products in
             // the same order), inlined: the library call was 1% of a lit frame.
             let (mut power, mut base, mut lobe) = (n as u32, alignment, 1.0f32);
