@@ -77,10 +77,7 @@ pub fn scene_warnings(
     warnings
 }
 
-/// Whether a coarse grid of camera rays over the image misses every surface. Each ray asks
-/// whether anything blocks it, not what it meets first: the first blocker found ends its search,
-/// where the nearest hit of a ray through many overlapping placements (nested instances in a
-/// chain of pairs) had to visit every one of them.
+/// Whether a coarse grid of camera rays over the image misses every surface.
 fn camera_sees_nothing(scene: &Scene, aspect: f64) -> bool {
     let Ok(frame) = scene.camera().prepare(aspect) else {
         return false; // the renderer reports an unusable camera itself
@@ -89,7 +86,7 @@ fn camera_sees_nothing(scene: &Scene, aspect: f64) -> bool {
     !(0..ny).any(|j| {
         (0..nx).any(|i| {
             let (u, v) = ((i as f64 + 0.5) / nx as f64, (j as f64 + 0.5) / ny as f64);
-            scene.occluded(&frame.ray(u, v), f64::INFINITY)
+            scene.intersect(&frame.ray(u, v)).is_some()
         })
     })
 }
