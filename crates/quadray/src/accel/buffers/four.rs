@@ -7,7 +7,7 @@ use super::{Cube, finite_in_f32};
 use crate::math::Ray;
 use glam::DVec3;
 
-/// What [`Cube::cells_from`] gives a ray [`Cube::cell_from`] gives no cell: beyond every cube's
+/// What [`Cube::cells_from`] gives where [`Cube::cell_from`] finds no cell: beyond every cube's
 /// cells, so a lookup with `get` finds nothing.
 pub(super) const NO_CELL: u32 = u32::MAX;
 
@@ -65,8 +65,8 @@ mod avx2 {
         _mm256_blendv_pd(b, a, take)
     }
 
-    /// Lanes where |v| rounds to a finite f32: below 2¹²⁸ − 2¹⁰³, half an f32 ulp above f32::MAX
-    /// (which rounds up, to even); NaN fails.
+    /// Lanes where v rounds to a finite f32: |v| below 2¹²⁸ − 2¹⁰³, which is f32::MAX plus half
+    /// its ulp, the first magnitude that rounds to infinity (the tie goes to even); NaN fails.
     #[target_feature(enable = "avx2")]
     fn finite_f32(v: __m256d) -> __m256d {
         const LIMIT: f64 = 340_282_356_779_733_661_637_539_395_458_142_568_448.0; // 2¹²⁸ − 2¹⁰³
@@ -82,10 +82,10 @@ mod avx2 {
         ))
     }
 
-    /// The cell coordinate of face coordinate `c` (a component over the largest one's magnitude,
-    /// times `half_n`): c · scale + n/2 clamped to [0, `top`] and truncated. Where the quotient is
-    /// finite, MAXPD and MINPD clamp as `f64::max` and `min` do, and truncation gives the integer
-    /// conversion's value.
+    /// The cell coordinate along the face of a direction's component `c`: c · scale + n/2 (with
+    /// scale n/2 over the largest component's magnitude) clamped to [0, `top`] and truncated.
+    /// Where the quotient is finite, MAXPD and MINPD clamp as `f64::max` and `min` do, and
+    /// truncation gives the integer conversion's value.
     #[target_feature(enable = "avx2")]
     fn cell_along(c: __m256d, scale: __m256d, half_n: __m256d, top: __m256d) -> __m256d {
         let moved = _mm256_add_pd(_mm256_mul_pd(c, scale), half_n);
