@@ -122,7 +122,11 @@ impl Accel {
         match item {
             TopItem::Analytic => {
                 if let Some(a) = &l.analytic
-                    && let Some(local) = a.closest(q.g.level(q.level), q.ray, best_t, q.skip())
+                    && let Some(local) = if AVX2 {
+                        a.closest(q.g.level(q.level), q.ray, best_t, q.skip())
+                    } else {
+                        a.closest_inlined(q.g.level(q.level), q.ray, best_t, q.skip())
+                    }
                 {
                     *best = Some(PrimRef {
                         placement: q.placement,

@@ -496,7 +496,7 @@ impl Scene {
     /// [`Scene::lights`]): through the light's buffer where the scene has one. The answer is
     /// [`Scene::occluded_from`]'s for any ray; a ray that does not end at the light, or an index
     /// out of range, takes the BVH.
-    #[inline]
+    #[inline(always)]
     pub fn occluded_towards_light(
         &self,
         light: usize,

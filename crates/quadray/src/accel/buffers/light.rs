@@ -121,7 +121,9 @@ impl Accel {
         candidates.iter().any(|&c| match c {
             Shape::Analytic(shape) => {
                 let from_self = from_world == Some(shape);
-                level.intersect(shape, ray, t_max, from_self).is_some()
+                level
+                    .intersect_inlined(shape, ray, t_max, from_self)
+                    .is_some()
             }
             Shape::Item(item) => self.occluded_world_item(g, item, ray, t_max, from),
         })
