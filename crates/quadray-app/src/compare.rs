@@ -131,6 +131,19 @@ fn read_exr(path: &Path) -> Result<LinearImage> {
     if [&r, &g, &b].iter().any(|c| c.len() != w * h) {
         bail!("subsampled colour channels are not supported");
     }
+    // A NaN or infinite colour has no display value, and its differences none either: measured,
+    // it made every measure infinite and still passed as equal.
+    if let Some(i) = (0..w * h).find(|&i| ![r[i], g[i], b[i]].iter().all(|v| v.is_finite())) {
+        bail!(
+            "pixel ({}, {}) holds a colour that is not finite ({}, {}, {}); only finite images \
+             can be compared",
+            i % w,
+            i / w,
+            r[i],
+            g[i],
+            b[i]
+        );
+    }
     let pixels = (0..w * h).map(|i| [r[i], g[i], b[i]]).collect();
     Ok(LinearImage {
         width: w as u32,
@@ -377,6 +390,25 @@ mod tests {
         assert_eq!(c.max_display, 0.0);
         assert_eq!(c.max_linear, 4.0);
         assert!(c.rmse_linear > 0.0);
+    }
+
+    #[test]
+    fn exr_images_with_colours_that_are_not_finite_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("nan.exr");
+        exr::prelude::write_rgb_file(&path, 3, 2, |x, y| {
+            let v = if (x, y) == (2, 1) { f32::NAN } else { 0.5 };
+            (0.5, v, 0.5)
+        })
+        .unwrap();
+        let err = format!("{:#}", read_image(&path).unwrap_err());
+        assert!(
+            err.contains("pixel (2, 1)") && err.contains("not finite"),
+            "{err}"
+        );
+        let fine = dir.path().join("fine.exr");
+        exr::prelude::write_rgb_file(&fine, 3, 2, |_, _| (0.5f32, 0.5f32, 0.5f32)).unwrap();
+        assert_eq!(read_image(&fine).unwrap().pixels.len(), 6);
     }
 
     #[test]

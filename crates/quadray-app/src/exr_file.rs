@@ -60,7 +60,16 @@ fn write_image(
     path: &Path,
     write: impl FnOnce(&mut quadray_loader::atomic_file::Writer<'_>) -> exr::error::UnitResult,
 ) -> Result<()> {
-    crate::output::write_atomically(path, |out| Ok(write(out)?))
+    crate::output::write_atomically(path, |out| write(out).map_err(write_error))
+}
+
+/// An EXR writer's error as one cause: its I/O errors print their cause in their own message and
+/// again as their source, so a full disk read "No space left on device" twice.
+fn write_error(e: exr::error::Error) -> anyhow::Error {
+    match e {
+        exr::error::Error::Io(io) => io.into(),
+        other => other.into(),
+    }
 }
 
 /// Name of the attribute holding the camera's position in world space (a v3f).

@@ -381,23 +381,26 @@ fn scene_hash(args: &RenderArgs) -> Result<String> {
     Ok(crate::tiles::fnv1a_hex(&[&bytes, choices.as_bytes()]))
 }
 
-/// The settings every piece of one frame must share, as text (quadray's version included: two
-/// versions may render a pixel differently).
+/// The settings every piece of one frame must share, as text: every setting that changes a
+/// pixel (quadray's version included: two versions may render a pixel differently).
 fn settings_text(settings: &RenderSettings, selection: AovSelection, half: bool) -> String {
+    let sampling = match &settings.adaptive {
+        None => format!("spp {}", settings.spp),
+        Some(a) => format!(
+            "adaptive: {:?} rule, target error {}, spp {}..{}, time limit {:?}, spp budget {:?}",
+            a.rule, a.target_error, a.min_spp, a.max_spp, a.time_limit, a.spp_budget
+        ),
+    };
     format!(
-        "quadray {}; {}x{}; {}; max depth {}; seed {}; passes {}; half {half}",
+        "quadray {}; {}x{}; {sampling}; max depth {}; min throughput {}; seed {}; \
+         texture filter {}; passes {}; half {half}",
         env!("CARGO_PKG_VERSION"),
         settings.width,
         settings.height,
-        match &settings.adaptive {
-            None => format!("spp {}", settings.spp),
-            Some(a) => format!(
-                "adaptive: target error {}, spp {}..{}, time limit {:?}",
-                a.target_error, a.min_spp, a.max_spp, a.time_limit
-            ),
-        },
         settings.whitted.max_depth,
+        settings.whitted.min_throughput,
         settings.seed,
+        if settings.texture_filter { "on" } else { "off" },
         crate::passes::names_of(selection),
     )
 }

@@ -251,6 +251,20 @@ fn set_overrides_scene_values() {
         err.contains("(the value comes from --set camera.from=\"abc\")") && !err.contains("-->"),
         "{err}"
     );
+    // Beside another override (here --res's own), only the one at fault is named.
+    let o = quadray(&[
+        "check",
+        &scene("defense.toml"),
+        "--set",
+        "camera.vfov=abc",
+        "--set",
+        "render.spp=2",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("(the value comes from --set camera.vfov=abc)") && !err.contains("spp"),
+        "{err}"
+    );
 }
 
 /// `--seed` gives independent renders: the same seed the same bytes, another seed other jitter.

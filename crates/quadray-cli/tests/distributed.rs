@@ -125,6 +125,20 @@ fn pieces_that_do_not_fit_together_are_refused_with_the_reason() {
         &[pieces[0].clone(), seeded, pieces[2].clone()],
         &["seeded.exr was rendered with other settings", "seed 9"],
     );
+    // A piece whose textures were point sampled: the merged frame would match neither render.
+    let point_sampled = tmp(&dir, "point.exr");
+    ok(render(
+        &scene("defense.toml"),
+        &point_sampled,
+        &["--tile", "1/3", "--texture-filter", "none"],
+    ));
+    refused(
+        &[pieces[0].clone(), point_sampled, pieces[2].clone()],
+        &[
+            "point.exr was rendered with other settings",
+            "texture filter off",
+        ],
+    );
     // A piece of a frame cut another way.
     let quarter = tmp(&dir, "quarter.exr");
     ok(render(&scene("defense.toml"), &quarter, &["--tile", "1/4"]));

@@ -303,6 +303,11 @@ fn a_full_disk_keeps_the_old_outputs() {
                 && stderr.contains(&disk.path("").to_string_lossy().into_owned()),
             "{args:?} names the file and the cause: {stderr}"
         );
+        assert_eq!(
+            stderr.matches("No space left on device").count(),
+            1,
+            "{args:?} says the cause once: {stderr}"
+        );
     }
     for name in names {
         assert_eq!(

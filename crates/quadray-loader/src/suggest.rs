@@ -1,4 +1,38 @@
-//! "Did you mean": the closest known name to a misspelt one, for error messages.
+//! Names in error messages: "did you mean" (the closest known name to a misspelt one), and a
+//! name cut short where it is too long to show.
+
+use std::borrow::Cow;
+
+/// Longest name (in bytes) a message shows whole: a longer one is cut, so a scene naming a
+/// material with 10 MB of text does not echo it.
+pub const MAX_SHOWN_NAME: usize = 80;
+
+/// The most known names a message lists; the rest are counted.
+pub const MAX_LISTED_NAMES: usize = 16;
+
+/// `name` as a message shows it: whole up to [`MAX_SHOWN_NAME`] bytes, else its start (cut at a
+/// character boundary), an ellipsis and its length.
+pub fn shown(name: &str) -> Cow<'_, str> {
+    if name.len() <= MAX_SHOWN_NAME {
+        return Cow::Borrowed(name);
+    }
+    let mut end = MAX_SHOWN_NAME;
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    Cow::Owned(format!("{}… ({} bytes)", &name[..end], name.len()))
+}
+
+/// `names` listed for a message, each [`shown`], at most [`MAX_LISTED_NAMES`] of them and a count
+/// of the others.
+pub fn listed<'a>(names: impl ExactSizeIterator<Item = &'a str>) -> String {
+    let total = names.len();
+    let mut list: Vec<Cow<'_, str>> = names.take(MAX_LISTED_NAMES).map(shown).collect();
+    if total > MAX_LISTED_NAMES {
+        list.push(Cow::Owned(format!("and {} more", total - MAX_LISTED_NAMES)));
+    }
+    list.join(", ")
+}
 
 /// Names longer than this (in bytes) are neither given suggestions nor suggested: a misspelling is
 /// a typo in a name a person wrote, and comparing two names costs the product of their lengths
@@ -25,7 +59,7 @@ pub fn did_you_mean<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str
         .map(|c| (strsim::jaro_winkler(&lower, &c.to_lowercase()), c))
         .filter(|(score, _)| *score >= 0.8)
         .max_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, c)| format!(" (did you mean \"{c}\"?)"))
+        .map(|(_, c)| format!(" (did you mean \"{}\"?)", shown(c)))
         .unwrap_or_default()
 }
 
@@ -60,6 +94,25 @@ mod tests {
             " (did you mean \"center\"?)"
         );
         assert_eq!(for_unknown_field("invalid type: string"), "");
+    }
+
+    #[test]
+    fn long_names_and_long_lists_are_cut() {
+        assert_eq!(shown("glass"), "glass");
+        let long = "é".repeat(1000);
+        let cut = shown(&long);
+        assert!(cut.ends_with("… (2000 bytes)"), "{cut}");
+        assert_eq!(
+            cut.chars().filter(|&c| c == 'é').count(),
+            MAX_SHOWN_NAME / 2
+        );
+        let names: Vec<String> = (0..20).map(|i| format!("m{i}")).collect();
+        let list = listed(names.iter().map(String::as_str));
+        assert!(
+            list.starts_with("m0, m1, ") && list.ends_with("m15, and 4 more"),
+            "{list}"
+        );
+        assert_eq!(listed(["a", "b"].into_iter()), "a, b");
     }
 
     /// 400 names of 20 KB each (an 8 MB scene) are not compared letter by letter.

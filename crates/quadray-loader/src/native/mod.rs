@@ -10,7 +10,7 @@ use crate::framing::{framing_camera, framing_points};
 use crate::import::ImportedCamera;
 use crate::import::{ImportOptions, Selector, UpAxis, select_camera};
 use crate::include;
-use crate::suggest::did_you_mean;
+use crate::suggest::{did_you_mean, listed, shown};
 use glam::{DVec3, Vec3};
 use quadray::render::{MAX_DEPTH, MAX_SIDE, MAX_SPP, check_resolution};
 use quadray::{
@@ -149,7 +149,17 @@ pub fn load_scene_with(
                 return parse_scene(&text, path).err().unwrap_or(e);
             }
             e.location = None;
-            let sets: Vec<String> = overrides.iter().map(ToString::to_string).collect();
+            // The overrides that fail the parse alone, else (only together) all of them.
+            let fails_alone = |o: &&overrides::Override| {
+                overrides::apply(&text, std::slice::from_ref(*o))
+                    .is_ok_and(|t| toml::from_str::<SceneFile>(&t).is_err())
+            };
+            let mut culprits: Vec<&overrides::Override> =
+                overrides.iter().filter(fails_alone).collect();
+            if culprits.is_empty() {
+                culprits = overrides.iter().collect();
+            }
+            let sets: Vec<String> = culprits.iter().map(ToString::to_string).collect();
             message.push_str(&format!(" (the value comes from {})", sets.join(", ")));
             return e;
         }
@@ -321,8 +331,8 @@ impl Builder<'_> {
                 key,
                 format!(
                     "unknown material \"{}\" (defined: {}){}",
-                    v.get_ref(),
-                    known.join(", "),
+                    shown(v.get_ref()),
+                    listed(known.iter().copied()),
                     did_you_mean(v.get_ref(), known.iter().copied())
                 ),
             )

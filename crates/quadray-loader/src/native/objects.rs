@@ -130,7 +130,7 @@ impl Builder<'_> {
                 }
                 ClipBox::cube(*r)
             }
-            ClipSpec::Box { min, max } => {
+            ClipSpec::Box(ClipBoxSpec { min, max }) => {
                 let corners = min.0.iter().chain(&max.0).copied();
                 self.within_limit(corners, q.clip.span(), &format!("{key}.clip"))?;
                 ClipBox {

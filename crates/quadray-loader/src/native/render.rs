@@ -105,7 +105,9 @@ impl Builder<'_> {
             a = a.with_max_spp(self.count(v, "render.max_spp", MAX_SPP)?);
         }
         if let Some(v) = &r.min_spp {
-            a.min_spp = self.count(v, "render.min_spp", MAX_SPP)?;
+            // Its range (a power of two from 2 to the maximum) is checked with the maximum below;
+            // a count past u32 stands as 0, which that check refuses with the range.
+            a.min_spp = u32::try_from(*v.get_ref()).unwrap_or(0);
         }
         if let Some(v) = &r.time_limit {
             let secs = self.positive(v, "render.time_limit")?;

@@ -210,7 +210,16 @@ pub(super) struct QuadricSpec {
 )]
 pub(super) enum ClipSpec {
     Radius(f64),
-    Box { min: V3, max: V3 },
+    Box(ClipBoxSpec),
+}
+
+/// A clip box's corners: a struct of its own so an unknown key is refused, which an untagged
+/// enum's struct variant cannot ask for.
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ClipBoxSpec {
+    pub(super) min: V3,
+    pub(super) max: V3,
 }
 
 #[derive(Clone, Deserialize)]

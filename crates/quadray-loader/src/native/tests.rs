@@ -102,6 +102,13 @@ fn errors_name_file_line_column_and_key() {
         e.contains(":12:12: `sphere[0].material`: unknown material \"blue\""),
         "{e}"
     );
+    // A name of 100 000 bytes is cut in the message (the source line under it was already).
+    let long = "x".repeat(100_000);
+    let e = error(&format!(
+        "[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"{long}\"\n"
+    ));
+    assert!(e.contains("xxx… (100000 bytes)\""), "{}", &e[..300]);
+    assert!(e.len() < 2000, "{} bytes", e.len());
 }
 
 #[test]
@@ -412,6 +419,16 @@ fn render_tables_choose_adaptive_sampling() {
             "target_error = 0.1\nmin_spp = 1",
             "render.min_spp",
             "power of two",
+        ),
+        (
+            "target_error = 0.1\nmin_spp = 0",
+            "render.min_spp",
+            "power of two from 2 to the maximum (1024), got 0",
+        ),
+        (
+            "target_error = 0.1\nmin_spp = -4",
+            "render.min_spp",
+            "power of two from 2",
         ),
         (
             "target_error = 0.1\nmin_spp = 24",
