@@ -32,6 +32,8 @@ struct Job {
     format: Format,
     selection: AovSelection,
     loaded_in: Duration,
+    /// The files the scene read (its own first), which a piece's scene hash covers.
+    inputs: Vec<PathBuf>,
 }
 
 /// Runs the render subcommand.
@@ -217,6 +219,7 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
         format,
         selection,
         loaded_in,
+        inputs,
     };
     Ok((loaded, job))
 }
@@ -328,7 +331,7 @@ fn write_output(
         let settings_text = settings_text(settings, job.selection, args.half);
         let attributes = [(
             PIECE,
-            piece_attribute(piece, &scene_hash(args)?, &settings_text),
+            piece_attribute(piece, &scene_hash(args, &job.inputs)?, &settings_text),
         )];
         let camera = ExrCamera::of(scene.camera(), settings.width, settings.height)?;
         let frame = (settings.width, settings.height, Some(camera));
@@ -364,12 +367,19 @@ fn write_output(
     }
 }
 
-/// Identifies what a piece was rendered from: the scene file's bytes and every command-line
-/// choice that changes the scene (overrides, the glTF scene, the camera, the turntable frame).
-fn scene_hash(args: &RenderArgs) -> Result<String> {
+/// Identifies what a piece was rendered from: the scene file's bytes, those of every file it
+/// read (`inputs`: meshes, includes, textures), and every command-line choice that changes the
+/// scene (overrides, the glTF scene, the camera, the turntable frame).
+fn scene_hash(args: &RenderArgs, inputs: &[PathBuf]) -> Result<String> {
     use quadray_loader::read_limited::{MAX_MESH_BYTES, read};
     let bytes = read(&args.scene, MAX_MESH_BYTES)
         .with_context(|| format!("reading {} again to identify it", args.scene.display()))?;
+    let mut files = String::new();
+    for input in inputs {
+        let hash = crate::tiles::fnv1a_file_hex(input)
+            .with_context(|| format!("reading {} again to identify it", input.display()))?;
+        files.push_str(&hash);
+    }
     let choices = format!(
         "{:?} {:?} {:?} {:?} {:?}",
         args.set.iter().map(ToString::to_string).collect::<Vec<_>>(),
@@ -378,7 +388,11 @@ fn scene_hash(args: &RenderArgs) -> Result<String> {
         args.orbit_frames,
         args.frame
     );
-    Ok(crate::tiles::fnv1a_hex(&[&bytes, choices.as_bytes()]))
+    Ok(crate::tiles::fnv1a_hex(&[
+        &bytes,
+        choices.as_bytes(),
+        files.as_bytes(),
+    ]))
 }
 
 /// The settings every piece of one frame must share, as text: every setting that changes a

@@ -70,15 +70,43 @@ pub fn piece_bands(piece: Piece, width: u32, height: u32) -> Vec<PixelWindow> {
 /// A 64-bit FNV-1a hash, written out in hex: stable across platforms and versions, so pieces
 /// rendered on different machines can be compared (it identifies, it does not protect).
 pub fn fnv1a_hex(parts: &[&[u8]]) -> String {
-    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut hash = FNV_OFFSET;
     for part in parts {
         // Each part's length first, so ("ab", "c") and ("a", "bc") differ.
-        for byte in (part.len() as u64).to_le_bytes().iter().chain(part.iter()) {
-            hash ^= *byte as u64;
-            hash = hash.wrapping_mul(0x0100_0000_01b3);
-        }
+        hash = fnv1a(hash, &(part.len() as u64).to_le_bytes());
+        hash = fnv1a(hash, part);
     }
     format!("{hash:016x}")
+}
+
+/// [`fnv1a_hex`] of one part, the contents of the file at `path`, read a block at a time (a
+/// mesh may be gigabytes).
+pub fn fnv1a_file_hex(path: &std::path::Path) -> std::io::Result<String> {
+    use std::io::Read;
+    let mut file = std::fs::File::open(path)?;
+    let length = file.metadata()?.len();
+    let mut hash = fnv1a(FNV_OFFSET, &length.to_le_bytes());
+    let mut block = vec![0u8; 1 << 20];
+    loop {
+        let n = file.read(&mut block)?;
+        if n == 0 {
+            break;
+        }
+        hash = fnv1a(hash, &block[..n]);
+    }
+    Ok(format!("{hash:016x}"))
+}
+
+/// FNV-1a's starting value.
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// FNV-1a's step over `bytes` from `hash`.
+fn fnv1a(mut hash: u64, bytes: &[u8]) -> u64 {
+    for &byte in bytes {
+        hash ^= byte as u64;
+        hash = hash.wrapping_mul(0x0100_0000_01b3);
+    }
+    hash
 }
 
 #[cfg(test)]
@@ -126,5 +154,10 @@ mod tests {
         assert_eq!(fnv1a_hex(&[]), "cbf29ce484222325");
         assert_ne!(fnv1a_hex(&[b"ab", b"c"]), fnv1a_hex(&[b"a", b"bc"]));
         assert_eq!(fnv1a_hex(&[b"scene"]), fnv1a_hex(&[b"scene"]));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("mesh.obj");
+        let bytes: Vec<u8> = (0..3_000_000u32).map(|i| (i % 251) as u8).collect();
+        std::fs::write(&path, &bytes).unwrap();
+        assert_eq!(fnv1a_file_hex(&path).unwrap(), fnv1a_hex(&[&bytes]));
     }
 }

@@ -139,6 +139,35 @@ fn pieces_that_do_not_fit_together_are_refused_with_the_reason() {
             "texture filter off",
         ],
     );
+    // A piece rendered after a mesh the scene reads was changed: the scene file is the same.
+    let meshed = tempfile::tempdir().unwrap();
+    let scene_file = meshed.path().join("scene.toml");
+    let mesh = meshed.path().join("tri.obj");
+    std::fs::write(
+        &scene_file,
+        "version = 1\n[camera]\nfrom = [0, -4, 1]\nto = [0, 0, 0]\n[[material]]\nname = \"m\"\n\
+         [[mesh]]\npath = \"tri.obj\"\nmaterial = \"m\"\n",
+    )
+    .unwrap();
+    let triangle = |z: f32| format!("v -1 0 0\nv 1 0 0\nv 0 0 {z}\nf 1 2 3\n");
+    std::fs::write(&mesh, triangle(1.0)).unwrap();
+    let first = tmp(&dir, "mesh-0.exr");
+    ok(render(
+        scene_file.to_str().unwrap(),
+        &first,
+        &["--tile", "0/2"],
+    ));
+    std::fs::write(&mesh, triangle(1.5)).unwrap();
+    let second = tmp(&dir, "mesh-1.exr");
+    ok(render(
+        scene_file.to_str().unwrap(),
+        &second,
+        &["--tile", "1/2"],
+    ));
+    refused(
+        &[first, second.clone()],
+        &["mesh-1.exr was rendered from another scene"],
+    );
     // A piece of a frame cut another way.
     let quarter = tmp(&dir, "quarter.exr");
     ok(render(&scene("defense.toml"), &quarter, &["--tile", "1/4"]));

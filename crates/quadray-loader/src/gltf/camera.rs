@@ -64,9 +64,12 @@ pub fn convert(
         .try_normalize()
         .filter(|f| f.is_finite())
         .ok_or("the camera node's transform is singular")?;
+    // The target a power of two (exact in the product) at least as far as the position's largest
+    // coordinate: one unit ahead of a camera at 1e17 rounds back onto the camera itself.
+    let reach = 2f64.powi(from.abs().max_element().max(1.0).log2().ceil() as i32);
     let camera_out = Camera {
         from,
-        to: from + forward,
+        to: from + forward * reach,
         up: up_axis.normalize_or_zero(),
         projection,
     };

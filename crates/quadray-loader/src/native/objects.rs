@@ -128,6 +128,7 @@ impl Builder<'_> {
                         format!("a clip radius must be a positive finite number, got {r}"),
                     ));
                 }
+                self.within_limit([*r], q.clip.span(), &format!("{key}.clip"))?;
                 ClipBox::cube(*r)
             }
             ClipSpec::Box(ClipBoxSpec { min, max }) => {
@@ -143,8 +144,21 @@ impl Builder<'_> {
         let material = self.material_id(names, &q.material, &format!("{key}.material"))?;
         Quadric::new(surface, clip, transform, material).map_err(|e| {
             let (span, key) = match (&e, &q.coefficients) {
-                (quadray::QuadricError::EmptyClipBox { .. }, _) => {
-                    (q.clip.span(), format!("{key}.clip"))
+                (
+                    quadray::QuadricError::EmptyClipBox { .. }
+                    | quadray::QuadricError::ClipScale { .. },
+                    _,
+                ) => (q.clip.span(), format!("{key}.clip")),
+                (quadray::QuadricError::ParameterRange { name, .. }, _) => {
+                    let given = match *name {
+                        "a" => &q.a,
+                        "b" => &q.b,
+                        _ => &q.c,
+                    };
+                    (
+                        given.as_ref().map_or(spec.span(), |v| v.span()),
+                        format!("{key}.{name}"),
+                    )
                 }
                 (quadray::QuadricError::BadTransform, _) => (
                     q.transform.as_ref().map_or(spec.span(), |t| t.span()),

@@ -131,6 +131,28 @@ pub enum QuadricError {
         /// The value given.
         value: f64,
     },
+    /// A parameter a, b or c so small or large that its coefficient ±1/a² is not a normal f64.
+    #[error(
+        "parameter {name} = {value:?} is out of range: its coefficient 1/{name}² must be a \
+         normal f64 (about 1e-154 < {name} < 1e154)"
+    )]
+    ParameterRange {
+        /// "a", "b" or "c".
+        name: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// A clip box so much smaller or larger than the surface's own scale that the coefficients
+    /// in its frame under- or overflow f64 (and would describe another surface).
+    #[error(
+        "the clip box (half extents {:?}) is too far from the surface's own scale: its \
+         coefficients in the box's frame under- or overflow f64",
+        half.to_array()
+    )]
+    ClipScale {
+        /// The box's half extents.
+        half: DVec3,
+    },
     /// A general coefficient is NaN or infinite.
     #[error("coefficient {index} is not finite ({value})")]
     NonFiniteCoefficient {
@@ -196,6 +218,9 @@ impl Quadric {
                 if !(value > 0.0 && value.is_finite()) {
                     return Err(QuadricError::BadParameter { name, value });
                 }
+                if !(1.0 / (value * value)).is_normal() {
+                    return Err(QuadricError::ParameterRange { name, value });
+                }
             }
         }
         let coefficients = surface.coefficients();
@@ -223,8 +248,18 @@ impl Quadric {
         let (ao, bo, co) = coefficients.to_matrix_form();
         let h = DMat3::from_diagonal(half);
         let mut a = h * ao * h;
-        let mut b = h * (ao * centre + bo);
+        let linear = ao * centre + bo;
+        let mut b = h * linear;
         let mut c = centre.dot(ao * centre) + 2.0 * bo.dot(centre) + co;
+        // A coefficient that is not zero but under- or overflows in the box's frame (a clip of
+        // 1e-200 around a unit sphere) would leave the equation of another surface.
+        let lost = |given: f64, framed: f64| given != 0.0 && !framed.is_normal();
+        let pairs = (0..3)
+            .flat_map(|i| (0..3).map(move |j| (ao.col(i)[j], a.col(i)[j])))
+            .chain((0..3).map(|i| (linear[i], b[i])));
+        if pairs.into_iter().any(|(given, framed)| lost(given, framed)) || !c.is_finite() {
+            return Err(QuadricError::ClipScale { half });
+        }
         let scale = [a.x_axis, a.y_axis, a.z_axis, b]
             .iter()
             .map(|v| v.abs().max_element())

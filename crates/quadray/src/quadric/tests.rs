@@ -112,6 +112,37 @@ fn rejects_bad_parameters_and_boxes() {
         c: 1.0,
     };
     assert!(Quadric::new(s, ClipBox::cube(1.0), Transform::IDENTITY, 0).is_err());
+    // Parameters whose 1/a² is not a normal f64, and clip boxes so far from the surface's scale
+    // that its coefficients in the box's frame under- or overflow, are refused as such (they
+    // were called "empty" or "all zero").
+    for a in [1e-300, 1e300] {
+        let s = QuadricSurface::Canonical {
+            kind: QuadricKind::Ellipsoid,
+            a,
+            b: 1.0,
+            c: 1.0,
+        };
+        assert!(matches!(
+            Quadric::new(s, ClipBox::cube(1.0), Transform::IDENTITY, 0),
+            Err(QuadricError::ParameterRange { name: "a", .. })
+        ));
+    }
+    let unit = QuadricSurface::Canonical {
+        kind: QuadricKind::Ellipsoid,
+        a: 1.0,
+        b: 1.0,
+        c: 1.0,
+    };
+    for size in [1e-200, 1e300] {
+        assert!(matches!(
+            Quadric::new(unit, ClipBox::cube(size), Transform::IDENTITY, 0),
+            Err(QuadricError::ClipScale { .. })
+        ));
+    }
+    // The accuracy suite's scales stay well inside.
+    for size in [1e-6, 1e6] {
+        assert!(Quadric::new(unit, ClipBox::cube(size), Transform::IDENTITY, 0).is_ok());
+    }
     let s = QuadricSurface::Canonical {
         kind: QuadricKind::Ellipsoid,
         a: 1.0,
