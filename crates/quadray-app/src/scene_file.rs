@@ -27,9 +27,25 @@ pub fn load(
     camera: Option<&quadray_loader::Selector>,
     res: Option<(u32, u32)>,
 ) -> anyhow::Result<quadray_loader::LoadedScene> {
-    let native = path
+    let extension = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let native = extension.as_deref() == Some("toml");
+    let gltf = matches!(extension.as_deref(), Some("gltf" | "glb"));
+    // Choices that only a glTF file offers would be dropped without a word elsewhere.
+    for (given, flag, what) in [
+        (options.scene.is_some(), "--gltf-scene", "scene"),
+        (camera.is_some(), "--camera", "camera"),
+    ] {
+        if given && !gltf {
+            return Err(UsageError(format!(
+                "{flag} chooses a glTF file's {what}; {} is not a .gltf or .glb file",
+                path.display()
+            ))
+            .into());
+        }
+    }
     if !native {
         if !set.is_empty() {
             return Err(UsageError(

@@ -223,6 +223,27 @@ fn refusals_exit_nonzero_and_name_the_problem() {
         "0",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // Neither means anything to a native scene or an OBJ file: refused, not dropped.
+    for (scene_file, flag) in [
+        (repo("scenes/defense.toml"), "--camera"),
+        (repo("scenes/obj-mtl/pedestal.obj"), "--gltf-scene"),
+    ] {
+        let o = quadray(&[
+            "render",
+            &scene_file,
+            "-o",
+            out.to_str().unwrap(),
+            flag,
+            "0",
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains(&format!("{flag} chooses a glTF file's"))
+                && stderr(&o).contains("is not a .gltf or .glb file"),
+            "{}",
+            stderr(&o)
+        );
+    }
 }
 
 /// A real GLB with its own camera renders through it; only the light is assumed.

@@ -119,3 +119,28 @@ impl Builder<'_> {
         Ok(folder.join(written))
     }
 }
+
+/// Notes for `[camera]` keys its projection does not use: `height` on a perspective camera (an
+/// orbit camera is one), `vfov` on an orthographic one. Notes rather than errors, so that
+/// `--set camera.projection="orthographic" --set camera.height=4` works on a file that gives a
+/// `vfov`.
+pub(super) fn unused_camera_keys(c: &CameraSpec) -> Vec<String> {
+    let orthographic = c
+        .projection
+        .as_ref()
+        .is_some_and(|p| p.get_ref() == "orthographic");
+    let mut notes = Vec::new();
+    if orthographic && c.vfov.is_some() {
+        notes.push(
+            "camera.vfov is not used: an orthographic camera's view is its `height`".to_string(),
+        );
+    }
+    if !orthographic && c.height.is_some() {
+        notes.push(
+            "camera.height is not used: a perspective camera's view is its `vfov` (`height` is \
+             an orthographic camera's)"
+                .to_string(),
+        );
+    }
+    notes
+}

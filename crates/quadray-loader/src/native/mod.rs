@@ -515,7 +515,10 @@ impl Builder<'_> {
         notes: &mut Vec<String>,
     ) -> Result<quadray::Camera, LoadError> {
         Ok(match &file.camera {
-            Some(c) => self.camera(c)?,
+            Some(c) => {
+                notes.extend(camera::unused_camera_keys(c.get_ref()));
+                self.camera(c)?
+            }
             None => match included_cameras.first() {
                 Some(c) => {
                     notes.push(format!(

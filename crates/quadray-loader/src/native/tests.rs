@@ -193,6 +193,26 @@ fn camera_variants() {
         s.description.camera.projection,
         Projection::Orthographic { height: 3.0 }
     );
+    assert!(s.notes.is_empty(), "{:?}", s.notes);
+    // A key the projection does not use is noted, not silently dropped.
+    let noted = |text: &str| parse_scene(text, Path::new("o.toml")).unwrap().notes;
+    let ortho_vfov = ortho.replace("height = 3\n", "height = 3\nvfov = 30\n");
+    assert!(
+        noted(&ortho_vfov)
+            .iter()
+            .any(|n| n.contains("camera.vfov is not used"))
+    );
+    let perspective_height = "version = 1\n[camera]\nfrom = [0,-5,1]\nto = [0,0,0]\nheight = 3\n";
+    assert!(
+        noted(perspective_height)
+            .iter()
+            .any(|n| n.contains("camera.height is not used"))
+    );
+    assert!(
+        noted(&format!("{orbit}height = 2\n"))
+            .iter()
+            .any(|n| n.contains("height"))
+    );
     let e = parse_scene(
         "version = 2\n[camera]\nfrom=[0,0,1]\nto=[0,0,0]\n",
         Path::new("v.toml"),
