@@ -18,7 +18,8 @@ Environment:
   QUADRAY_AVAILABLE_MEMORY=BYTES   the memory free for a render, in place of what the system
                                    reports (a render that needs more is refused before it starts)
   QUADRAY_SIMD=baseline            the baseline code (SSE2 on x86-64) where AVX2 code would run:
-                                   the traversal, camera rays, sample points (same images)";
+                                   the traversal, camera rays, sample points (same images);
+                                   `auto`, or unset: the fastest path the CPU has";
 
 /// Most worker threads `-t` accepts.
 pub const MAX_THREADS: usize = 1024;

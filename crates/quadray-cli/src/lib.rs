@@ -195,6 +195,7 @@ pub fn apply_confinement(flag: Option<&std::path::Path>) -> anyhow::Result<()> {
 
 /// Runs a parsed command line.
 pub fn run(cli: args::Cli) -> anyhow::Result<()> {
+    check_simd_variable()?;
     match cli.command {
         args::Command::Render(a) => render_cmd::run(&a),
         args::Command::Check(a) => check::run(&a),
@@ -207,6 +208,21 @@ pub fn run(cli: args::Cli) -> anyhow::Result<()> {
         args::Command::Merge(a) => merge_cmd::run(&a),
         args::Command::Completions(a) => shell::completions(&a),
         args::Command::Man => shell::man(),
+    }
+}
+
+/// Refuses a `QUADRAY_SIMD` other than `baseline` or `auto` (or empty), which would otherwise be
+/// ignored without a word: a usage error, as a malformed `QUADRAY_AVAILABLE_MEMORY` is.
+fn check_simd_variable() -> Result<(), StatusError> {
+    match std::env::var_os("QUADRAY_SIMD") {
+        Some(v) if !(v.is_empty() || v == "baseline" || v == "auto") => {
+            Err(StatusError::usage(format!(
+                "QUADRAY_SIMD={}: its values are `baseline` (the baseline code where AVX2 code \
+                 would run) and `auto` (the fastest path the CPU has, as when it is unset)",
+                terminal_safe(&v.to_string_lossy())
+            )))
+        }
+        _ => Ok(()),
     }
 }
 

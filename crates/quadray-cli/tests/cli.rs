@@ -438,6 +438,18 @@ fn simd_paths_render_identical_images() {
         }
         outputs.push(std::fs::read(&out).unwrap());
     }
+    // A path quadray does not know is refused rather than ignored.
+    let o = Command::new(env!("CARGO_BIN_EXE_quadray"))
+        .args(["check", &scene("obj-mesh.toml")])
+        .env("QUADRAY_SIMD", "avx512")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("QUADRAY_SIMD=avx512: its values are `baseline`"),
+        "{stderr}"
+    );
     assert!(
         outputs[0] == outputs[1],
         "the two traversal paths rendered different images"
