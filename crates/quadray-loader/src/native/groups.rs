@@ -180,7 +180,12 @@ impl Builder<'_> {
             )? {
                 continue;
             }
+            let before = (out.spheres.len(), out.quadrics.len());
             self.sphere(s, &key, names, false, out)?;
+            if k.is_empty() {
+                let placed = (s.span(), s.get_ref().transform.as_ref());
+                self.placed_within_limit(out, before, placed, &key)?;
+            }
         }
         for (i, s) in c.sphere_sets.iter().enumerate() {
             self.sphere_set(st, names, s, &format!("{k}spheres[{i}]"), out)?;
@@ -208,7 +213,12 @@ impl Builder<'_> {
             )? {
                 continue;
             }
+            let before = (out.spheres.len(), out.quadrics.len());
             out.quadrics.push(self.quadric(q, &key, names)?);
+            if k.is_empty() {
+                let placed = (q.span(), q.get_ref().transform.as_ref());
+                self.placed_within_limit(out, before, placed, &key)?;
+            }
         }
         for (i, m) in c.meshes.iter().enumerate() {
             let key = format!("{k}mesh[{i}]");
