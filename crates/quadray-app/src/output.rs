@@ -33,13 +33,19 @@ impl Format {
 /// the confinement folder if there is one ([`quadray_loader::confine`]).
 pub fn check_writable(path: &Path) -> Result<Format> {
     let format = Format::from_path(path)?;
+    check_output_folder(path)?;
+    Ok(format)
+}
+
+/// Checks, before any work, that `path`'s folder exists and that confinement lets it be written,
+/// whatever its format.
+pub fn check_output_folder(path: &Path) -> Result<()> {
     let dir = parent_dir(path);
     if !dir.is_dir() {
         bail!("output folder {} does not exist", dir.display());
     }
     quadray_loader::confine::check_write(path)
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(format)
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 fn parent_dir(path: &Path) -> PathBuf {

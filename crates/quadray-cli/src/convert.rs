@@ -6,6 +6,8 @@ use anyhow::{Context, Result};
 
 /// Runs the convert subcommand.
 pub fn run(args: &ConvertArgs) -> Result<()> {
+    // Before the (possibly long) load, and before a temporary file's name can reach a message.
+    quadray_app::output::check_output_folder(&args.output)?;
     quadray_loader::confine::record_reads();
     let loaded = quadray_loader::load_any(&args.scene);
     let inputs = quadray_loader::confine::take_reads();

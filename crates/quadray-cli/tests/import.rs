@@ -147,6 +147,21 @@ fn convert_writes_gltf_and_glb_that_render_like_the_native_scene() {
             "{name}: {differing} pixels differ"
         );
     }
+    // A missing output folder is said plainly, before the load, as `render` says it (it was an
+    // error naming the hidden temporary file).
+    let missing = dir.path().join("nodir").join("a.gltf");
+    let o = quadray(&[
+        "convert",
+        &repo("scenes/defense.toml"),
+        "-o",
+        missing.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("output folder") && !stderr(&o).contains("quadray-tmp"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]
