@@ -192,10 +192,9 @@ impl<'a> Materials<'a> {
         };
         let mask = coverage(m, alpha.clamp(0.0, 1.0), &map);
         let material = if let Some(ext) = m.extension_value(quadrics_ext::EXTENSION) {
-            let ext: MaterialExtension = serde_json::from_value(ext.clone()).map_err(|e| {
-                let e = crate::plain_words::in_plain_words(&e.to_string());
-                format!("{label}: extensions.{}: {e}", quadrics_ext::EXTENSION)
-            })?;
+            let key = format!("extensions.{}", quadrics_ext::EXTENSION);
+            let ext: MaterialExtension = quadrics_ext::read_extension(ext, &key)
+                .map_err(|(key, message)| format!("{label}: {key}: {message}"))?;
             quadrics_ext::whitted_material(&ext.whitted, texture)
                 .map_err(|e| format!("{label}: extensions.{}: {e}", quadrics_ext::EXTENSION))?
         } else if m.unlit() {

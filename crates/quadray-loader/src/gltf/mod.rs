@@ -144,11 +144,9 @@ fn root_extension(doc: &gltf::Document, path: &Path) -> Result<RootExtension, Lo
     let Some(v) = doc.extension_value(quadrics_ext::EXTENSION) else {
         return Ok(RootExtension::default());
     };
-    serde_json::from_value(v.clone()).map_err(|e| {
-        let key = format!("extensions.{}", quadrics_ext::EXTENSION);
-        let message = crate::plain_words::in_plain_words(&e.to_string());
-        LoadError::invalid(path, None, key, message)
-    })
+    let key = format!("extensions.{}", quadrics_ext::EXTENSION);
+    quadrics_ext::read_extension(v, &key)
+        .map_err(|(key, message)| LoadError::invalid(path, None, key, message))
 }
 
 /// Notes on what the import of `doc` by `build` left out or assumed: degenerate triangles,

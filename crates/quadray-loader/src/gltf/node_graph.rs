@@ -31,18 +31,13 @@ pub(super) struct NodeGraph {
 fn node_shape(node: &gltf::Node<'_>, path: &Path) -> Result<Option<NodeExtension>, LoadError> {
     node.extension_value(quadrics_ext::EXTENSION)
         .map(|v| {
-            serde_json::from_value::<NodeExtension>(v.clone()).map_err(|e| {
-                LoadError::invalid(
-                    path,
-                    None,
-                    format!(
-                        "nodes[{}].extensions.{}",
-                        node.index(),
-                        quadrics_ext::EXTENSION
-                    ),
-                    crate::plain_words::in_plain_words(&e.to_string()),
-                )
-            })
+            let key = format!(
+                "nodes[{}].extensions.{}",
+                node.index(),
+                quadrics_ext::EXTENSION
+            );
+            quadrics_ext::read_extension::<NodeExtension>(v, &key)
+                .map_err(|(key, message)| LoadError::invalid(path, None, key, message))
         })
         .transpose()
 }

@@ -18,6 +18,27 @@ use serde::{Deserialize, Serialize};
 /// The extension's name.
 pub const EXTENSION: &str = "QUADRAY_quadrics";
 
+/// The extension object `value` found at `key` (say `nodes[3].extensions.QUADRAY_quadrics`) read
+/// as a `T`; on failure the key of the field at fault (`….shapes[2].a`) and the problem in plain
+/// words: serde_json alone names no place once the document is a `Value`.
+pub(crate) fn read_extension<T: serde::de::DeserializeOwned>(
+    value: &Value,
+    key: &str,
+) -> Result<T, (String, String)> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let inner = e.path().to_string();
+        let key = if inner == "." {
+            key.to_string()
+        } else {
+            format!("{key}.{inner}")
+        };
+        (
+            key,
+            crate::plain_words::in_plain_words(&e.inner().to_string()),
+        )
+    })
+}
+
 /// The document-level object: every shape definition.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
