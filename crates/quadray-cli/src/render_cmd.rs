@@ -175,7 +175,15 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
         let camera = &mut loaded.description.camera;
         *camera = camera.orbited(360.0 * frame as f64 / frames as f64);
     }
-    let format = check_writable(&output)?;
+    // An output the scene names ([output] file) is checked only now: say where it came from.
+    let format = check_writable(&output).with_context(|| match &loaded.output {
+        Some(named) if args.output.is_none() && *named == output => format!(
+            "the output {} that {}'s [output] file names",
+            output.display(),
+            args.scene.display()
+        ),
+        _ => format!("the output {}", output.display()),
+    })?;
     crate::overwrite::refuse_replacing_an_input(
         "the output",
         &output,

@@ -328,6 +328,15 @@ fn the_output_defaults_to_a_png_beside_the_scene() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(chosen.is_file());
+    // An [output] in a folder that does not exist is an error that says the scene named it.
+    std::fs::remove_dir_all(tmp(&dir, "out")).unwrap();
+    let o = quadray(&["render", copy.to_str().unwrap(), "--res", "8x6", "-q"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("ball.toml's [output] file names") && err.contains("does not exist"),
+        "{err}"
+    );
 }
 
 /// `--version` names the program, and `--help` lists every subcommand and the exit statuses.
