@@ -151,7 +151,6 @@ impl Geometry {
 
     /// Phase two: surface geometry, in world space, of the hit at `t` on `prim`, reached through
     /// `path` (the instances leading to its placement).
-    #[inline(always)]
     pub fn surface(
         &self,
         prim: PrimRef,

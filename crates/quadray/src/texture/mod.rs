@@ -224,7 +224,7 @@ impl Texture {
     /// The colour at a hit whose interpolated vertex attributes are `attributes`. `point` is asked
     /// only by the procedural textures that read it: `point(filtered)` gives the texture point,
     /// and when `filtered` also the extent of the sample's footprint around it.
-    #[inline(always)]
+    #[inline]
     pub fn eval_at(
         &self,
         point: impl FnOnce(bool) -> (TexturePoint, TextureExtent),
