@@ -30,6 +30,7 @@ pub mod native;
 pub mod obj;
 mod plain_words;
 mod ply;
+mod reach;
 pub mod read_limited;
 pub mod standalone;
 pub mod suggest;

@@ -20,7 +20,6 @@ pub(crate) mod material;
 mod mesh;
 mod node_graph;
 pub mod quadrics_ext;
-mod reach;
 pub(crate) mod resources;
 pub mod transmission;
 

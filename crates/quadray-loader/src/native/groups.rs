@@ -7,6 +7,7 @@
 //! core requires; a group that reaches itself through its instances is an error naming the cycle.
 
 use super::*;
+use crate::reach::Mark;
 use quadray::{Instance, MAX_NESTING, Prototype};
 use std::collections::HashSet;
 
@@ -180,11 +181,11 @@ impl Builder<'_> {
             )? {
                 continue;
             }
-            let before = (out.spheres.len(), out.quadrics.len());
+            let mark = Mark::of(out);
             self.sphere(s, &key, names, false, out)?;
             if k.is_empty() {
                 let placed = (s.span(), s.get_ref().transform.as_ref());
-                self.placed_within_limit(out, before, placed, &key)?;
+                self.placed_within_limit(out, &mark, placed, &key)?;
             }
         }
         for (i, s) in c.sphere_sets.iter().enumerate() {
@@ -213,11 +214,11 @@ impl Builder<'_> {
             )? {
                 continue;
             }
-            let before = (out.spheres.len(), out.quadrics.len());
+            let mark = Mark::of(out);
             out.quadrics.push(self.quadric(q, &key, names)?);
             if k.is_empty() {
                 let placed = (q.span(), q.get_ref().transform.as_ref());
-                self.placed_within_limit(out, before, placed, &key)?;
+                self.placed_within_limit(out, &mark, placed, &key)?;
             }
         }
         for (i, m) in c.meshes.iter().enumerate() {

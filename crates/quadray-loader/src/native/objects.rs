@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::import::{PlacedShape, placed_sphere};
+use crate::reach::{self, Mark, PrototypeBoxes};
 use quadray::Prototype;
 
 /// A sphere of `radius` at `center` into `out`, placed by `to_world` when given: a sphere, or the
@@ -33,36 +34,33 @@ pub(super) fn push_sphere(
 }
 
 impl Builder<'_> {
-    /// Refuses world shapes added to `out` since the counts `before` (spheres, quadrics) whose
-    /// boxes reach past [`quadray::MAX_COORDINATE`], at their `transform` where one put them
-    /// there: the scene's own check would name only "geometry".
+    /// Refuses what was added to the world's `out` since `mark` (one shape) where it reaches past
+    /// [`quadray::MAX_COORDINATE`], at its `transform` where one put it there, else at the item:
+    /// the scene's own check would name only "geometry".
     pub(super) fn placed_within_limit(
         &self,
         out: &Prototype,
-        (spheres, quadrics): (usize, usize),
+        mark: &Mark,
         (item, transform): (Range<usize>, Option<&Spanned<TransformSpec>>),
         key: &str,
     ) -> Result<(), LoadError> {
-        let reach = |(lo, hi): (DVec3, DVec3)| lo.abs().max(hi.abs()).max_element();
-        let far = (out.spheres[spheres..].iter().map(|s| reach(s.bounds())))
-            .chain(out.quadrics[quadrics..].iter().map(|q| reach(q.bounds())))
-            .fold(0.0, f64::max);
-        if far > quadray::MAX_COORDINATE {
-            let (span, key) = match transform {
-                Some(t) => (t.span(), format!("{key}.transform")),
-                None => (item, key.to_string()),
-            };
-            return Err(self.err(
-                span,
-                key,
-                format!(
-                    "places the shape at coordinates up to {far:e}; quadray supports magnitudes \
-                     up to {:e}",
-                    quadray::MAX_COORDINATE
-                ),
-            ));
-        }
-        Ok(())
+        // A world shape, not an instance: no prototype's box is asked for.
+        let Some(far) = reach::too_far(out, mark, &[], &mut PrototypeBoxes::default()) else {
+            return Ok(());
+        };
+        let (span, key) = match transform {
+            Some(t) => (t.span(), format!("{key}.transform")),
+            None => (item, key.to_string()),
+        };
+        Err(self.err(
+            span,
+            key,
+            format!(
+                "places the shape at coordinates up to {far:e}; quadray supports magnitudes up \
+                 to {:e}",
+                quadray::MAX_COORDINATE
+            ),
+        ))
     }
 
     pub(super) fn selector(

@@ -1,6 +1,6 @@
-//! How far from the origin what a node puts in the world reaches, so that coordinates past
-//! quadray's limit ([`MAX_COORDINATE`]) are reported with the node that put them there rather
-//! than, later, as the whole scene's.
+//! How far from the origin what an item of a file (a glTF node, a native scene's shape) puts in
+//! the world reaches, so that coordinates past quadray's limit ([`MAX_COORDINATE`]) are reported
+//! with the item that put them there rather than, later, as the whole scene's.
 
 use crate::framing::level_box;
 use glam::DVec3;
@@ -8,7 +8,7 @@ use quadray::{Level, MAX_COORDINATE, Prototype};
 
 /// How much a level held before a node's contents were added to it.
 #[derive(Default)]
-pub(super) struct Mark {
+pub(crate) struct Mark {
     spheres: usize,
     quadrics: usize,
     meshes: usize,
@@ -17,7 +17,7 @@ pub(super) struct Mark {
 
 impl Mark {
     /// What `level` holds now.
-    pub(super) fn of(level: &Prototype) -> Mark {
+    pub(crate) fn of(level: &Prototype) -> Mark {
         Mark {
             spheres: level.spheres.len(),
             quadrics: level.quadrics.len(),
@@ -41,7 +41,7 @@ fn since<'a>(level: &'a Prototype, mark: &Mark) -> Level<'a> {
 /// found once. A prototype is complete once listed, and nests only earlier ones, so the list
 /// grows in order.
 #[derive(Default)]
-pub(super) struct PrototypeBoxes(Vec<Option<(DVec3, DVec3)>>);
+pub(crate) struct PrototypeBoxes(Vec<Option<(DVec3, DVec3)>>);
 
 impl PrototypeBoxes {
     /// The boxes of every prototype in `prototypes`.
@@ -57,7 +57,7 @@ impl PrototypeBoxes {
 /// The largest coordinate magnitude of what `level` holds past `mark`, its instances placed,
 /// where it exceeds [`MAX_COORDINATE`]; `None` within the limit. Values that are not numbers are
 /// the loaders' and the scene's own checks to report.
-pub(super) fn too_far(
+pub(crate) fn too_far(
     level: &Prototype,
     mark: &Mark,
     prototypes: &[Prototype],
