@@ -152,6 +152,7 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
         loaded_in.as_secs_f64()
     );
     // -o, else the scene's [output], else the scene's name with .png beside it.
+    let named_by_scene = args.output.is_none() && loaded.output.is_some();
     let mut output = args
         .output
         .clone()
@@ -176,13 +177,16 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
         *camera = camera.orbited(360.0 * frame as f64 / frames as f64);
     }
     // An output the scene names ([output] file) is checked only now: say where it came from.
-    let format = check_writable(&output).with_context(|| match &loaded.output {
-        Some(named) if args.output.is_none() && *named == output => format!(
-            "the output {} that {}'s [output] file names",
-            output.display(),
-            args.scene.display()
-        ),
-        _ => format!("the output {}", output.display()),
+    let format = check_writable(&output).with_context(|| {
+        if named_by_scene {
+            format!(
+                "the output {} that {}'s [output] file names",
+                output.display(),
+                args.scene.display()
+            )
+        } else {
+            format!("the output {}", output.display())
+        }
     })?;
     crate::overwrite::refuse_replacing_an_input(
         "the output",
@@ -375,13 +379,10 @@ fn write_output(
     }
 }
 
-/// Identifies what a piece was rendered from: the scene file's bytes, those of every file it
-/// read (`inputs`: meshes, includes, textures), and every command-line choice that changes the
-/// scene (overrides, the glTF scene, the camera, the turntable frame).
+/// Identifies what a piece was rendered from: the bytes of every file the scene read (`inputs`,
+/// the scene file first, then its meshes, includes and textures), and every command-line choice
+/// that changes the scene (overrides, the glTF scene, the camera, the turntable frame).
 fn scene_hash(args: &RenderArgs, inputs: &[PathBuf]) -> Result<String> {
-    use quadray_loader::read_limited::{MAX_MESH_BYTES, read};
-    let bytes = read(&args.scene, MAX_MESH_BYTES)
-        .with_context(|| format!("reading {} again to identify it", args.scene.display()))?;
     let mut files = String::new();
     for input in inputs {
         let hash = crate::tiles::fnv1a_file_hex(input)
@@ -397,9 +398,8 @@ fn scene_hash(args: &RenderArgs, inputs: &[PathBuf]) -> Result<String> {
         args.frame
     );
     Ok(crate::tiles::fnv1a_hex(&[
-        &bytes,
-        choices.as_bytes(),
         files.as_bytes(),
+        choices.as_bytes(),
     ]))
 }
 
