@@ -114,31 +114,27 @@ fn pieces_that_do_not_fit_together_are_refused_with_the_reason() {
         &[pieces[0].clone(), other, pieces[2].clone()],
         &["other.exr was rendered from another scene"],
     );
-    // A piece rendered with other settings.
-    let seeded = tmp(&dir, "seeded.exr");
-    ok(render(
-        &scene("defense.toml"),
-        &seeded,
-        &["--tile", "1/3", "--seed", "9"],
-    ));
-    refused(
-        &[pieces[0].clone(), seeded, pieces[2].clone()],
-        &["seeded.exr was rendered with other settings", "seed 9"],
-    );
-    // A piece whose textures were point sampled: the merged frame would match neither render.
-    let point_sampled = tmp(&dir, "point.exr");
-    ok(render(
-        &scene("defense.toml"),
-        &point_sampled,
-        &["--tile", "1/3", "--texture-filter", "none"],
-    ));
-    refused(
-        &[pieces[0].clone(), point_sampled, pieces[2].clone()],
-        &[
-            "point.exr was rendered with other settings",
+    // A piece rendered with other settings: another seed, or textures point sampled (the merged
+    // frame would match neither render).
+    for (name, option, says) in [
+        ("seeded.exr", ["--seed", "9"], "seed 9"),
+        (
+            "point.exr",
+            ["--texture-filter", "none"],
             "texture filter off",
-        ],
-    );
+        ),
+    ] {
+        let other = tmp(&dir, name);
+        ok(render(
+            &scene("defense.toml"),
+            &other,
+            &[&["--tile", "1/3"], &option[..]].concat(),
+        ));
+        refused(
+            &[pieces[0].clone(), other, pieces[2].clone()],
+            &[&format!("{name} was rendered with other settings"), says],
+        );
+    }
     // A piece rendered after a mesh the scene reads was changed: the scene file is the same.
     let meshed = tempfile::tempdir().unwrap();
     let scene_file = meshed.path().join("scene.toml");

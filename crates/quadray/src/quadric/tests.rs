@@ -95,66 +95,44 @@ fn degenerate_inputs_are_classified_and_rejected() {
 
 #[test]
 fn rejects_bad_parameters_and_boxes() {
-    let s = QuadricSurface::Canonical {
+    let ellipsoid = |a, b, c| QuadricSurface::Canonical {
         kind: QuadricKind::Ellipsoid,
-        a: -1.0,
-        b: 1.0,
-        c: 1.0,
+        a,
+        b,
+        c,
     };
+    let new = |s, clip| Quadric::new(s, clip, Transform::IDENTITY, 0);
     assert!(matches!(
-        Quadric::new(s, ClipBox::cube(1.0), Transform::IDENTITY, 0),
+        new(ellipsoid(-1.0, 1.0, 1.0), ClipBox::cube(1.0)),
         Err(QuadricError::BadParameter { name: "a", .. })
     ));
-    let s = QuadricSurface::Canonical {
-        kind: QuadricKind::Ellipsoid,
-        a: 1.0,
-        b: f64::NAN,
-        c: 1.0,
-    };
-    assert!(Quadric::new(s, ClipBox::cube(1.0), Transform::IDENTITY, 0).is_err());
+    assert!(new(ellipsoid(1.0, f64::NAN, 1.0), ClipBox::cube(1.0)).is_err());
     // Parameters whose 1/a² is not a normal f64, and clip boxes so far from the surface's scale
     // that its coefficients in the box's frame under- or overflow, are refused as such (they
     // were called "empty" or "all zero").
     for a in [1e-300, 1e300] {
-        let s = QuadricSurface::Canonical {
-            kind: QuadricKind::Ellipsoid,
-            a,
-            b: 1.0,
-            c: 1.0,
-        };
         assert!(matches!(
-            Quadric::new(s, ClipBox::cube(1.0), Transform::IDENTITY, 0),
+            new(ellipsoid(a, 1.0, 1.0), ClipBox::cube(1.0)),
             Err(QuadricError::ParameterRange { name: "a", .. })
         ));
     }
-    let unit = QuadricSurface::Canonical {
-        kind: QuadricKind::Ellipsoid,
-        a: 1.0,
-        b: 1.0,
-        c: 1.0,
-    };
+    let unit = ellipsoid(1.0, 1.0, 1.0);
     for size in [1e-200, 1e300] {
         assert!(matches!(
-            Quadric::new(unit, ClipBox::cube(size), Transform::IDENTITY, 0),
+            new(unit, ClipBox::cube(size)),
             Err(QuadricError::ClipScale { .. })
         ));
     }
     // The accuracy suite's scales stay well inside.
     for size in [1e-6, 1e6] {
-        assert!(Quadric::new(unit, ClipBox::cube(size), Transform::IDENTITY, 0).is_ok());
+        assert!(new(unit, ClipBox::cube(size)).is_ok());
     }
-    let s = QuadricSurface::Canonical {
-        kind: QuadricKind::Ellipsoid,
-        a: 1.0,
-        b: 1.0,
-        c: 1.0,
-    };
     let flat = ClipBox {
         min: DVec3::new(-1.0, -1.0, 0.0),
         max: DVec3::new(1.0, 1.0, 0.0),
     };
     assert!(matches!(
-        Quadric::new(s, flat, Transform::IDENTITY, 0),
+        new(unit, flat),
         Err(QuadricError::EmptyClipBox { .. })
     ));
 }
