@@ -300,8 +300,10 @@ fn gltf_graphs_wide_deep_and_with_planes_under_shared_nodes() {
         })
         .collect();
     let doc = triangle_gltf(serde_json::json!(chain), serde_json::json!([0]));
+    // Within the stack the loader asks of the threads that load (the viewer's does): the test
+    // build compiles the loader unoptimised, where this chain needs 4 to 8 MiB.
     let deep = std::thread::Builder::new()
-        .stack_size(2 << 20)
+        .stack_size(quadray_loader::LOAD_STACK_BYTES)
         .spawn(move || load_gltf_json(&doc).map(|l| l.description.geometry.meshes.len()))
         .unwrap()
         .join()

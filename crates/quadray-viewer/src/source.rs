@@ -98,10 +98,19 @@ impl FileSource {
     pub fn reload(&mut self, notify: impl Fn() + Send + 'static) {
         let (send, receive) = channel();
         let path = self.path.clone();
-        std::thread::spawn(move || {
-            let _ = send.send(load(&path));
-            notify();
-        });
+        // The loader recurses once a level of a file's node hierarchy: a thread's default
+        // 2 MiB stack is too small for the deepest files it accepts in an unoptimised build.
+        let failed = send.clone();
+        let spawned = std::thread::Builder::new()
+            .name("scene loader".into())
+            .stack_size(quadray_loader::LOAD_STACK_BYTES)
+            .spawn(move || {
+                let _ = send.send(load(&path));
+                notify();
+            });
+        if let Err(e) = spawned {
+            let _ = failed.send(Err(e).context("could not start a thread to load the scene"));
+        }
         self.loading = Some(receive);
     }
 
