@@ -275,8 +275,8 @@ fn load_gltf_json(doc: &serde_json::Value) -> Result<quadray_loader::LoadedScene
     quadray_loader::load_any(&path).map_err(|e| e.to_string())
 }
 
-/// Review findings kept fixed: a node with thousands of children is wide, not deep; a chain of
-/// 1000 nodes loads on a test thread's stack; a `QUADRAY_quadrics` plane under a node placed
+/// Review findings kept fixed: a node with thousands of children is wide, not deep; the deepest
+/// chain of nodes accepted loads within a loading thread's stack, and a deeper one is refused; a `QUADRAY_quadrics` plane under a node placed
 /// twice is placed on both paths (it cannot be instanced).
 #[test]
 fn gltf_graphs_wide_deep_and_with_planes_under_shared_nodes() {
@@ -293,22 +293,37 @@ fn gltf_graphs_wide_deep_and_with_planes_under_shared_nodes() {
     assert_eq!(wide.description.geometry.prototypes.len(), 1);
     assert_eq!(wide.description.geometry.instances.len(), 3000);
 
-    let chain: Vec<serde_json::Value> = (0..1000)
-        .map(|i| match i {
-            999 => serde_json::json!({"mesh": 0}),
-            _ => serde_json::json!({"children": [i + 1], "translation": [0.001, 0.0, 0.0]}),
-        })
-        .collect();
-    let doc = triangle_gltf(serde_json::json!(chain), serde_json::json!([0]));
-    // Within the stack the loader asks of the threads that load (the viewer's does): the test
-    // build compiles the loader unoptimised, where this chain needs 4 to 8 MiB.
-    let deep = std::thread::Builder::new()
+    // The deepest chain the loader accepts loads, and one node deeper is refused, within the
+    // stack the loader asks of the threads that load (the viewer's does): the test build
+    // compiles the loader unoptimised, where a 1000-deep chain needs 4 to 8 MiB.
+    let chain = |depth: usize| {
+        let nodes: Vec<serde_json::Value> = (0..depth)
+            .map(|i| match i {
+                _ if i == depth - 1 => serde_json::json!({"mesh": 0}),
+                _ => serde_json::json!({"children": [i + 1], "translation": [0.001, 0.0, 0.0]}),
+            })
+            .collect();
+        triangle_gltf(serde_json::json!(nodes), serde_json::json!([0]))
+    };
+    let deepest = quadray_loader::gltf::MAX_DEPTH;
+    let (deep, deeper) = (chain(deepest), chain(deepest + 1));
+    let (deep, deeper) = std::thread::Builder::new()
         .stack_size(quadray_loader::LOAD_STACK_BYTES)
-        .spawn(move || load_gltf_json(&doc).map(|l| l.description.geometry.meshes.len()))
+        .spawn(move || {
+            let meshes = |doc| load_gltf_json(doc).map(|l| l.description.geometry.meshes.len());
+            (meshes(&deep), meshes(&deeper))
+        })
         .unwrap()
         .join()
         .expect("no stack overflow");
     assert_eq!(deep, Ok(1));
+    let error = deeper.expect_err("a chain past the limit is refused");
+    assert!(
+        error.contains(&format!(
+            "the node hierarchy is deeper than {deepest} levels"
+        )),
+        "{error}"
+    );
 
     let nodes = serde_json::json!([
         {"children": [2], "translation": [0.0, 0.0, 0.0]},
