@@ -371,3 +371,69 @@ fn a_model_without_a_camera_fills_the_frame() {
         );
     }
 }
+
+/// The deepest glTF node chain the loader accepts renders through the binary, which loads on its
+/// main thread (the test build's loader is unoptimised, its frames several times their release
+/// size: a 1000-deep chain needed 4 to 8 MiB), and a chain one node deeper is refused with the
+/// node at fault, writing nothing.
+#[test]
+fn the_deepest_gltf_chain_renders_and_a_deeper_one_is_refused() {
+    use base64::Engine;
+    let dir = tempfile::tempdir().unwrap();
+    let triangle: Vec<u8> = [0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&triangle)
+    );
+    let chain = |depth: usize| {
+        let nodes: Vec<serde_json::Value> = (0..depth)
+            .map(|i| match i {
+                _ if i == depth - 1 => serde_json::json!({"mesh": 0}),
+                _ => serde_json::json!({"children": [i + 1], "translation": [0.001, 0.0, 0.0]}),
+            })
+            .collect();
+        let doc = serde_json::json!({
+            "asset": {"version": "2.0"},
+            "scene": 0,
+            "scenes": [{"nodes": [0]}],
+            "nodes": nodes,
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+            "buffers": [{"byteLength": triangle.len(), "uri": uri}],
+            "bufferViews": [{"buffer": 0, "byteLength": triangle.len()}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                           "min": [0, 0, 0], "max": [1, 1, 0]}]
+        });
+        let path = dir.path().join(format!("chain-{depth}.gltf"));
+        std::fs::write(&path, doc.to_string()).unwrap();
+        path
+    };
+    let deepest = quadray_loader::gltf::MAX_DEPTH;
+    let (deep, deeper) = (chain(deepest), chain(deepest + 1));
+    let (out, refused) = (dir.path().join("deep.png"), dir.path().join("deeper.png"));
+    let render = |scene: &Path, out: &Path| {
+        quadray(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--res",
+            "8x8",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = render(&deep, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(png(&out).0, 8);
+    let o = render(&deeper, &refused);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!(
+            "`nodes[{deepest}]`: the node hierarchy is deeper than"
+        )),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!refused.exists());
+}
