@@ -467,6 +467,7 @@ impl Builder<'_> {
         for (i, inc) in file.includes.iter().enumerate() {
             let key = format!("include[{i}]");
             let spec = inc.get_ref();
+            self.keys_for_format(spec.path.get_ref(), &spec.up, &spec.scene, &key)?;
             let options = ImportOptions {
                 transform: Some(self.transform(&spec.transform, &format!("{key}.transform"))?),
                 scene: spec

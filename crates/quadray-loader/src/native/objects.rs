@@ -93,6 +93,38 @@ impl Builder<'_> {
         }
     }
 
+    /// Refuses an import key that the format of the file at `path` does not read, at the key:
+    /// `scene` picks one of a glTF file's scenes, which an OBJ file does not have; `up` names an
+    /// OBJ file's up axis, where a glTF file is Y-up by its specification. Either was ignored
+    /// without a word before. (An extension of neither format is refused by the import.)
+    pub(super) fn keys_for_format(
+        &self,
+        path: &str,
+        up: &Option<Spanned<String>>,
+        scene: &Option<Spanned<SelectorSpec>>,
+        key: &str,
+    ) -> Result<(), LoadError> {
+        let extension = std::path::Path::new(path)
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match (extension.as_deref(), up, scene) {
+            (Some("obj"), _, Some(scene)) => Err(self.err(
+                scene.span(),
+                format!("{key}.scene"),
+                "only applies to a glTF file (it picks one of the file's scenes); an OBJ file has \
+                 none",
+            )),
+            (Some("gltf" | "glb"), Some(up), _) => Err(self.err(
+                up.span(),
+                format!("{key}.up"),
+                "only applies to an OBJ file; a glTF file is Y-up by its specification, and is \
+                 turned to quadray's Z-up on import",
+            )),
+            _ => Ok(()),
+        }
+    }
+
     /// Imports the file of a `[[mesh]] path = …`; returns it with its path and the override material.
     #[allow(clippy::type_complexity)]
     pub(super) fn mesh_file(
@@ -118,6 +150,7 @@ impl Builder<'_> {
                 ));
             }
         }
+        self.keys_for_format(path_spec.get_ref(), &m.up, &m.scene, key)?;
         let replace = m
             .material
             .as_ref()
