@@ -297,9 +297,10 @@ impl<'a> GraphBuild<'a> {
                         format!("shape {shape} uses material {i}, which does not exist"),
                     )
                 })?;
+                // The material's own error is located at the material, not at its user.
                 self.materials
                     .get(&mat, &mut self.notes)
-                    .map_err(|m| self.invalid(ext_key.clone(), m))?
+                    .map_err(|m| self.invalid(format!("materials[{i}]"), m))?
                     .id
             }
             None => self.materials.default_material().id,
@@ -373,9 +374,15 @@ impl<'a> GraphBuild<'a> {
                     normal_map: None,
                 }
             } else {
+                let used = primitive.material();
+                // The material's own error is located at the material, not at its user.
+                let key = match used.index() {
+                    Some(i) => format!("materials[{i}]"),
+                    None => pkey.clone(),
+                };
                 self.materials
-                    .get(&primitive.material(), &mut self.notes)
-                    .map_err(|e| self.invalid(pkey.clone(), e))?
+                    .get(&used, &mut self.notes)
+                    .map_err(|e| self.invalid(key, e))?
             };
             let built = gltf_mesh::build(&primitive, self.file, m, &material)
                 .map_err(|e| self.invalid(pkey.clone(), e))?;
