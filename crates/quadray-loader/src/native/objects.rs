@@ -95,8 +95,8 @@ impl Builder<'_> {
 
     /// Refuses an import key that the format of the file at `path` does not read, at the key:
     /// `scene` picks one of a glTF file's scenes, which an OBJ file does not have; `up` names an
-    /// OBJ file's up axis, where a glTF file is Y-up by its specification. Either was ignored
-    /// without a word before. (An extension of neither format is refused by the import.)
+    /// OBJ file's up axis, where a glTF file is Y-up by its specification. (An extension of
+    /// neither format is refused by the import.)
     pub(super) fn keys_for_format(
         &self,
         path: &str,
