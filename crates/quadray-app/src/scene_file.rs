@@ -27,12 +27,10 @@ pub fn load(
     camera: Option<&quadray_loader::Selector>,
     res: Option<(u32, u32)>,
 ) -> anyhow::Result<quadray_loader::LoadedScene> {
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let native = extension.as_deref() == Some("toml");
-    let gltf = matches!(extension.as_deref(), Some("gltf" | "glb"));
+    use quadray_loader::FileFormat;
+    let format = FileFormat::of(path);
+    let native = format == Some(FileFormat::Native);
+    let gltf = format == Some(FileFormat::Gltf);
     // Choices that only a glTF file offers would be dropped without a word elsewhere.
     for (given, flag, what) in [
         (options.scene.is_some(), "--gltf-scene", "scene"),

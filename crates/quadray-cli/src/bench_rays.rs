@@ -90,11 +90,13 @@ pub fn run(a: &RaysArgs) -> Result<()> {
         skip_materials: true,
         ..Default::default()
     };
-    let ext = a.mesh.extension().and_then(|e| e.to_str()).unwrap_or("");
-    let imported = match ext.to_ascii_lowercase().as_str() {
-        "obj" => quadray_loader::obj::import_obj(&a.mesh, &options)?,
-        "gltf" | "glb" => quadray_loader::gltf::import_gltf(&a.mesh, &options)?,
-        _ => bail!("{}: expected an .obj, .gltf or .glb mesh", a.mesh.display()),
+    use quadray_loader::FileFormat;
+    let imported = match FileFormat::of(&a.mesh) {
+        Some(FileFormat::Obj) => quadray_loader::obj::import_obj(&a.mesh, &options)?,
+        Some(FileFormat::Gltf) => quadray_loader::gltf::import_gltf(&a.mesh, &options)?,
+        Some(FileFormat::Native) | None => {
+            bail!("{}: expected an .obj, .gltf or .glb mesh", a.mesh.display())
+        }
     };
     let name = a
         .mesh

@@ -14,6 +14,30 @@ use glam::{DAffine3, DMat3, DVec3};
 use quadray::{Camera, Geometry, Light, Material, Projection, Quadric, Sphere, Transform};
 use std::path::Path;
 
+/// The kinds of scene file quadray reads, told by the file's extension (in any case).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileFormat {
+    /// A native scene: `.toml`.
+    Native,
+    /// A Wavefront OBJ file (with its MTL materials): `.obj`.
+    Obj,
+    /// A glTF 2.0 file: `.gltf` or `.glb`.
+    Gltf,
+}
+
+impl FileFormat {
+    /// The format of the file at `path`, or `None` for an extension quadray does not read.
+    pub fn of(path: &Path) -> Option<FileFormat> {
+        let extension = path.extension()?.to_str()?.to_ascii_lowercase();
+        match extension.as_str() {
+            "toml" => Some(FileFormat::Native),
+            "obj" => Some(FileFormat::Obj),
+            "gltf" | "glb" => Some(FileFormat::Gltf),
+            _ => None,
+        }
+    }
+}
+
 /// Which of several named items (a glTF scene, a camera) to use: by index or by name.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Selector {
@@ -362,6 +386,18 @@ impl PlacedShape {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn file_formats_follow_the_extension_in_any_case() {
+        let of = |p: &str| FileFormat::of(Path::new(p));
+        assert_eq!(of("room.toml"), Some(FileFormat::Native));
+        assert_eq!(of("a/teapot.OBJ"), Some(FileFormat::Obj));
+        assert_eq!(of("lamp.gltf"), Some(FileFormat::Gltf));
+        assert_eq!(of("lamp.Glb"), Some(FileFormat::Gltf));
+        for other in ["atoms.ply", "scene", "archive.toml.gz", ".obj"] {
+            assert_eq!(of(other), None, "{other}");
+        }
+    }
 
     #[test]
     fn y_up_becomes_z_up_and_front_faces_minus_y() {

@@ -7,7 +7,7 @@
 
 use crate::error::{LoadError, LoadErrorKind};
 use crate::image_file::resolve_reference;
-use crate::import::{ImportOptions, Imported, MaterialMap};
+use crate::import::{FileFormat, ImportOptions, Imported, MaterialMap};
 use quadray::{Geometry, Material};
 use std::path::{Path, PathBuf};
 
@@ -18,14 +18,10 @@ pub fn resolve(scene_file: &Path, reference: &str) -> PathBuf {
 
 /// Imports the OBJ or glTF file at `path`, chosen by its extension.
 pub fn import_file(path: &Path, options: &ImportOptions) -> Result<Imported, LoadError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("obj") => crate::obj::import_obj(path, options),
-        Some("gltf" | "glb") => crate::gltf::import_gltf(path, options),
-        _ => Err(LoadError::new(
+    match FileFormat::of(path) {
+        Some(FileFormat::Obj) => crate::obj::import_obj(path, options),
+        Some(FileFormat::Gltf) => crate::gltf::import_gltf(path, options),
+        Some(FileFormat::Native) | None => Err(LoadError::new(
             path,
             None,
             LoadErrorKind::Unsupported(

@@ -38,7 +38,7 @@ mod tangents;
 mod tessellate;
 
 pub use error::{LoadError, LoadErrorKind, Location};
-pub use import::{ImportOptions, Imported, Selector, UpAxis};
+pub use import::{FileFormat, ImportOptions, Imported, Selector, UpAxis};
 pub use native::overrides::Override;
 pub use native::{LoadedScene, SceneSettings, load_scene, load_scene_with, parse_scene};
 
@@ -74,15 +74,11 @@ pub fn load_any_with(
     options: &ImportOptions,
     camera: Option<&Selector>,
 ) -> Result<LoadedScene, LoadError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let mut imported = match ext.as_deref() {
-        Some("toml") => return load_scene(path),
-        Some("obj") => obj::import_obj(path, options)?,
-        Some("gltf" | "glb") => gltf::import_gltf(path, options)?,
-        _ => {
+    let mut imported = match FileFormat::of(path) {
+        Some(FileFormat::Native) => return load_scene(path),
+        Some(FileFormat::Obj) => obj::import_obj(path, options)?,
+        Some(FileFormat::Gltf) => gltf::import_gltf(path, options)?,
+        None => {
             return Err(LoadError::new(
                 path,
                 None,

@@ -2,7 +2,7 @@
 //! latter take.
 
 use super::*;
-use crate::import::{PlacedShape, placed_sphere};
+use crate::import::{FileFormat, PlacedShape, placed_sphere};
 use crate::reach::{self, Mark, PrototypeBoxes};
 use quadray::Prototype;
 
@@ -104,18 +104,14 @@ impl Builder<'_> {
         scene: &Option<Spanned<SelectorSpec>>,
         key: &str,
     ) -> Result<(), LoadError> {
-        let extension = std::path::Path::new(path)
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        match (extension.as_deref(), up, scene) {
-            (Some("obj"), _, Some(scene)) => Err(self.err(
+        match (FileFormat::of(std::path::Path::new(path)), up, scene) {
+            (Some(FileFormat::Obj), _, Some(scene)) => Err(self.err(
                 scene.span(),
                 format!("{key}.scene"),
                 "only applies to a glTF file (it picks one of the file's scenes); an OBJ file has \
                  none",
             )),
-            (Some("gltf" | "glb"), Some(up), _) => Err(self.err(
+            (Some(FileFormat::Gltf), Some(up), _) => Err(self.err(
                 up.span(),
                 format!("{key}.up"),
                 "only applies to an OBJ file; a glTF file is Y-up by its specification, and is \
