@@ -276,8 +276,9 @@ fn load_gltf_json(doc: &serde_json::Value) -> Result<quadray_loader::LoadedScene
 }
 
 /// Review findings kept fixed: a node with thousands of children is wide, not deep; the deepest
-/// chain of nodes accepted loads within a loading thread's stack, and a deeper one is refused; a `QUADRAY_quadrics` plane under a node placed
-/// twice is placed on both paths (it cannot be instanced).
+/// chain of nodes accepted loads on a thread of a small stack, and a deeper one is refused, as
+/// is a ladder of shared nodes as deep; a `QUADRAY_quadrics` plane under a node placed twice is
+/// placed on both paths (it cannot be instanced).
 #[test]
 fn gltf_graphs_wide_deep_and_with_planes_under_shared_nodes() {
     let children: Vec<serde_json::Value> = (1..=3000)
@@ -293,30 +294,65 @@ fn gltf_graphs_wide_deep_and_with_planes_under_shared_nodes() {
     assert_eq!(wide.description.geometry.prototypes.len(), 1);
     assert_eq!(wide.description.geometry.instances.len(), 3000);
 
-    // The deepest chain the loader accepts loads, and one node deeper is refused, within the
-    // stack the loader asks of the threads that load (the viewer's does): the test build
-    // compiles the loader unoptimised, where a 1000-deep chain needs 4 to 8 MiB.
+    // The deepest chain the loader accepts loads, and one node deeper is refused, on a thread
+    // of a quarter of the default stack: the walk keeps its own stack of nodes (the test build
+    // compiles the loader unoptimised, where a recursion a node at a time needed 4 to 8 MiB).
+    // The last node holds a light too, which the walk of cameras and lights must reach, placed
+    // by the whole chain's translations.
     let chain = |depth: usize| {
         let nodes: Vec<serde_json::Value> = (0..depth)
             .map(|i| match i {
-                _ if i == depth - 1 => serde_json::json!({"mesh": 0}),
+                _ if i == depth - 1 => serde_json::json!({
+                    "mesh": 0,
+                    "extensions": {"KHR_lights_punctual": {"light": 0}}
+                }),
                 _ => serde_json::json!({"children": [i + 1], "translation": [0.001, 0.0, 0.0]}),
             })
             .collect();
-        triangle_gltf(serde_json::json!(nodes), serde_json::json!([0]))
+        let mut doc = triangle_gltf(serde_json::json!(nodes), serde_json::json!([0]));
+        doc["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual"]);
+        doc["extensions"]["KHR_lights_punctual"] =
+            serde_json::json!({"lights": [{"type": "point", "intensity": 100.0}]});
+        doc
+    };
+    // And a ladder as deep: both nodes of each rung are children of both nodes of the rung
+    // above, so each is shared, and the prototypes nest a rung at a time.
+    let ladder = |depth: usize| {
+        let nodes: Vec<serde_json::Value> = (0..2 * depth)
+            .map(|i| match i / 2 {
+                rung if rung == depth - 1 => serde_json::json!({"mesh": 0}),
+                rung => serde_json::json!({"children": [2 * rung + 2, 2 * rung + 3]}),
+            })
+            .collect();
+        triangle_gltf(serde_json::json!(nodes), serde_json::json!([0, 1]))
     };
     let deepest = quadray_loader::gltf::MAX_DEPTH;
-    let (deep, deeper) = (chain(deepest), chain(deepest + 1));
-    let (deep, deeper) = std::thread::Builder::new()
-        .stack_size(quadray_loader::LOAD_STACK_BYTES)
+    let (deep, deeper, ladder) = (chain(deepest), chain(deepest + 1), ladder(deepest));
+    let (deep, deeper, ladder) = std::thread::Builder::new()
+        .stack_size(512 << 10)
         .spawn(move || {
-            let meshes = |doc| load_gltf_json(doc).map(|l| l.description.geometry.meshes.len());
-            (meshes(&deep), meshes(&deeper))
+            let counts = |doc| {
+                load_gltf_json(doc).map(|l| {
+                    let lights = l.description.lights;
+                    let x = lights
+                        .first()
+                        .and_then(|light| light.position())
+                        .map(|p| p.x);
+                    (l.description.geometry.meshes.len(), lights.len(), x)
+                })
+            };
+            (counts(&deep), counts(&deeper), counts(&ladder))
         })
         .unwrap()
         .join()
         .expect("no stack overflow");
-    assert_eq!(deep, Ok(1));
+    let error = ladder.expect_err("prototypes nested a thousand deep are refused");
+    assert!(error.contains("instances nest"), "{error}");
+    let (meshes, lights, x) = deep.expect("the deepest chain loads");
+    assert_eq!((meshes, lights), (1, 1));
+    // 1023 translations of 0.001 along x (glTF's x stays quadray's x).
+    let x = x.expect("a light");
+    assert!((x - 1.023).abs() < 1e-9, "{x}");
     let error = deeper.expect_err("a chain past the limit is refused");
     assert!(
         error.contains(&format!(

@@ -44,13 +44,6 @@ pub use native::{LoadedScene, SceneSettings, load_scene, load_scene_with, parse_
 
 use std::path::Path;
 
-/// The stack a thread that loads scene files should have: the deepest file accepted (glTF node
-/// hierarchies [`gltf::MAX_DEPTH`] levels deep, whose walk recurses a level at a time) loads
-/// within it in any build. A 1000-deep glTF chain needed 4 to 8 MiB unoptimised, as the test
-/// build compiles the loader, and under 2 MiB optimised; a thread's stack is address space
-/// until it is used, so the margin costs nothing.
-pub const LOAD_STACK_BYTES: usize = 64 << 20;
-
 /// The note for `merged` coincident placements dropped at load, if any.
 pub(crate) fn coincident_note(merged: usize) -> Option<String> {
     (merged > 0).then(|| {

@@ -98,12 +98,9 @@ impl FileSource {
     pub fn reload(&mut self, notify: impl Fn() + Send + 'static) {
         let (send, receive) = channel();
         let path = self.path.clone();
-        // The loader recurses once a level of a file's node hierarchy: a thread's default
-        // 2 MiB stack is too small for the deepest files it accepts in an unoptimised build.
         let failed = send.clone();
         let spawned = std::thread::Builder::new()
             .name("scene loader".into())
-            .stack_size(quadray_loader::LOAD_STACK_BYTES)
             .spawn(move || {
                 let _ = send.send(load(&path));
                 notify();

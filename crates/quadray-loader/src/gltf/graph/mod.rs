@@ -11,15 +11,17 @@
 use crate::error::LoadError;
 use crate::gltf::document::GltfFile;
 use crate::gltf::material::{MaterialUse, Materials};
+use crate::gltf::mesh as gltf_mesh;
 use crate::gltf::node_graph::NodeGraph;
 use crate::gltf::quadrics_ext::{self, RootExtension};
-use crate::gltf::{camera as gltf_camera, light as gltf_light, mesh as gltf_mesh};
 use crate::import::{Imported, PlacedShape};
 use crate::reach::{self, Mark, PrototypeBoxes};
 use glam::DAffine3;
 use quadray::{Instance, MAX_COORDINATE, Plane, Prototype, Transform};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
+
+mod lights;
 
 /// Deepest node hierarchy accepted; deeper means a cycle (which glTF forbids) or an absurd file.
 pub const MAX_DEPTH: usize = 1024;
@@ -109,20 +111,28 @@ impl<'a> GraphBuild<'a> {
         root: DAffine3,
         out: &mut Imported,
     ) -> Result<(), LoadError> {
-        let mut world = Prototype::default();
-        let mut planes = Vec::new();
-        let mut prototypes = Vec::new();
+        let mut walk = Walk {
+            steps: Vec::new(),
+            levels: vec![Prototype::default()],
+            planes: Vec::new(),
+            prototypes: Vec::new(),
+        };
         for node in roots {
-            self.place_node(
-                node,
-                root,
-                &mut world,
-                Some(&mut planes),
-                &mut prototypes,
-                0,
-            )?;
-            self.place_cameras_and_lights(node, root, out, 0, false)?;
+            walk.steps.push(Step::Node {
+                node: node.clone(),
+                to_level: root,
+                depth: 0,
+            });
+            self.walk(&mut walk)?;
+            self.place_cameras_and_lights(node, root, out)?;
         }
+        let Walk {
+            mut levels,
+            mut planes,
+            prototypes,
+            ..
+        } = walk;
+        let world = &mut levels[WORLD];
         let g = &mut out.geometry;
         g.spheres.append(&mut world.spheres);
         g.quadrics.append(&mut world.quadrics);
@@ -133,42 +143,101 @@ impl<'a> GraphBuild<'a> {
         Ok(())
     }
 
-    /// Places `node`, whose parent frame `to_level` maps into the level `out` belongs to.
-    fn place_node(
-        &mut self,
-        node: &gltf::Node<'_>,
-        to_level: DAffine3,
-        out: &mut Prototype,
-        planes: Option<&mut Vec<Plane>>,
-        prototypes: &mut Vec<Prototype>,
-        depth: usize,
-    ) -> Result<(), LoadError> {
-        let key = format!("nodes[{}]", node.index());
-        let placed = to_level * self.local_transform(node)?;
-        if self.graph.refs[node.index()] > 1 {
-            let proto = match self.node_protos.get(&node.index()) {
-                Some(&p) => p,
-                None => {
-                    let mut p = Prototype::default();
-                    self.place_contents(node, DAffine3::IDENTITY, &mut p, None, prototypes, depth)?;
-                    let index = (!is_empty(&p)).then(|| {
-                        prototypes.push(p);
-                        prototypes.len() as u32 - 1
-                    });
-                    self.node_protos.insert(node.index(), index);
-                    index
+    /// Takes `walk`'s steps until none is left: the depth-first walk, in the file's order, that
+    /// a recursion a node at a time would make.
+    fn walk(&mut self, walk: &mut Walk<'_>) -> Result<(), LoadError> {
+        while let Some(step) = walk.steps.pop() {
+            match step {
+                Step::Node {
+                    node,
+                    to_level,
+                    depth,
+                } => self.place_node(node, to_level, depth, walk)?,
+                Step::Children {
+                    mut children,
+                    to_level,
+                    depth,
+                } => {
+                    if let Some(node) = children.next() {
+                        walk.steps.push(Step::Children {
+                            children,
+                            to_level,
+                            depth,
+                        });
+                        self.place_node(node, to_level, depth, walk)?;
+                    }
                 }
-            };
-            if let Some(proto) = proto {
-                let mark = Mark::of(out);
-                self.instance(proto, placed, &key, out);
-                if planes.is_some() {
-                    self.check_reach(&key, out, &mark, prototypes)?;
-                }
+                Step::Close { node, placed } => self.close_prototype(node, placed, walk)?,
             }
-            return Ok(());
         }
-        self.place_contents(node, placed, out, planes, prototypes, depth)
+        Ok(())
+    }
+
+    /// Places `node` in the walk's innermost open level, its parent's frame mapped into that
+    /// level by `to_level`: a node used more than once as an instance of its prototype (opened
+    /// here the first time, its contents walked before it closes), any other directly.
+    fn place_node<'d>(
+        &mut self,
+        node: gltf::Node<'d>,
+        to_level: DAffine3,
+        depth: usize,
+        walk: &mut Walk<'d>,
+    ) -> Result<(), LoadError> {
+        let placed = to_level * self.local_transform(&node)?;
+        if self.graph.refs[node.index()] <= 1 {
+            return self.place_contents(node, placed, depth, walk);
+        }
+        match self.node_protos.get(&node.index()) {
+            Some(&proto) => self.instance_in_level(proto, placed, node.index(), walk),
+            None => {
+                walk.steps.push(Step::Close {
+                    node: node.index(),
+                    placed,
+                });
+                walk.levels.push(Prototype::default());
+                self.place_contents(node, DAffine3::IDENTITY, depth, walk)
+            }
+        }
+    }
+
+    /// Closes the walk's innermost level, the prototype of shared node `node`, and places it by
+    /// `placed` in the level around it (an empty prototype is dropped, and places nothing).
+    fn close_prototype(
+        &mut self,
+        node: usize,
+        placed: DAffine3,
+        walk: &mut Walk<'_>,
+    ) -> Result<(), LoadError> {
+        let p = walk.levels.pop().expect("a closed prototype was opened");
+        let proto = (!is_empty(&p)).then(|| {
+            walk.prototypes.push(p);
+            walk.prototypes.len() as u32 - 1
+        });
+        self.node_protos.insert(node, proto);
+        self.instance_in_level(proto, placed, node, walk)
+    }
+
+    /// An instance of node `node`'s prototype `proto` (if it places anything) placed by `placed`
+    /// in the walk's innermost level, checked for its reach there when that is the world.
+    fn instance_in_level(
+        &mut self,
+        proto: Option<u32>,
+        placed: DAffine3,
+        node: usize,
+        walk: &mut Walk<'_>,
+    ) -> Result<(), LoadError> {
+        let Some(proto) = proto else {
+            return Ok(());
+        };
+        let key = format!("nodes[{node}]");
+        let in_world = walk.levels.len() - 1 == WORLD;
+        let out = walk.levels.last_mut().expect("the world is open");
+        let mark = Mark::of(out);
+        self.instance(proto, placed, &key, out);
+        if in_world {
+            self.check_reach(&key, out, &mark, &walk.prototypes)?;
+        }
+        Ok(())
     }
 
     /// The node's own transform (its matrix, or translation · rotation · scale).
@@ -212,15 +281,14 @@ impl<'a> GraphBuild<'a> {
         }
     }
 
-    /// The node's own shape or mesh placed by `m`, and its children below it.
-    fn place_contents(
+    /// The node's own shape or mesh placed by `m` in the walk's innermost level, and the step of
+    /// its children (`depth` + 1) below it.
+    fn place_contents<'d>(
         &mut self,
-        node: &gltf::Node<'_>,
+        node: gltf::Node<'d>,
         m: DAffine3,
-        out: &mut Prototype,
-        mut planes: Option<&mut Vec<Plane>>,
-        prototypes: &mut Vec<Prototype>,
         depth: usize,
+        walk: &mut Walk<'d>,
     ) -> Result<(), LoadError> {
         let key = format!("nodes[{}]", node.index());
         if depth >= MAX_DEPTH {
@@ -229,9 +297,13 @@ impl<'a> GraphBuild<'a> {
                 format!("the node hierarchy is deeper than {MAX_DEPTH} levels"),
             ));
         }
+        let in_world = walk.levels.len() - 1 == WORLD;
+        let out = walk.levels.last_mut().expect("the world is open");
+        let planes = in_world.then_some(&mut walk.planes);
+        let prototypes = &mut walk.prototypes;
         let mark = Mark::of(out);
         if let Some(shape) = self.graph.node_shapes[node.index()] {
-            self.place_shape(shape, m, &key, out, planes.as_deref_mut(), prototypes)?;
+            self.place_shape(shape, m, &key, out, planes, prototypes)?;
         } else if let Some(mesh) = node.mesh() {
             if node.skin().is_some() {
                 self.rest_pose.push("skins");
@@ -257,12 +329,14 @@ impl<'a> GraphBuild<'a> {
         }
         // In the world (where `planes` go), what the node placed itself is checked here, so the
         // error can name the node.
-        if planes.is_some() {
+        if in_world {
             self.check_reach(&key, out, &mark, prototypes)?;
         }
-        for child in node.children() {
-            self.place_node(&child, m, out, planes.as_deref_mut(), prototypes, depth + 1)?;
-        }
+        walk.steps.push(Step::Children {
+            children: node.children(),
+            to_level: m,
+            depth: depth + 1,
+        });
         Ok(())
     }
 
@@ -407,65 +481,47 @@ impl<'a> GraphBuild<'a> {
         }
         Ok(())
     }
+}
 
-    /// Cameras and lights of `node`'s subtree, on every path that reaches them, and the planes
-    /// under nodes placed more than once (`shared_above`: a node on the path is).
-    fn place_cameras_and_lights(
-        &mut self,
-        node: &gltf::Node<'_>,
-        to_world: DAffine3,
-        out: &mut Imported,
+/// The index of the world among a walk's open levels.
+const WORLD: usize = 0;
+
+/// The state of the walk that places a scene's nodes ([`GraphBuild::place_roots`]): an explicit
+/// stack of steps instead of a recursion a node at a time, whose frames took megabytes of a
+/// thread's stack on a chain [`MAX_DEPTH`] nodes deep.
+struct Walk<'d> {
+    /// What is left to do, the next step last.
+    steps: Vec<Step<'d>>,
+    /// The levels being filled: the world first, then the prototypes of the shared nodes being
+    /// walked, each inside the one before it; steps place into the last.
+    levels: Vec<Prototype>,
+    /// The world's planes.
+    planes: Vec<Plane>,
+    /// The finished prototypes.
+    prototypes: Vec<Prototype>,
+}
+
+/// One step of a [`Walk`].
+enum Step<'d> {
+    /// Place `node` in the innermost open level, its parent's frame mapped into that level by
+    /// `to_level`, `depth` nodes below a root.
+    Node {
+        node: gltf::Node<'d>,
+        to_level: DAffine3,
         depth: usize,
-        shared_above: bool,
-    ) -> Result<(), LoadError> {
-        if !self.graph.has_camera_or_light[node.index()] || depth >= MAX_DEPTH {
-            return Ok(());
-        }
-        self.camera_light_placements += 1;
-        if self.camera_light_placements > MAX_INSTANCES {
-            return Err(self.invalid(
-                format!("nodes[{}]", node.index()),
-                format!("cameras and lights expand to more than {MAX_INSTANCES} placements"),
-            ));
-        }
-        let world = to_world * self.local_transform(node)?;
-        let shared = shared_above || self.graph.refs[node.index()] > 1;
-        if let (true, Some(shape)) = (shared, self.graph.node_shapes[node.index()]) {
-            let key = format!("nodes[{}]", node.index());
-            if self
-                .shapes
-                .shapes
-                .get(shape)
-                .is_some_and(|d| d.kind == "plane")
-            {
-                let mut p = Prototype::default();
-                let mut planes = Vec::new();
-                let mut none = Vec::new();
-                self.place_shape(shape, world, &key, &mut p, Some(&mut planes), &mut none)?;
-                out.geometry.planes.append(&mut planes);
-            }
-        }
-        if let Some(camera) = node.camera() {
-            let c = gltf_camera::convert(&camera, self.file.cameras.get(camera.index()), world)
-                .map_err(|m| self.invalid(format!("cameras[{}]", camera.index()), m))?;
-            out.cameras.push(c);
-        }
-        if let Some(light) = node.light() {
-            let l = gltf_light::convert(&light, world).map_err(|m| {
-                self.invalid(
-                    format!("extensions.KHR_lights_punctual.lights[{}]", light.index()),
-                    m,
-                )
-            })?;
-            self.range_ignored |= light.range().is_some();
-            self.brightest = self.brightest.max(light.intensity());
-            out.lights.push(l);
-        }
-        for child in node.children() {
-            self.place_cameras_and_lights(&child, world, out, depth + 1, shared)?;
-        }
-        Ok(())
-    }
+    },
+    /// Place the nodes `children` has left, one at a time (each child's own steps come before
+    /// its next sibling's), `depth` nodes below a root, their parent's frame mapped into the
+    /// innermost open level by `to_level`. A node's children wait as their iterator, so a node
+    /// of a million children takes one step, not a million.
+    Children {
+        children: gltf::scene::iter::Children<'d>,
+        to_level: DAffine3,
+        depth: usize,
+    },
+    /// Close the innermost open level, the prototype of shared node `node`, whose contents are
+    /// all placed, and instance it by `placed` in the level around it.
+    Close { node: usize, placed: DAffine3 },
 }
 
 /// Whether a prototype places nothing.
