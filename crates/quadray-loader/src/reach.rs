@@ -4,7 +4,7 @@
 
 use crate::framing::level_box;
 use glam::DVec3;
-use quadray::{Level, MAX_COORDINATE, Prototype};
+use quadray::{Geometry, Level, MAX_COORDINATE, Prototype};
 
 /// How much a level held before a node's contents were added to it.
 #[derive(Default)]
@@ -18,6 +18,15 @@ pub(crate) struct Mark {
 impl Mark {
     /// What `level` holds now.
     pub(crate) fn of(level: &Prototype) -> Mark {
+        Mark::of_level(level_of(level))
+    }
+
+    /// What the world of `g` holds now.
+    pub(crate) fn of_world(g: &Geometry) -> Mark {
+        Mark::of_level(g.level(0))
+    }
+
+    fn of_level(level: Level<'_>) -> Mark {
         Mark {
             spheres: level.spheres.len(),
             quadrics: level.quadrics.len(),
@@ -27,8 +36,18 @@ impl Mark {
     }
 }
 
+/// A prototype as a level.
+fn level_of(p: &Prototype) -> Level<'_> {
+    Level {
+        spheres: &p.spheres,
+        quadrics: &p.quadrics,
+        meshes: &p.meshes,
+        instances: &p.instances,
+    }
+}
+
 /// What `level` holds past `mark`.
-fn since<'a>(level: &'a Prototype, mark: &Mark) -> Level<'a> {
+fn since<'a>(level: Level<'a>, mark: &Mark) -> Level<'a> {
     Level {
         spheres: &level.spheres[mark.spheres..],
         quadrics: &level.quadrics[mark.quadrics..],
@@ -47,7 +66,7 @@ impl PrototypeBoxes {
     /// The boxes of every prototype in `prototypes`.
     fn of_all(&mut self, prototypes: &[Prototype]) -> &[Option<(DVec3, DVec3)>] {
         for p in &prototypes[self.0.len().min(prototypes.len())..] {
-            let b = level_box(since(p, &Mark::default()), &self.0);
+            let b = level_box(level_of(p), &self.0);
             self.0.push(b);
         }
         &self.0
@@ -63,7 +82,23 @@ pub(crate) fn too_far(
     prototypes: &[Prototype],
     boxes: &mut PrototypeBoxes,
 ) -> Option<f64> {
-    let (lo, hi) = level_box(since(level, mark), boxes.of_all(prototypes))?;
+    reach_past(since(level_of(level), mark), prototypes, boxes)
+}
+
+/// [`too_far`] for what the world of `g` holds past `mark`, its instances placing `g`'s
+/// prototypes.
+pub(crate) fn too_far_in_world(g: &Geometry, mark: &Mark) -> Option<f64> {
+    let boxes = &mut PrototypeBoxes::default();
+    reach_past(since(g.level(0), mark), &g.prototypes, boxes)
+}
+
+/// The largest coordinate magnitude of `level`, where it exceeds [`MAX_COORDINATE`].
+fn reach_past(
+    level: Level<'_>,
+    prototypes: &[Prototype],
+    boxes: &mut PrototypeBoxes,
+) -> Option<f64> {
+    let (lo, hi) = level_box(level, boxes.of_all(prototypes))?;
     let reach = lo.abs().max(hi.abs()).max_element();
     (reach > MAX_COORDINATE).then_some(reach)
 }

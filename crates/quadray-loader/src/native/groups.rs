@@ -7,7 +7,7 @@
 //! core requires; a group that reaches itself through its instances is an error naming the cycle.
 
 use super::*;
-use crate::reach::Mark;
+use crate::reach::PrototypeBoxes;
 use quadray::{Instance, MAX_NESTING, Prototype};
 use std::collections::HashSet;
 
@@ -74,6 +74,8 @@ pub(super) struct GraphState<'f> {
     visiting: Vec<String>,
     /// The prototypes, children before parents.
     pub(super) prototypes: Vec<Prototype>,
+    /// Their boxes, for the reach of what the world places.
+    prototype_boxes: PrototypeBoxes,
     /// Per prototype, the most instances on a path down from it (0 for plain shapes).
     depths: Vec<usize>,
     /// Materials: the scene's own, then those of imported files.
@@ -101,6 +103,7 @@ impl Builder<'_> {
             built: HashMap::new(),
             visiting: Vec::new(),
             prototypes: Vec::new(),
+            prototype_boxes: PrototypeBoxes::default(),
             depths: Vec::new(),
             materials,
             material_names,
@@ -176,7 +179,7 @@ impl Builder<'_> {
                 names,
                 &s.get_ref().name,
                 &s.get_ref().transform,
-                &key,
+                (&key, k.is_empty()),
                 out,
             )? {
                 continue;
@@ -185,11 +188,17 @@ impl Builder<'_> {
             self.sphere(s, &key, names, false, out)?;
             if k.is_empty() {
                 let placed = (s.span(), s.get_ref().transform.as_ref());
-                self.placed_within_limit(out, &mark, placed, &key)?;
+                self.world_within_limit(st, out, &mark, placed, (&key, "the shape"))?;
             }
         }
         for (i, s) in c.sphere_sets.iter().enumerate() {
-            self.sphere_set(st, names, s, &format!("{k}spheres[{i}]"), out)?;
+            let key = format!("{k}spheres[{i}]");
+            let mark = Mark::of(out);
+            self.sphere_set(st, names, s, &key, out)?;
+            if k.is_empty() {
+                let placed = (s.span(), s.get_ref().transform.as_ref());
+                self.world_within_limit(st, out, &mark, placed, (&key, "the spheres"))?;
+            }
         }
         for (i, p) in c.planes.iter().enumerate() {
             let key = format!("{k}plane[{i}]");
@@ -209,7 +218,7 @@ impl Builder<'_> {
                 names,
                 &q.get_ref().name,
                 &q.get_ref().transform,
-                &key,
+                (&key, k.is_empty()),
                 out,
             )? {
                 continue;
@@ -218,7 +227,7 @@ impl Builder<'_> {
             out.quadrics.push(self.quadric(q, &key, names)?);
             if k.is_empty() {
                 let placed = (q.span(), q.get_ref().transform.as_ref());
-                self.placed_within_limit(out, &mark, placed, &key)?;
+                self.world_within_limit(st, out, &mark, placed, (&key, "the shape"))?;
             }
         }
         for (i, m) in c.meshes.iter().enumerate() {
@@ -228,14 +237,33 @@ impl Builder<'_> {
                 names,
                 &m.get_ref().name,
                 &m.get_ref().transform,
-                &key,
+                (&key, k.is_empty()),
                 out,
             )? {
                 continue;
             }
+            let mark = Mark::of(out);
             self.mesh_into(st, names, m, &key, out, planes.as_deref_mut())?;
+            if k.is_empty() {
+                let placed = (m.span(), m.get_ref().transform.as_ref());
+                self.world_within_limit(st, out, &mark, placed, (&key, "the mesh"))?;
+            }
         }
         self.fill_instances(st, names, c, out)
+    }
+
+    /// [`Builder::placed_within_limit`] for what the world's `out` holds past `mark`, with the
+    /// scene graph's prototypes.
+    fn world_within_limit(
+        &self,
+        st: &mut GraphState<'_>,
+        out: &Prototype,
+        mark: &Mark,
+        placed: (Range<usize>, Option<&Spanned<TransformSpec>>),
+        key_and_what: (&str, &str),
+    ) -> Result<(), LoadError> {
+        let prototypes = (st.prototypes.as_slice(), &mut st.prototype_boxes);
+        self.placed_within_limit((out, mark), prototypes, placed, key_and_what)
     }
 
     /// The instances `c` holds into `out`: its groups (built, and placed unless templates) and
@@ -258,7 +286,13 @@ impl Builder<'_> {
                 continue;
             }
             let transform = self.transform(&spec.transform, &format!("{key}.transform"))?;
+            let mark = Mark::of(out);
             out.instances.push(Instance::new(prototype, transform));
+            if k.is_empty() {
+                let placed = (g.span(), spec.transform.as_ref());
+                let what = format!("group \"{}\"", spec.name.get_ref());
+                self.world_within_limit(st, out, &mark, placed, (&key, &what))?;
+            }
         }
         for (i, inst) in c.instances.iter().enumerate() {
             let key = format!("{k}instance[{i}]");
@@ -276,24 +310,31 @@ impl Builder<'_> {
                 .as_ref()
                 .map(|m| self.material_id(names, m, &format!("{key}.material")))
                 .transpose()?;
+            let mark = Mark::of(out);
             out.instances.push(Instance {
                 prototype,
                 transform,
                 material,
             });
+            if k.is_empty() {
+                let placed = (inst.span(), spec.transform.as_ref());
+                let what = format!("\"{}\"", spec.of.get_ref());
+                self.world_within_limit(st, out, &mark, placed, (&key, &what))?;
+            }
         }
         Ok(())
     }
 
     /// A named shape some instance places is itself placed as an instance of its prototype (so
-    /// it is stored once); returns whether it was.
+    /// it is stored once); returns whether it was. `key` is the shape's, and `in_world` whether
+    /// `out` is the world's.
     fn place_named<'f>(
         &self,
         st: &mut GraphState<'f>,
         names: &HashMap<String, u32>,
         name: &Option<Spanned<String>>,
         transform: &Option<Spanned<TransformSpec>>,
-        key: &str,
+        (key, in_world): (&str, bool),
         out: &mut Prototype,
     ) -> Result<bool, LoadError> {
         let Some(name) = name
@@ -303,8 +344,13 @@ impl Builder<'_> {
             return Ok(false);
         };
         let prototype = self.prototype(st, names, name.get_ref(), name.span(), key)?;
-        let transform = self.transform(transform, &format!("{key}.transform"))?;
-        out.instances.push(Instance::new(prototype, transform));
+        let placed = self.transform(transform, &format!("{key}.transform"))?;
+        let mark = Mark::of(out);
+        out.instances.push(Instance::new(prototype, placed));
+        if in_world {
+            let placed = (name.span(), transform.as_ref());
+            self.world_within_limit(st, out, &mark, placed, (key, "the shape"))?;
+        }
         Ok(true)
     }
 

@@ -10,6 +10,7 @@ use crate::framing::{framing_camera, framing_points};
 use crate::import::ImportedCamera;
 use crate::import::{ImportOptions, Selector, UpAxis, select_camera};
 use crate::include;
+use crate::reach::{self, Mark};
 use crate::suggest::{did_you_mean, listed, shown};
 use glam::{DVec3, Vec3};
 use quadray::render::{MAX_DEPTH, MAX_SIDE, MAX_SPP, check_resolution};
@@ -483,9 +484,25 @@ impl Builder<'_> {
             let path = include::resolve(self.path, spec.path.get_ref());
             let imported = include::import_file(&path, &options)
                 .map_err(|e| self.include_err(Some(&spec.path), &format!("{key}.path"), e))?;
+            let mark = Mark::of_world(geometry);
             let mut merged =
                 include::merge(imported, &path, None, materials, material_names, geometry)
                     .map_err(|e| self.include_err(Some(&spec.path), &format!("{key}.path"), e))?;
+            if let Some(far) = reach::too_far_in_world(geometry, &mark) {
+                let (span, key) = match &spec.transform {
+                    Some(t) => (t.span(), format!("{key}.transform")),
+                    None => (inc.span(), key),
+                };
+                return Err(self.err(
+                    span,
+                    key,
+                    format!(
+                        "places the file's contents at coordinates up to {far:e}; quadray \
+                         supports magnitudes up to {:e}",
+                        quadray::MAX_COORDINATE
+                    ),
+                ));
+            }
             notes.append(&mut merged.notes);
             if spec.lights.unwrap_or(true) {
                 lights.append(&mut merged.lights);

@@ -34,18 +34,19 @@ pub(super) fn push_sphere(
 }
 
 impl Builder<'_> {
-    /// Refuses what was added to the world's `out` since `mark` (one shape) where it reaches past
-    /// [`quadray::MAX_COORDINATE`], at its `transform` where one put it there, else at the item:
-    /// the scene's own check would name only "geometry".
+    /// Refuses what was added to the world's `out` since `mark` (one item: a shape, a mesh, or
+    /// an instance of one of `prototypes`, whose boxes `boxes` keeps) where it reaches past
+    /// [`quadray::MAX_COORDINATE`], at its `transform` where it has one, else at the item; `what`
+    /// names what it places ("the shape", "group \"g\""). The scene's own check would name only
+    /// "geometry".
     pub(super) fn placed_within_limit(
         &self,
-        out: &Prototype,
-        mark: &Mark,
+        (out, mark): (&Prototype, &Mark),
+        (prototypes, boxes): (&[Prototype], &mut PrototypeBoxes),
         (item, transform): (Range<usize>, Option<&Spanned<TransformSpec>>),
-        key: &str,
+        (key, what): (&str, &str),
     ) -> Result<(), LoadError> {
-        // A world shape, not an instance: no prototype's box is asked for.
-        let Some(far) = reach::too_far(out, mark, &[], &mut PrototypeBoxes::default()) else {
+        let Some(far) = reach::too_far(out, mark, prototypes, boxes) else {
             return Ok(());
         };
         let (span, key) = match transform {
@@ -56,8 +57,8 @@ impl Builder<'_> {
             span,
             key,
             format!(
-                "places the shape at coordinates up to {far:e}; quadray supports magnitudes up \
-                 to {:e}",
+                "places {what} at coordinates up to {far:e}; quadray supports magnitudes up to \
+                 {:e}",
                 quadray::MAX_COORDINATE
             ),
         ))
