@@ -113,7 +113,9 @@ name = "b"
 }
 
 /// A chain of groups deeper than the documented maximum is an error, not a stack overflow; a
-/// binary DAG of 2^20 placements loads from a file of a few dozen lines, in its own size.
+/// binary DAG of 2^20 placements loads from a file of a few dozen lines, in its own size, where
+/// its copies lie apart; where they overlap at every level, a ray would enter every copy, and the
+/// scene is refused.
 #[test]
 fn nesting_is_bounded_and_dags_load_at_the_cost_of_the_file() {
     let mut deep = String::from(
@@ -129,33 +131,52 @@ fn nesting_is_bounded_and_dags_load_at_the_cost_of_the_file() {
     let e = error(&deep);
     assert!(e.contains("nest more than 32"), "{e}");
 
-    let mut dag = String::from(
-        "[[sphere]]\nname = \"d0\"\ncenter = [0, 0, 0]\nradius = 0.001\nmaterial = \"m\"\n",
-    );
-    for i in 1..=20 {
-        let step = 2f64.powi(-i);
-        dag += &format!(
-            "[[group]]\nname = \"d{i}\"\ntemplate = true\n  [[group.instance]]\n  of = \"d{p}\"\n  [[group.instance]]\n  of = \"d{p}\"\n  transform = {{ translate = [{step}, 0, 0] }}\n",
-            p = i - 1
+    // Each level places two copies of the one before, the second shifted by the first's size
+    // along x, y and z in turn: 2^20 spheres on a 128 × 128 × 64 lattice of unit spacing.
+    let dag = |shift: &dyn Fn(i32) -> [f64; 3]| {
+        let mut dag = String::from(
+            "[[sphere]]\nname = \"d0\"\ncenter = [0, 0, 0]\nradius = 0.25\nmaterial = \"m\"\n",
         );
-    }
-    dag += "[[instance]]\nof = \"d20\"\n";
-    let loaded = load_text(&format!("{HEADER}{dag}")).expect("the DAG loads");
+        for i in 1..=20 {
+            let [x, y, z] = shift(i);
+            dag += &format!(
+                "[[group]]\nname = \"d{i}\"\ntemplate = true\n  [[group.instance]]\n  of = \"d{p}\"\n  [[group.instance]]\n  of = \"d{p}\"\n  transform = {{ translate = [{x}, {y}, {z}] }}\n",
+                p = i - 1
+            );
+        }
+        dag + "[[instance]]\nof = \"d20\"\n"
+    };
+    let apart = |i: i32| {
+        let mut t = [0.0; 3];
+        t[(i as usize - 1) % 3] = 2f64.powi((i - 1) / 3);
+        t
+    };
+    let loaded = load_text(&format!("{HEADER}{}", dag(&apart))).expect("the DAG loads");
     let scene = Scene::new(loaded.description).unwrap();
     let stats = scene.accel().stats(scene.geometry());
     // The d0 sphere is placed 2^20 times by the DAG (below 2^20 - 1 group placements) and once
     // where it is defined.
     assert_eq!(stats.placements, 1 << 21);
     assert_eq!(stats.primitives_stored, 1);
-    // A ray down the x axis meets copies along [0, 1): the one at x = 0.5 exactly is hit from
-    // above at its top.
-    let ray = quadray::Ray::new(glam::DVec3::new(0.5, 0.0, 1.0), -glam::DVec3::Z);
-    let hit = scene.intersect(&ray).expect("a copy at x = 0.5");
+    // A ray down the z axis through a column of the lattice meets its top copy, at z = 63.
+    let ray = quadray::Ray::new(glam::DVec3::new(5.0, 7.0, 100.0), -glam::DVec3::Z);
+    let hit = scene.intersect(&ray).expect("a copy at x = 5, y = 7");
     assert!(
-        (hit.geometry.point.z - 0.001).abs() < 1e-9,
+        (hit.geometry.point.z - 63.25).abs() < 1e-9,
         "{:?}",
         hit.geometry.point
     );
+
+    // The same DAG with each level's copies a small step apart along x (2^-i: the copies of
+    // every level overlap): a ray through x = 0.5 would enter each of the 2^21 placements there
+    // (about 50 ms a ray), so the scene is refused, naming the overlap.
+    let overlapping = |i: i32| [2f64.powi(-i), 0.0, 0.0];
+    let loaded = load_text(&format!("{HEADER}{}", dag(&overlapping))).expect("it loads");
+    let e = match Scene::new(loaded.description) {
+        Ok(_) => panic!("an overlap of 2^21 placements is refused"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("placements overlap at one point"), "{e}");
 }
 
 /// Coordinates beyond the documented limit (shapes as placed, in any level) are a clear error,

@@ -44,7 +44,7 @@ fn union(a: Option<Bounds>, b: Bounds) -> Option<Bounds> {
 
 /// The box of `b`'s eight corners through an instance's transform, widened by the transform's own
 /// rounding (a few ulps of the magnitudes it combines).
-fn transformed_bounds(b: Bounds, inst: &Instance) -> Bounds {
+pub(super) fn transformed_bounds(b: Bounds, inst: &Instance) -> Bounds {
     placed_bounds(b, &inst.transform.to_world)
 }
 
@@ -305,6 +305,12 @@ impl Layout {
             placements,
             bounds: LevelBounds::new(geometry),
         }
+    }
+
+    /// An upper bound on how many placements one point of the world lies in, through nested
+    /// instances ([`super::overlap`]).
+    pub fn overlap_depth(&self, geometry: &Geometry) -> f64 {
+        super::overlap::overlap_depth(geometry, &self.bounds.all)
     }
 
     /// The largest coordinate magnitude of any shape, in its level's own space or placed by an

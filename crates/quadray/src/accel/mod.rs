@@ -45,6 +45,7 @@ mod corner_cone;
 mod huge_pages;
 mod level;
 mod mesh_bvh;
+mod overlap;
 mod sphere4;
 mod sphere_clusters;
 mod stack;
@@ -65,6 +66,7 @@ pub use build::Layout;
 use glam::DVec3;
 use mesh_bvh::MeshBvh;
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
+pub use overlap::MAX_OVERLAP;
 pub use stats::AccelStats;
 
 /// One leaf item of a level's top.

@@ -3,7 +3,7 @@
 //! Values that would render as NaN or negative light are refused with the item they belong to.
 
 use super::{MAX_COORDINATE, SceneDescription, SceneError, invalid};
-use crate::accel::{Layout, max_abs_coordinate};
+use crate::accel::{Layout, MAX_OVERLAP, max_abs_coordinate};
 use crate::camera::Projection;
 use crate::geometry::Geometry;
 use crate::geometry::instance::Placements;
@@ -102,6 +102,17 @@ pub(super) fn checked_layout(
             format!(
                 "coordinates reach {extent:e}; quadray supports magnitudes up to \
                  {MAX_COORDINATE:e} (its BVHs use f32 boxes)"
+            ),
+        ));
+    }
+    let overlap = layout.overlap_depth(&d.geometry);
+    if overlap > MAX_OVERLAP {
+        return Err(invalid(
+            "instances",
+            format!(
+                "up to {overlap:.0} placements overlap at one point (nested instances that each \
+                 place overlapping copies multiply), and a ray through it would enter every one; \
+                 at most {MAX_OVERLAP:.0} are supported"
             ),
         ));
     }

@@ -1,0 +1,274 @@
+//! How deeply instances overlap: the most placements one point of the world lies in, counted
+//! through nested instances.
+//!
+//! A ray through a point enters every placement whose box holds the point. Where each level of
+//! nested instances places overlapping copies of the next, that number multiplies level by level:
+//! thirty levels of two copies put 2³⁰ placements on every ray through them, from a file of sixty
+//! lines. The placement count ([`crate::MAX_PLACEMENTS`]) bounds what a scene holds, not what one
+//! ray meets; this bounds the latter, so such a scene is refused instead of rendering for days.
+//!
+//! The count is bounded from above level by level, children first. An instance weighs one (its
+//! own box) plus its prototype's bound; a level's bound is the largest total weight of the
+//! instance boxes that meet one cell of a grid laid over them (all the boxes that hold a point
+//! meet that point's cell), or, for a few instances, that meet one instance's box. Legitimate
+//! scenes stay far below the limit: a forest of instanced trees puts tens of placements at a
+//! point, not a million.
+
+use super::build::{Bounds, transformed_bounds};
+use crate::geometry::Geometry;
+
+/// The most placements one point of the world may lie in, through nested instances: a ray
+/// through it would enter each (about a second of tracing for one ray at a million).
+pub const MAX_OVERLAP: f64 = (1u64 << 20) as f64;
+
+/// Levels with at most this many instances weigh each instance's box against every other.
+const PAIRWISE: usize = 32;
+
+/// The most cells along each axis of a level's grid.
+const MAX_CELLS: usize = 256;
+
+/// The most cells of a level's grid in all (16 MiB of sums).
+const MAX_GRID: usize = 1 << 21;
+
+/// Weights stop growing here: far past [`MAX_OVERLAP`], far inside f64's range.
+const CAP: f64 = 1e30;
+
+/// An upper bound on the number of placements one point of the world lies in, given each
+/// level's bounds in its own space (`bounds[0]` the world's, `bounds[p + 1]` prototype `p`'s).
+pub(super) fn overlap_depth(g: &Geometry, bounds: &[Option<Bounds>]) -> f64 {
+    let n = g.level_count();
+    let mut depth = vec![0.0f64; n];
+    // Prototypes place only earlier prototypes, so children come first; the world last.
+    for level in (1..n).chain([0]) {
+        let boxes: Vec<(Bounds, f64)> = (g.level(level).instances.iter())
+            .filter_map(|inst| {
+                let child = inst.prototype as usize + 1;
+                let placed = transformed_bounds((*bounds.get(child)?)?, inst);
+                Some((placed, (1.0 + depth[child]).min(CAP)))
+            })
+            .collect();
+        depth[level] = deepest(&boxes).min(CAP);
+    }
+    depth[0]
+}
+
+/// An upper bound on the largest total weight of the boxes that hold one point.
+fn deepest(boxes: &[(Bounds, f64)]) -> f64 {
+    if boxes.len() <= PAIRWISE {
+        return (boxes.iter())
+            .map(|&(a, _)| {
+                (boxes.iter())
+                    .filter(|&&(b, _)| meet(a, b))
+                    .map(|&(_, w)| w)
+                    .sum::<f64>()
+            })
+            .fold(0.0, f64::max);
+    }
+    Grid::over(boxes).deepest(boxes)
+}
+
+/// Whether two closed boxes share a point.
+fn meet((alo, ahi): Bounds, (blo, bhi): Bounds) -> bool {
+    alo.cmple(bhi).all() && blo.cmple(ahi).all()
+}
+
+/// A grid of cells over the union of a level's instance boxes, `k[axis]` along each axis.
+struct Grid {
+    lo: glam::DVec3,
+    /// Cells per unit length along each axis (0 along an axis the boxes do not extend along).
+    scale: glam::DVec3,
+    k: [usize; 3],
+}
+
+impl Grid {
+    /// Cells about as large as the boxes' mean size along each axis, so a box meets a few cells
+    /// and a cell is met by about the boxes that overlap there: at most [`MAX_CELLS`] along an
+    /// axis, and eight a box and [`MAX_GRID`] in all (coarser where the boxes are small and
+    /// far apart).
+    fn over(boxes: &[(Bounds, f64)]) -> Grid {
+        let (lo, hi) = (boxes.iter()).fold(
+            (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY),
+            |(lo, hi), &((a, b), _)| (lo.min(a), hi.max(b)),
+        );
+        let extent = hi - lo;
+        let mean = (boxes.iter()).fold(glam::DVec3::ZERO, |s, &((a, b), _)| s + (b - a))
+            / boxes.len() as f64;
+        let mut size = mean.max(extent / MAX_CELLS as f64);
+        let cells = |size: glam::DVec3| {
+            [0, 1, 2].map(|axis| match size[axis] > 0.0 && extent[axis] > 0.0 {
+                true => ((extent[axis] / size[axis]).ceil() as usize).clamp(1, MAX_CELLS),
+                false => 1,
+            })
+        };
+        // Eight cells a box at most, so a level costs in proportion to its instances.
+        let budget = (8 * boxes.len()).min(MAX_GRID);
+        let mut k = cells(size);
+        while k.iter().product::<usize>() > budget {
+            size *= 2.0;
+            k = cells(size);
+        }
+        let scale = glam::DVec3::from_array([0, 1, 2].map(|axis| match k[axis] > 1 {
+            true => k[axis] as f64 / extent[axis],
+            false => 0.0,
+        }));
+        Grid { lo, scale, k }
+    }
+
+    /// The cell along `axis` that coordinate `x` lies in (clamped to the grid; a NaN to 0).
+    fn cell(&self, x: f64, axis: usize) -> usize {
+        let c = ((x - self.lo[axis]) * self.scale[axis]).floor();
+        (c.max(0.0) as usize).min(self.k[axis] - 1)
+    }
+
+    /// The largest total weight of the boxes meeting one cell: each box adds its weight to the
+    /// block of cells it meets, as eight signed corners of a difference array whose prefix sums
+    /// along the three axes give every cell's total.
+    fn deepest(&self, boxes: &[(Bounds, f64)]) -> f64 {
+        let [sx, sy, sz] = self.k.map(|k| k + 1);
+        let index = |x: usize, y: usize, z: usize| (z * sy + y) * sx + x;
+        let mut sums = vec![0.0f64; sx * sy * sz];
+        for &((lo, hi), w) in boxes {
+            let first = [0, 1, 2].map(|axis| self.cell(lo[axis], axis));
+            let last = [0, 1, 2].map(|axis| (self.cell(hi[axis], axis) + 1).max(first[axis] + 1));
+            for corner in 0..8u32 {
+                let pick = |axis: usize| match corner >> axis & 1 {
+                    0 => first[axis],
+                    _ => last[axis],
+                };
+                let sign = if corner.count_ones() % 2 == 0 {
+                    1.0
+                } else {
+                    -1.0
+                };
+                sums[index(pick(0), pick(1), pick(2))] += sign * w;
+            }
+        }
+        // Prefix sums along x, then y, then z: each cell then holds the weight of the boxes
+        // meeting it.
+        for z in 0..sz {
+            for y in 0..sy {
+                for x in 1..sx {
+                    sums[index(x, y, z)] += sums[index(x - 1, y, z)];
+                }
+            }
+        }
+        for z in 0..sz {
+            for y in 1..sy {
+                for x in 0..sx {
+                    sums[index(x, y, z)] += sums[index(x, y - 1, z)];
+                }
+            }
+        }
+        for z in 1..sz {
+            for y in 0..sy {
+                for x in 0..sx {
+                    sums[index(x, y, z)] += sums[index(x, y, z - 1)];
+                }
+            }
+        }
+        let [kx, ky, kz] = self.k;
+        (0..kz)
+            .flat_map(|z| (0..ky).flat_map(move |y| (0..kx).map(move |x| (x, y, z))))
+            .map(|(x, y, z)| sums[index(x, y, z)])
+            .fold(0.0, f64::max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Prototype;
+    use crate::geometry::instance::Instance;
+    use crate::math::Transform;
+    use crate::sphere::Sphere;
+    use glam::{DAffine3, DVec3};
+
+    fn ball() -> Prototype {
+        Prototype {
+            spheres: vec![Sphere {
+                center: DVec3::ZERO,
+                radius: 1.0,
+                material: 0,
+            }],
+            ..Prototype::default()
+        }
+    }
+
+    fn at(prototype: u32, x: f64, y: f64) -> Instance {
+        let t = DAffine3::from_translation(DVec3::new(x, y, 0.0));
+        Instance::new(prototype, Transform::new(t).unwrap())
+    }
+
+    /// The depth of `g` through the core's own level bounds.
+    fn depth(g: &Geometry) -> f64 {
+        let layout = super::super::Layout::new(g, None);
+        layout.overlap_depth(g)
+    }
+
+    /// Nested levels of two overlapping copies double the depth a level: exactly, as two boxes
+    /// are weighed pairwise.
+    #[test]
+    fn overlapping_copies_multiply_level_by_level() {
+        for levels in 1..=12u32 {
+            let mut g = Geometry {
+                prototypes: vec![ball()],
+                ..Geometry::default()
+            };
+            for l in 1..levels {
+                g.prototypes.push(Prototype {
+                    instances: vec![at(l - 1, 0.0, 0.0), at(l - 1, 0.1, 0.0)],
+                    ..Prototype::default()
+                });
+            }
+            g.instances = vec![at(levels - 1, 0.0, 0.0), at(levels - 1, 0.1, 0.0)];
+            // 2 + 4 + … + 2^levels instances hold the origin.
+            let expected = f64::from((1u32 << (levels + 1)) - 2);
+            assert_eq!(depth(&g), expected, "{levels} levels");
+        }
+    }
+
+    /// Copies side by side, apart, count one each however many there are: a grid of 100 × 100
+    /// balls two units apart (the grid's cells then hold one or a few boxes), under a level
+    /// that places that grid twice far apart.
+    #[test]
+    fn copies_apart_do_not_add_up() {
+        let mut g = Geometry {
+            prototypes: vec![ball()],
+            ..Geometry::default()
+        };
+        let row: Vec<Instance> = (0..10_000)
+            .map(|i| at(0, f64::from(i % 100) * 3.0, f64::from(i / 100) * 3.0))
+            .collect();
+        g.prototypes.push(Prototype {
+            instances: row,
+            ..Prototype::default()
+        });
+        g.instances = vec![at(1, 0.0, 0.0), at(1, 0.0, 1000.0)];
+        let d = depth(&g);
+        // One for the grid's instance, then the balls that meet one cell of about a ball's size
+        // (cells of 2 units: a cell meets at most 2 × 2 balls three units apart).
+        assert!((2.0..=1.0 + 4.0).contains(&d), "{d}");
+    }
+
+    /// The grid bounds the depth from above: 40 boxes all holding the origin (too many to
+    /// compare pairwise) weigh 40, and with 60 far-off ones beside them still 40.
+    #[test]
+    fn the_grid_counts_every_box_at_a_point() {
+        let mut g = Geometry {
+            prototypes: vec![ball()],
+            ..Geometry::default()
+        };
+        let mut instances: Vec<Instance> =
+            (0..40).map(|i| at(0, f64::from(i) * 0.01, 0.0)).collect();
+        assert_eq!(
+            depth(&Geometry {
+                instances: instances.clone(),
+                ..g.clone()
+            }),
+            40.0
+        );
+        instances.extend((0..60).map(|i| at(0, 100.0 + f64::from(i) * 10.0, 50.0)));
+        g.instances = instances;
+        assert_eq!(depth(&g), 40.0);
+    }
+}
