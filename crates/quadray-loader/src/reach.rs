@@ -3,7 +3,7 @@
 //! with the item that put them there rather than, later, as the whole scene's.
 
 use crate::framing::level_box;
-use glam::DVec3;
+use glam::{DAffine3, DVec3};
 use quadray::{Geometry, Level, MAX_COORDINATE, Prototype};
 
 /// How much a level held before a node's contents were added to it.
@@ -73,34 +73,67 @@ impl PrototypeBoxes {
     }
 }
 
-/// The largest coordinate magnitude of what `level` holds past `mark`, its instances placed,
-/// where it exceeds [`MAX_COORDINATE`]; `None` within the limit. Values that are not numbers are
-/// the loaders' and the scene's own checks to report.
+/// What an item put past [`MAX_COORDINATE`]: how far, and the box of it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Reach {
+    /// The largest coordinate magnitude.
+    pub(crate) far: f64,
+    /// The box of what the item put in its level.
+    bounds: (DVec3, DVec3),
+}
+
+impl Reach {
+    /// How far the item's contents reached before a transform placed them, at most, given the
+    /// transform's inverse `from_world`: its box's corners mapped back (a rotation widens the box,
+    /// so this may overstate, never understate).
+    pub(crate) fn before(&self, from_world: &DAffine3) -> f64 {
+        let back = from_world;
+        let (lo, hi) = self.bounds;
+        (0..8)
+            .map(|corner| {
+                let pick = |bit: u32, a: f64, b: f64| if corner & bit == 0 { a } else { b };
+                let c = DVec3::new(
+                    pick(1, lo.x, hi.x),
+                    pick(2, lo.y, hi.y),
+                    pick(4, lo.z, hi.z),
+                );
+                back.transform_point3(c).abs().max_element()
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+/// How far what `level` holds past `mark` reaches, its instances placed, where it passes
+/// [`MAX_COORDINATE`]; `None` within the limit. Values that are not numbers are the loaders' and
+/// the scene's own checks to report.
 pub(crate) fn too_far(
     level: &Prototype,
     mark: &Mark,
     prototypes: &[Prototype],
     boxes: &mut PrototypeBoxes,
-) -> Option<f64> {
+) -> Option<Reach> {
     reach_past(since(level_of(level), mark), prototypes, boxes)
 }
 
 /// [`too_far`] for what the world of `g` holds past `mark`, its instances placing `g`'s
-/// prototypes.
-pub(crate) fn too_far_in_world(g: &Geometry, mark: &Mark) -> Option<f64> {
-    let boxes = &mut PrototypeBoxes::default();
+/// prototypes, whose boxes `boxes` keeps from one call to the next.
+pub(crate) fn too_far_in_world(
+    g: &Geometry,
+    mark: &Mark,
+    boxes: &mut PrototypeBoxes,
+) -> Option<Reach> {
     reach_past(since(g.level(0), mark), &g.prototypes, boxes)
 }
 
-/// The largest coordinate magnitude of `level`, where it exceeds [`MAX_COORDINATE`].
+/// How far `level` reaches, where it passes [`MAX_COORDINATE`].
 fn reach_past(
     level: Level<'_>,
     prototypes: &[Prototype],
     boxes: &mut PrototypeBoxes,
-) -> Option<f64> {
-    let (lo, hi) = level_box(level, boxes.of_all(prototypes))?;
-    let reach = lo.abs().max(hi.abs()).max_element();
-    (reach > MAX_COORDINATE).then_some(reach)
+) -> Option<Reach> {
+    let bounds = level_box(level, boxes.of_all(prototypes))?;
+    let far = bounds.0.abs().max(bounds.1.abs()).max_element();
+    (far > MAX_COORDINATE).then_some(Reach { far, bounds })
 }
 
 #[cfg(test)]
@@ -132,12 +165,12 @@ mod tests {
         let mut world = Prototype::default();
         let mark = Mark::of(&world);
         world.instances.push(Instance::new(1, scaled(1e15)));
-        let reach = too_far(&world, &mark, &prototypes, &mut boxes).unwrap();
+        let reach = too_far(&world, &mark, &prototypes, &mut boxes).unwrap().far;
         assert!((reach / 1e31 - 1.0).abs() < 1e-9, "{reach:e}");
         // Past the mark only: the far instance is now behind it.
         let mark = Mark::of(&world);
         world.spheres.push(sphere(5.0));
-        assert_eq!(too_far(&world, &mark, &prototypes, &mut boxes), None);
+        assert!(too_far(&world, &mark, &prototypes, &mut boxes).is_none());
         world.spheres.push(sphere(2e30));
         assert!(too_far(&world, &mark, &prototypes, &mut boxes).is_some());
     }

@@ -19,6 +19,10 @@ pub(super) struct NodeGraph {
     /// Whether a node's subtree holds a camera, a light or a `QUADRAY_quadrics` plane: what is
     /// placed on every path that reaches it.
     pub(super) has_camera_or_light: Vec<bool>,
+    /// Per node, its children whose subtrees hold one (`has_camera_or_light`), in file order: the
+    /// walk of cameras and lights visits only these, so a wide node is not scanned on every path
+    /// through it.
+    pub(super) lit_children: Vec<Vec<usize>>,
     /// Placements of each node once the graph is expanded (saturating).
     pub(super) placements: Vec<u64>,
     /// Placements of each mesh: its nodes' placements summed.
@@ -80,6 +84,7 @@ impl NodeGraph {
             mesh_users: vec![0; doc.meshes().len()],
             shape_users: HashMap::new(),
             has_camera_or_light: vec![false; n],
+            lit_children: vec![Vec::new(); n],
             placements: vec![0; n],
             mesh_placements: vec![0; doc.meshes().len()],
             node_shapes: vec![None; n],
@@ -176,8 +181,13 @@ impl NodeGraph {
                 let p = &mut self.mesh_placements[mesh.index()];
                 *p = p.saturating_add(self.placements[i]);
             }
-            if node.children().any(|c| self.has_camera_or_light[c.index()]) {
+            let lit: Vec<usize> = (node.children())
+                .map(|c| c.index())
+                .filter(|&c| self.has_camera_or_light[c])
+                .collect();
+            if !lit.is_empty() {
                 self.has_camera_or_light[i] = true;
+                self.lit_children[i] = lit;
             }
         }
     }

@@ -465,6 +465,8 @@ impl Builder<'_> {
         notes: &mut Vec<String>,
     ) -> Result<Vec<ImportedCamera>, LoadError> {
         let mut included_cameras = Vec::new();
+        // The boxes of the prototypes met so far, each found once however many includes follow.
+        let mut boxes = reach::PrototypeBoxes::default();
         for (i, inc) in file.includes.iter().enumerate() {
             let key = format!("include[{i}]");
             let spec = inc.get_ref();
@@ -488,20 +490,9 @@ impl Builder<'_> {
             let mut merged =
                 include::merge(imported, &path, None, materials, material_names, geometry)
                     .map_err(|e| self.include_err(Some(&spec.path), &format!("{key}.path"), e))?;
-            if let Some(far) = reach::too_far_in_world(geometry, &mark) {
-                let (span, key) = match &spec.transform {
-                    Some(t) => (t.span(), format!("{key}.transform")),
-                    None => (inc.span(), key),
-                };
-                return Err(self.err(
-                    span,
-                    key,
-                    format!(
-                        "places the file's contents at coordinates up to {far:e}; quadray \
-                         supports magnitudes up to {:e}",
-                        quadray::MAX_COORDINATE
-                    ),
-                ));
+            if let Some(reach) = reach::too_far_in_world(geometry, &mark, &mut boxes) {
+                let placed = (inc.span(), spec.transform.as_ref());
+                return Err(self.too_far(reach, placed, (&key, "the file's contents")));
             }
             notes.append(&mut merged.notes);
             if spec.lights.unwrap_or(true) {

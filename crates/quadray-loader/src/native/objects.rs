@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::import::{FileFormat, PlacedShape, placed_sphere};
-use crate::reach::{self, Mark, PrototypeBoxes};
+use crate::reach::{self, Mark, PrototypeBoxes, Reach};
 use quadray::Prototype;
 
 /// A sphere of `radius` at `center` into `out`, placed by `to_world` when given: a sphere, or the
@@ -36,32 +36,55 @@ pub(super) fn push_sphere(
 impl Builder<'_> {
     /// Refuses what was added to the world's `out` since `mark` (one item: a shape, a mesh, or
     /// an instance of one of `prototypes`, whose boxes `boxes` keeps) where it reaches past
-    /// [`quadray::MAX_COORDINATE`], at its `transform` where it has one, else at the item; `what`
-    /// names what it places ("the shape", "group \"g\""). The scene's own check would name only
-    /// "geometry".
+    /// [`quadray::MAX_COORDINATE`] ([`Builder::too_far`] says where); `what` names what it places
+    /// ("the shape", "group \"g\""). The scene's own check would name only "geometry".
     pub(super) fn placed_within_limit(
         &self,
         (out, mark): (&Prototype, &Mark),
         (prototypes, boxes): (&[Prototype], &mut PrototypeBoxes),
+        placed: (Range<usize>, Option<&Spanned<TransformSpec>>),
+        key_and_what: (&str, &str),
+    ) -> Result<(), LoadError> {
+        match reach::too_far(out, mark, prototypes, boxes) {
+            None => Ok(()),
+            Some(reach) => Err(self.too_far(reach, placed, key_and_what)),
+        }
+    }
+
+    /// The error for an item (at `item`, keyed `key`) whose contents, placed by its `transform`
+    /// if any, reach past the limit as `reach` says: at the transform when the contents were
+    /// within the limit before it, else at the item, with how far they reached before.
+    pub(super) fn too_far(
+        &self,
+        reach: Reach,
         (item, transform): (Range<usize>, Option<&Spanned<TransformSpec>>),
         (key, what): (&str, &str),
-    ) -> Result<(), LoadError> {
-        let Some(far) = reach::too_far(out, mark, prototypes, boxes) else {
-            return Ok(());
+    ) -> LoadError {
+        let (far, limit) = (reach.far, quadray::MAX_COORDINATE);
+        let Some(t) = transform else {
+            return self.err(
+                item,
+                key,
+                format!("places {what} at coordinates up to {far:e}; quadray supports magnitudes up to {limit:e}"),
+            );
         };
-        let (span, key) = match transform {
-            Some(t) => (t.span(), format!("{key}.transform")),
-            None => (item, key.to_string()),
-        };
-        Err(self.err(
-            span,
-            key,
-            format!(
-                "places {what} at coordinates up to {far:e}; quadray supports magnitudes up to \
-                 {:e}",
-                quadray::MAX_COORDINATE
+        let before = (self.transform(&Some(t.clone()), key).ok())
+            .map(|placed| reach.before(&placed.from_world));
+        match before {
+            Some(before) if before > limit => self.err(
+                item,
+                key,
+                format!(
+                    "before its transform, {what} reached coordinates up to {before:e} ({far:e} \
+                     after); quadray supports magnitudes up to {limit:e}"
+                ),
             ),
-        ))
+            _ => self.err(
+                t.span(),
+                format!("{key}.transform"),
+                format!("places {what} at coordinates up to {far:e}; quadray supports magnitudes up to {limit:e}"),
+            ),
+        }
     }
 
     pub(super) fn selector(

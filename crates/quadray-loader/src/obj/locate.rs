@@ -182,6 +182,23 @@ pub(crate) fn locate_non_finite(bytes: &[u8]) -> Option<(&'static str, Located)>
     })
 }
 
+/// The first vertex (`v`) with a coordinate (one of its first three numbers) beyond `limit` in
+/// magnitude.
+pub(crate) fn locate_far_vertex(bytes: &[u8], limit: f32) -> Option<Located> {
+    let text = String::from_utf8_lossy(bytes);
+    statements(&text).find_map(|(line, k, words)| {
+        if k != "v" {
+            return None;
+        }
+        let bad = (words.iter().take(3)).find(|w| w.parse::<f32>().is_ok_and(|x| x.abs() > limit))?;
+        let message = format!(
+            "vertex coordinate `{bad}` lies past quadray's limit of ±{limit:e} for coordinates (its \
+             BVHs use f32 boxes)"
+        );
+        Some((line, message))
+    })
+}
+
 /// The first face corner with an index of 0, which OBJ does not have (indices count from 1, or
 /// back from -1); tobj reads a texture or normal index 0 without complaint.
 pub(crate) fn locate_zero_index(bytes: &[u8]) -> Option<Located> {
@@ -248,6 +265,17 @@ mod tests {
     fn undefined_materials_are_named_once() {
         let text = b"usemtl red\nusemtl blue\nusemtl blue\nusemtl green\n";
         assert_eq!(undefined_materials(text, &["red"]), ["blue", "green"]);
+    }
+
+    #[test]
+    fn far_vertices_are_located() {
+        let text = b"v 0 0 0\nvn 2e31 0 1\nv 1 -2e31 0 0.5 0.5 0.5\n";
+        let (line, message) = locate_far_vertex(text, 1e30).unwrap();
+        assert_eq!(line, 3);
+        assert!(message.contains("`-2e31`"), "{message}");
+        // A colour past the limit is not a coordinate; within it, nothing is found.
+        assert!(locate_far_vertex(b"v 0 0 0 2e31 0 0\n", 1e30).is_none());
+        assert!(locate_far_vertex(b"v 1e30 0 0\n", 1e30).is_none());
     }
 
     #[test]

@@ -19,7 +19,8 @@ use crate::error::{LoadError, LoadErrorKind, Location};
 use crate::image_file::{ImageCache, resolve_reference};
 use crate::import::{ImportOptions, Imported};
 use crate::obj::locate::{
-    locate_non_finite, locate_parse_error, locate_zero_index, oversized_face, undefined_materials,
+    locate_far_vertex, locate_non_finite, locate_parse_error, locate_zero_index, oversized_face,
+    undefined_materials,
 };
 use crate::obj::mtl::{prepare_mtl_text, whitted_material};
 use glam::{DVec3, Vec2, Vec3, Vec4};
@@ -63,6 +64,11 @@ pub fn import_obj_bytes(
         mut notes,
     } = parse(bytes, path, &folder)?;
     check_numbers(bytes, path, &models)?;
+    // Placed as written (no transform to bring it back within the limit), a vertex past the
+    // coordinate limit is the file's error, at its line, not the geometry's or the camera's.
+    if options.transform.is_none() {
+        check_reach(bytes, path, &models)?;
+    }
     let mut out = Imported::default();
     if !options.skip_materials {
         out.materials =
@@ -255,6 +261,28 @@ fn check_numbers(bytes: &[u8], path: &Path, models: &[tobj::Model]) -> Result<()
         ));
     }
     Ok(())
+}
+
+/// An error on the first `v` line with a coordinate past [`quadray::MAX_COORDINATE`], if any
+/// vertex has one.
+fn check_reach(bytes: &[u8], path: &Path, models: &[tobj::Model]) -> Result<(), LoadError> {
+    let limit = quadray::MAX_COORDINATE as f32;
+    let far = (models.iter()).any(|m| m.mesh.positions.iter().any(|x| x.abs() > limit));
+    if !far {
+        return Ok(());
+    }
+    let (line, message) = locate_far_vertex(bytes, limit).unwrap_or((
+        0,
+        format!("a vertex lies past quadray's coordinate limit of ±{limit:e}"),
+    ));
+    Err(LoadError::new(
+        path,
+        (line > 0).then_some(Location { line, column: 1 }),
+        LoadErrorKind::Invalid {
+            key: "v".into(),
+            message,
+        },
+    ))
 }
 
 /// The Whitted materials of the libraries' materials, each with its textures read beside its own

@@ -10,9 +10,12 @@
 //! The count is bounded from above level by level, children first. An instance weighs one (its
 //! own box) plus its prototype's bound; a level's bound is the largest total weight of the
 //! instance boxes that meet one cell of a grid laid over them (all the boxes that hold a point
-//! meet that point's cell), or, for a few instances, that meet one instance's box. Legitimate
-//! scenes stay far below the limit: a forest of instanced trees puts tens of placements at a
-//! point, not a million.
+//! meet that point's cell), or, for a few instances, that meet one instance's box. Boxes that
+//! only touch (by less than a millionth of their size) do not count as meeting: tiles, voxels
+//! and lattices of copies side by side count one placement a level, however deeply they nest.
+//! The bound takes each prototype's worst point wherever it lies, so it overstates where
+//! instances overlap at one point and their prototypes' worst points lie elsewhere; a forest of
+//! instanced trees whose crowns overlap still counts tens or hundreds, not a million.
 
 use super::build::{Bounds, transformed_bounds};
 use crate::geometry::Geometry;
@@ -30,6 +33,9 @@ const MAX_CELLS: usize = 256;
 /// The most cells of a level's grid in all (16 MiB of sums).
 const MAX_GRID: usize = 1 << 21;
 
+/// The share of a box's size along each axis by which boxes must overlap to count as meeting.
+const TOUCH: f64 = 1e-6;
+
 /// Weights stop growing here: far past [`MAX_OVERLAP`], far inside f64's range.
 const CAP: f64 = 1e30;
 
@@ -44,12 +50,21 @@ pub(super) fn overlap_depth(g: &Geometry, bounds: &[Option<Bounds>]) -> f64 {
             .filter_map(|inst| {
                 let child = inst.prototype as usize + 1;
                 let placed = transformed_bounds((*bounds.get(child)?)?, inst);
-                Some((placed, (1.0 + depth[child]).min(CAP)))
+                Some((inner(placed), (1.0 + depth[child]).min(CAP)))
             })
             .collect();
         depth[level] = deepest(&boxes).min(CAP);
     }
     depth[0]
+}
+
+/// The box shrunk by [`TOUCH`] of its size along each axis: boxes that touch (tiles, voxels,
+/// spheres in a lattice of their diameter, whose padded boxes overlap by a few ulps) then do
+/// not meet, while any that overlap by more do. Along an axis where a box is flat, the margin is
+/// a millionth of its padding, so flat boxes in one plane still meet.
+fn inner((lo, hi): Bounds) -> Bounds {
+    let margin = (hi - lo) * TOUCH;
+    (lo + margin, hi - margin)
 }
 
 /// An upper bound on the largest total weight of the boxes that hold one point.
@@ -96,7 +111,10 @@ impl Grid {
         let mut size = mean.max(extent / MAX_CELLS as f64);
         let cells = |size: glam::DVec3| {
             [0, 1, 2].map(|axis| match size[axis] > 0.0 && extent[axis] > 0.0 {
-                true => ((extent[axis] / size[axis]).ceil() as usize).clamp(1, MAX_CELLS),
+                // Rounded, not raised: cells of the boxes' own size stay aligned with a lattice
+                // of them, whose extent the boxes' padding makes a hair longer than a whole
+                // number of boxes.
+                true => ((extent[axis] / size[axis]).round() as usize).clamp(1, MAX_CELLS),
                 false => 1,
             })
         };
@@ -184,10 +202,14 @@ mod tests {
     use glam::{DAffine3, DVec3};
 
     fn ball() -> Prototype {
+        ball_of(1.0)
+    }
+
+    fn ball_of(radius: f64) -> Prototype {
         Prototype {
             spheres: vec![Sphere {
                 center: DVec3::ZERO,
-                radius: 1.0,
+                radius,
                 material: 0,
             }],
             ..Prototype::default()
@@ -248,6 +270,41 @@ mod tests {
         // One for the grid's instance, then the balls that meet one cell of about a ball's size
         // (cells of 2 units: a cell meets at most 2 × 2 balls three units apart).
         assert!((2.0..=1.0 + 4.0).contains(&d), "{d}");
+    }
+
+    /// Copies that only touch count one a level: spheres of radius 0.5 on a lattice of unit
+    /// spacing, 2 × 2 × 2 a level (weighed pairwise) twelve levels deep, and 4 × 4 × 4 a level
+    /// (on the grid) five levels deep; with the copies overlapping by a tenth instead, the
+    /// 2 × 2 × 2 octree multiplies by eight a level.
+    #[test]
+    fn touching_copies_count_one_a_level() {
+        let nested = |side: u32, levels: u32, spacing: f64| {
+            let mut g = Geometry {
+                prototypes: vec![ball_of(0.5)],
+                ..Geometry::default()
+            };
+            for l in 0..levels {
+                let size = spacing * f64::from(side.pow(l));
+                let copies = (0..side.pow(3))
+                    .map(|i| {
+                        let [x, y, z] = [i % side, i / side % side, i / side / side];
+                        let shift = DVec3::new(f64::from(x), f64::from(y), f64::from(z)) * size;
+                        let t = DAffine3::from_translation(shift);
+                        Instance::new(l, Transform::new(t).unwrap())
+                    })
+                    .collect();
+                g.prototypes.push(Prototype {
+                    instances: copies,
+                    ..Prototype::default()
+                });
+            }
+            g.instances = vec![at(levels, 0.0, 0.0)];
+            depth(&g)
+        };
+        assert_eq!(nested(2, 12, 1.0), 13.0);
+        assert_eq!(nested(4, 5, 1.0), 6.0);
+        // Overlapping by a tenth of a sphere, eight copies meet at each level's centre.
+        assert!(nested(2, 6, 0.9) >= 8f64.powi(5), "{}", nested(2, 6, 0.9));
     }
 
     /// The grid bounds the depth from above: 40 boxes all holding the origin (too many to

@@ -19,23 +19,33 @@ impl GraphBuild<'_> {
         out: &mut Imported,
     ) -> Result<(), LoadError> {
         // The next node to visit, with its parent's map to the world, depth and whether a node
-        // above it is shared; then the children left of each visited node, with its own.
-        let mut next = Some((root.clone(), to_world, 0, false));
-        let mut left = Vec::new();
+        // above it is shared; then, for each visited node, its children that hold a camera or
+        // light (`lit_children`) with how many were visited, its own map and whether it is shared.
+        let mut next = Some((root.index(), to_world, 0, false));
+        let mut left: Vec<(usize, usize, DAffine3, usize, bool)> = Vec::new();
         loop {
             if let Some((node, to_world, depth, shared_above)) = next.take()
-                && self.graph.has_camera_or_light[node.index()]
+                && self.graph.has_camera_or_light[node]
                 && depth < MAX_DEPTH
             {
+                let node = self
+                    .file
+                    .document
+                    .nodes()
+                    .nth(node)
+                    .expect("a reached node");
                 let (world, shared) =
                     self.place_camera_or_light(&node, to_world, out, shared_above)?;
-                left.push((node.children(), world, depth + 1, shared));
+                left.push((node.index(), 0, world, depth + 1, shared));
             }
-            let Some((children, world, depth, shared)) = left.last_mut() else {
+            let Some((node, visited, world, depth, shared)) = left.last_mut() else {
                 return Ok(());
             };
-            match children.next() {
-                Some(child) => next = Some((child, *world, *depth, *shared)),
+            match self.graph.lit_children[*node].get(*visited) {
+                Some(&child) => {
+                    *visited += 1;
+                    next = Some((child, *world, *depth, *shared));
+                }
                 None => {
                     left.pop();
                 }

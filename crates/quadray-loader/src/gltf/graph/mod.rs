@@ -261,7 +261,7 @@ impl<'a> GraphBuild<'a> {
     ) -> Result<(), LoadError> {
         match reach::too_far(out, mark, prototypes, &mut self.prototype_boxes) {
             None => Ok(()),
-            Some(reach) => Err(self.invalid(
+            Some(reach::Reach { far: reach, .. }) => Err(self.invalid(
                 key.to_string(),
                 format!(
                     "its transform, with its parents', places its contents at coordinates up to \
