@@ -113,7 +113,7 @@ impl LevelBounds {
 }
 
 /// Bounds of a mesh's vertices.
-fn mesh_bounds(m: &crate::mesh::Mesh) -> Bounds {
+pub(super) fn mesh_bounds(m: &crate::mesh::Mesh) -> Bounds {
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for p in m.positions() {
         lo = lo.min(p.as_dvec3());

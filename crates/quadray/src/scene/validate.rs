@@ -110,9 +110,9 @@ pub(super) fn checked_layout(
         return Err(invalid(
             "instances",
             format!(
-                "up to {overlap:.0} placements overlap at one point (nested instances that each \
-                 place overlapping copies multiply), and a ray through it would enter every one; \
-                 at most {MAX_OVERLAP:.0} are supported"
+                "up to {overlap:.0} shapes and placements overlap at one point (nested \
+                 instances that each place overlapping copies multiply), and a ray through it \
+                 would test every one; at most {MAX_OVERLAP:.0} are supported"
             ),
         ));
     }

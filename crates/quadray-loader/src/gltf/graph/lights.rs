@@ -67,7 +67,10 @@ impl GraphBuild<'_> {
         if self.camera_light_placements > MAX_INSTANCES {
             return Err(self.invalid(
                 format!("nodes[{}]", node.index()),
-                format!("cameras and lights expand to more than {MAX_INSTANCES} placements"),
+                format!(
+                    "cameras, lights and planes under nodes placed more than once expand to more \
+                     than {MAX_INSTANCES} placements"
+                ),
             ));
         }
         let world = to_world * self.local_transform(node)?;

@@ -25,7 +25,7 @@ mod lights;
 
 /// Deepest node hierarchy accepted; deeper means a cycle (which glTF forbids) or an absurd file.
 pub const MAX_DEPTH: usize = 1024;
-/// Most camera and light placements one scene may expand to.
+/// Most placements of cameras, lights and planes under shared nodes one scene may expand to.
 pub const MAX_INSTANCES: usize = 1 << 20;
 /// Most triangles one import may store (about 20 GB of meshes and BVH).
 pub const MAX_TRIANGLES: usize = 200_000_000;
@@ -36,6 +36,11 @@ pub(crate) struct GraphBuild<'a> {
     path: &'a Path,
     shapes: &'a RootExtension,
     skip_materials: bool,
+    /// Whether what a node places in the world is checked against [`MAX_COORDINATE`] here:
+    /// not when the file is placed by a transform of its includer's (a native scene's
+    /// `[[include]]` or `[[mesh]]`), which checks what the file places through it, and can tell
+    /// the transform's fault from the file's.
+    checks_reach: bool,
     graph: NodeGraph,
     /// Node, mesh and shape prototypes built so far.
     node_protos: HashMap<usize, Option<u32>>,
@@ -75,6 +80,7 @@ impl<'a> GraphBuild<'a> {
             path,
             shapes,
             skip_materials: options.skip_materials,
+            checks_reach: options.transform.is_none(),
             graph: NodeGraph::new(&file.document, roots, shapes, path)?,
             node_protos: HashMap::new(),
             mesh_protos: HashMap::new(),
@@ -259,6 +265,9 @@ impl<'a> GraphBuild<'a> {
         mark: &Mark,
         prototypes: &[Prototype],
     ) -> Result<(), LoadError> {
+        if !self.checks_reach {
+            return Ok(());
+        }
         match reach::too_far(out, mark, prototypes, &mut self.prototype_boxes) {
             None => Ok(()),
             Some(reach::Reach { far: reach, .. }) => Err(self.invalid(
