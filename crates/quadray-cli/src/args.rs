@@ -186,6 +186,12 @@ pub struct CheckArgs {
     /// Override a value of a .toml scene, as `render --set` does (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<quadray_loader::Override>,
+    /// For a glTF file: the scene to check, as `render --gltf-scene` chooses it.
+    #[arg(long, value_name = "INDEX|NAME", value_parser = parse_selector)]
+    pub gltf_scene: Option<quadray_loader::Selector>,
+    /// For a glTF file: the camera to check with, as `render --camera` chooses it.
+    #[arg(long, value_name = "INDEX|NAME", value_parser = parse_selector)]
+    pub camera: Option<quadray_loader::Selector>,
 }
 
 /// Parses a scene or camera choice: a number is an index, anything else a name.

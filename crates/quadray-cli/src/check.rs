@@ -10,8 +10,12 @@ use std::time::Instant;
 pub fn run(args: &CheckArgs) -> Result<()> {
     let start = Instant::now();
     quadray_loader::confine::record_reads();
-    let loaded =
-        quadray_app::scene_file::load(&args.scene, &args.set, &Default::default(), None, None)?;
+    let options = quadray_loader::ImportOptions {
+        scene: args.gltf_scene.clone(),
+        ..Default::default()
+    };
+    let camera = args.camera.as_ref();
+    let loaded = quadray_app::scene_file::load(&args.scene, &args.set, &options, camera, None)?;
     let reads = quadray_loader::confine::take_reads();
     log::info!(
         "loaded {} in {:.3} s",

@@ -372,14 +372,14 @@ fn a_model_without_a_camera_fills_the_frame() {
     }
 }
 
-/// The deepest glTF node chain the loader accepts renders through the binary, which loads on its
-/// main thread (the test build's loader is unoptimised, its frames several times their release
-/// size: a 1000-deep chain needed 4 to 8 MiB), and a chain one node deeper is refused with the
-/// node at fault, writing nothing.
-#[test]
-fn the_deepest_gltf_chain_renders_and_a_deeper_one_is_refused() {
+/// A glTF file `name` in `dir` of one triangle mesh (mesh 0), with `nodes` and `scenes`.
+fn triangle_gltf(
+    dir: &Path,
+    name: &str,
+    nodes: serde_json::Value,
+    scenes: serde_json::Value,
+) -> PathBuf {
     use base64::Engine;
-    let dir = tempfile::tempdir().unwrap();
     let triangle: Vec<u8> = [0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
         .iter()
         .flat_map(|v| v.to_le_bytes())
@@ -388,6 +388,27 @@ fn the_deepest_gltf_chain_renders_and_a_deeper_one_is_refused() {
         "data:application/octet-stream;base64,{}",
         base64::engine::general_purpose::STANDARD.encode(&triangle)
     );
+    let doc = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": scenes,
+        "nodes": nodes,
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "buffers": [{"byteLength": triangle.len(), "uri": uri}],
+        "bufferViews": [{"buffer": 0, "byteLength": triangle.len()}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]}]
+    });
+    let path = dir.join(name);
+    std::fs::write(&path, doc.to_string()).unwrap();
+    path
+}
+
+/// The deepest glTF node chain the loader accepts renders through the binary, and a chain one
+/// node deeper is refused with the node at fault, writing nothing.
+#[test]
+fn the_deepest_gltf_chain_renders_and_a_deeper_one_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
     let chain = |depth: usize| {
         let nodes: Vec<serde_json::Value> = (0..depth)
             .map(|i| match i {
@@ -395,20 +416,13 @@ fn the_deepest_gltf_chain_renders_and_a_deeper_one_is_refused() {
                 _ => serde_json::json!({"children": [i + 1], "translation": [0.001, 0.0, 0.0]}),
             })
             .collect();
-        let doc = serde_json::json!({
-            "asset": {"version": "2.0"},
-            "scene": 0,
-            "scenes": [{"nodes": [0]}],
-            "nodes": nodes,
-            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
-            "buffers": [{"byteLength": triangle.len(), "uri": uri}],
-            "bufferViews": [{"buffer": 0, "byteLength": triangle.len()}],
-            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
-                           "min": [0, 0, 0], "max": [1, 1, 0]}]
-        });
-        let path = dir.path().join(format!("chain-{depth}.gltf"));
-        std::fs::write(&path, doc.to_string()).unwrap();
-        path
+        let name = format!("chain-{depth}.gltf");
+        triangle_gltf(
+            dir.path(),
+            &name,
+            serde_json::json!(nodes),
+            serde_json::json!([{"nodes": [0]}]),
+        )
     };
     let deepest = quadray_loader::gltf::MAX_DEPTH;
     let (deep, deeper) = (chain(deepest), chain(deepest + 1));
@@ -436,4 +450,27 @@ fn the_deepest_gltf_chain_renders_and_a_deeper_one_is_refused() {
         stderr(&o)
     );
     assert!(!refused.exists());
+}
+
+/// `check` checks the glTF scene and camera `render` would use: a file whose second scene places
+/// its triangle past the coordinate limit passes as it is (its default scene is the first) and
+/// fails with `--gltf-scene 1`, naming the node; a camera that is not there is refused by name.
+#[test]
+fn check_takes_the_gltf_scene_and_camera_render_takes() {
+    let dir = tempfile::tempdir().unwrap();
+    let nodes = serde_json::json!([
+        {"mesh": 0},
+        {"mesh": 0, "translation": [2e30, 0.0, 0.0]}
+    ]);
+    let scenes = serde_json::json!([{"nodes": [0]}, {"nodes": [1]}]);
+    let file = triangle_gltf(dir.path(), "two.gltf", nodes, scenes);
+    let file = file.to_str().unwrap();
+    let o = quadray(&["check", file]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = quadray(&["check", file, "--gltf-scene", "1"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("`nodes[1]`"), "{}", stderr(&o));
+    let o = quadray(&["check", file, "--camera", "5"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("camera"), "{}", stderr(&o));
 }
