@@ -443,6 +443,30 @@ impl Builder<'_> {
                 ),
             ));
         }
+        // Every level's boxes are held in its own frame, whatever scale its instances place it
+        // at, so a definition whose own contents pass the limit (its nested groups' transforms
+        // multiply) is its error. Checked here, level by level, no box past the limit reaches
+        // the next, and no product of transforms overflows to infinity.
+        let mark = Mark::default();
+        let boxes = &mut st.prototype_boxes;
+        if let Some(reach) = reach::too_far(&prototype, &mark, &st.prototypes, boxes) {
+            let at = match def {
+                Def::Group(g) => g.span(),
+                Def::Sphere(s) => s.span(),
+                Def::Quadric(q) => q.span(),
+                Def::Mesh(m) => m.span(),
+            };
+            return Err(self.err(
+                at,
+                key,
+                format!(
+                    "its contents reach coordinates up to {:e} in its own frame, before any \
+                     instance places it; quadray supports magnitudes up to {:e}",
+                    reach.far,
+                    quadray::MAX_COORDINATE
+                ),
+            ));
+        }
         let index = st.prototypes.len() as u32;
         st.depths.resize(st.prototypes.len(), 1);
         st.depths.push(depth);
