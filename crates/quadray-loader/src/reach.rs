@@ -3,7 +3,7 @@
 //! with the item that put them there rather than, later, as the whole scene's.
 
 use crate::framing::level_box;
-use glam::{DAffine3, DVec3};
+use glam::DVec3;
 use quadray::{Geometry, Level, MAX_COORDINATE, Prototype};
 
 /// How much a level held before a node's contents were added to it.
@@ -73,34 +73,11 @@ impl PrototypeBoxes {
     }
 }
 
-/// What an item put past [`MAX_COORDINATE`]: how far, and the box of it.
+/// What an item put past [`MAX_COORDINATE`]: how far.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Reach {
     /// The largest coordinate magnitude.
     pub(crate) far: f64,
-    /// The box of what the item put in its level.
-    bounds: (DVec3, DVec3),
-}
-
-impl Reach {
-    /// How far the item's contents reached before a transform placed them, at most, given the
-    /// transform's inverse `from_world`: its box's corners mapped back (a rotation widens the box,
-    /// so this may overstate, never understate).
-    pub(crate) fn before(&self, from_world: &DAffine3) -> f64 {
-        let back = from_world;
-        let (lo, hi) = self.bounds;
-        (0..8)
-            .map(|corner| {
-                let pick = |bit: u32, a: f64, b: f64| if corner & bit == 0 { a } else { b };
-                let c = DVec3::new(
-                    pick(1, lo.x, hi.x),
-                    pick(2, lo.y, hi.y),
-                    pick(4, lo.z, hi.z),
-                );
-                back.transform_point3(c).abs().max_element()
-            })
-            .fold(0.0, f64::max)
-    }
 }
 
 /// How far what `level` holds past `mark` reaches, its instances placed, where it passes
@@ -131,9 +108,9 @@ fn reach_past(
     prototypes: &[Prototype],
     boxes: &mut PrototypeBoxes,
 ) -> Option<Reach> {
-    let bounds = level_box(level, boxes.of_all(prototypes))?;
-    let far = bounds.0.abs().max(bounds.1.abs()).max_element();
-    (far > MAX_COORDINATE).then_some(Reach { far, bounds })
+    let (lo, hi) = level_box(level, boxes.of_all(prototypes))?;
+    let far = lo.abs().max(hi.abs()).max_element();
+    (far > MAX_COORDINATE).then_some(Reach { far })
 }
 
 #[cfg(test)]

@@ -68,15 +68,25 @@ impl Builder<'_> {
                 format!("places {what} at coordinates up to {far:e}; quadray supports magnitudes up to {limit:e}"),
             );
         };
-        let before = (self.transform(&Some(t.clone()), key).ok())
-            .map(|placed| reach.before(&placed.from_world));
+        // Some point of the contents lies at `far` after the transform x ↦ Mx + t, so before it
+        // that point reached at least (far − ‖t‖∞) / ‖M‖∞: past the limit, the contents were
+        // already at fault, whatever the transform did.
+        let before = (self.transform(&Some(t.clone()), key).ok()).map(|placed| {
+            let m = placed.to_world;
+            let rows = m.matrix3.transpose().abs();
+            let norm = [rows.x_axis, rows.y_axis, rows.z_axis]
+                .iter()
+                .map(|r| r.element_sum())
+                .fold(0.0, f64::max);
+            (far - m.translation.abs().max_element()) / norm
+        });
         match before {
             Some(before) if before > limit => self.err(
                 item,
                 key,
                 format!(
-                    "before its transform, {what} reached coordinates up to {before:e} ({far:e} \
-                     after); quadray supports magnitudes up to {limit:e}"
+                    "before its transform, {what} reached coordinates of at least {before:e} \
+                     ({far:e} after); quadray supports magnitudes up to {limit:e}"
                 ),
             ),
             _ => self.err(
@@ -177,7 +187,12 @@ impl Builder<'_> {
             .map(|v| self.material_id(names, v, &format!("{key}.material")))
             .transpose()?;
         let options = ImportOptions {
-            transform: Some(self.transform(&m.transform, &format!("{key}.transform"))?),
+            // None where the file gives none: the import then checks what the file itself places
+            // (an OBJ vertex at its line, a glTF node by its index).
+            transform: match &m.transform {
+                Some(_) => Some(self.transform(&m.transform, &format!("{key}.transform"))?),
+                None => None,
+            },
             scene: m
                 .scene
                 .as_ref()
