@@ -201,6 +201,16 @@ impl Transform {
     }
 }
 
+/// ‖M‖∞, the largest absolute row sum of `m`: the most a map x ↦ Mx stretches the largest
+/// coordinate magnitude, ‖Mx‖∞ ≤ ‖M‖∞·‖x‖∞.
+pub fn max_row_sum(m: DMat3) -> f64 {
+    let rows = m.transpose().abs();
+    [rows.x_axis, rows.y_axis, rows.z_axis]
+        .iter()
+        .map(|r| r.element_sum())
+        .fold(0.0, f64::max)
+}
+
 /// Slab test of a ray against the closed box `[min, max]`: the parameter interval inside it.
 ///
 /// Division by a zero direction component gives ±∞, which the min/max below handle, except for

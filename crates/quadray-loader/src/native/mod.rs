@@ -472,12 +472,7 @@ impl Builder<'_> {
             let spec = inc.get_ref();
             self.keys_for_format(spec.path.get_ref(), &spec.up, &spec.scene, &key)?;
             let options = ImportOptions {
-                // None where the file gives none: the import then checks what the file itself places
-                // (an OBJ vertex at its line, a glTF node by its index).
-                transform: match &spec.transform {
-                    Some(_) => Some(self.transform(&spec.transform, &format!("{key}.transform"))?),
-                    None => None,
-                },
+                transform: self.import_transform(&spec.transform, &format!("{key}.transform"))?,
                 scene: spec
                     .scene
                     .as_ref()

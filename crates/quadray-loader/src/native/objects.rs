@@ -73,12 +73,7 @@ impl Builder<'_> {
         // already at fault, whatever the transform did.
         let before = (self.transform(&Some(t.clone()), key).ok()).map(|placed| {
             let m = placed.to_world;
-            let rows = m.matrix3.transpose().abs();
-            let norm = [rows.x_axis, rows.y_axis, rows.z_axis]
-                .iter()
-                .map(|r| r.element_sum())
-                .fold(0.0, f64::max);
-            (far - m.translation.abs().max_element()) / norm
+            (far - m.translation.abs().max_element()) / quadray::math::max_row_sum(m.matrix3)
         });
         match before {
             Some(before) if before > limit => self.err(
@@ -187,12 +182,7 @@ impl Builder<'_> {
             .map(|v| self.material_id(names, v, &format!("{key}.material")))
             .transpose()?;
         let options = ImportOptions {
-            // None where the file gives none: the import then checks what the file itself places
-            // (an OBJ vertex at its line, a glTF node by its index).
-            transform: match &m.transform {
-                Some(_) => Some(self.transform(&m.transform, &format!("{key}.transform"))?),
-                None => None,
-            },
+            transform: self.import_transform(&m.transform, &format!("{key}.transform"))?,
             scene: m
                 .scene
                 .as_ref()

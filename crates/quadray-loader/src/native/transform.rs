@@ -5,6 +5,20 @@ use super::*;
 use glam::{DAffine3, DMat3, DQuat};
 
 impl Builder<'_> {
+    /// The transform an imported file is placed by (an `[[include]]`'s or a `[[mesh]]`'s):
+    /// `None` where the file gives none, so the import checks what the file itself places (an
+    /// OBJ vertex at its line, a glTF node by its index).
+    pub(super) fn import_transform(
+        &self,
+        spec: &Option<Spanned<TransformSpec>>,
+        key: &str,
+    ) -> Result<Option<Transform>, LoadError> {
+        match spec {
+            Some(_) => Ok(Some(self.transform(spec, key)?)),
+            None => Ok(None),
+        }
+    }
+
     /// The object-to-parent map a `transform` table describes (the identity when absent).
     pub(super) fn transform(
         &self,

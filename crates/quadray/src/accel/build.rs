@@ -132,12 +132,8 @@ fn level_extents(g: &Geometry, bounds: &[Option<Bounds>], world: f64) -> Vec<f64
     for level in [0].into_iter().chain((1..n).rev()) {
         for inst in g.level(level).instances {
             let m = &inst.transform.from_world;
-            // ‖x‖∞ ≤ e maps to ‖Mx + t‖∞ ≤ ‖M‖∞·e + ‖t‖∞ (‖M‖∞: the largest absolute row sum).
-            let rows = m.matrix3.transpose().abs();
-            let norm = [rows.x_axis, rows.y_axis, rows.z_axis]
-                .iter()
-                .map(|r| r.element_sum())
-                .fold(0.0, f64::max);
+            // ‖x‖∞ ≤ e maps to ‖Mx + t‖∞ ≤ ‖M‖∞·e + ‖t‖∞.
+            let norm = crate::math::max_row_sum(m.matrix3);
             let e = (norm * extents[level] + m.translation.abs().max_element()) * (1.0 + 1e-12);
             if let Some(child) = extents.get_mut(inst.prototype as usize + 1) {
                 *child = child.max(e);
