@@ -71,6 +71,18 @@ impl PrototypeBoxes {
         }
         &self.0
     }
+
+    /// How far `next`, the prototype to follow `prototypes`, reaches in its own frame, where it
+    /// passes [`MAX_COORDINATE`]; within the limit its box is kept, found once, for the caller
+    /// to push `next` after `prototypes`.
+    pub(crate) fn admit(&mut self, prototypes: &[Prototype], next: &Prototype) -> Option<Reach> {
+        let bounds = level_box(level_of(next), self.of_all(prototypes));
+        if let Some(reach) = bounds.and_then(reach_of) {
+            return Some(reach);
+        }
+        self.0.push(bounds);
+        None
+    }
 }
 
 /// What an item put past [`MAX_COORDINATE`]: how far.
@@ -108,7 +120,11 @@ fn reach_past(
     prototypes: &[Prototype],
     boxes: &mut PrototypeBoxes,
 ) -> Option<Reach> {
-    let (lo, hi) = level_box(level, boxes.of_all(prototypes))?;
+    level_box(level, boxes.of_all(prototypes)).and_then(reach_of)
+}
+
+/// How far the box `(lo, hi)` reaches, where it passes [`MAX_COORDINATE`].
+fn reach_of((lo, hi): (DVec3, DVec3)) -> Option<Reach> {
     let far = lo.abs().max(hi.abs()).max_element();
     (far > MAX_COORDINATE).then_some(Reach { far })
 }
@@ -150,5 +166,35 @@ mod tests {
         assert!(too_far(&world, &mark, &prototypes, &mut boxes).is_none());
         world.spheres.push(sphere(2e30));
         assert!(too_far(&world, &mark, &prototypes, &mut boxes).is_some());
+    }
+
+    /// A prototype admitted within the limit keeps its box, which what places it is then
+    /// measured with; one whose own contents pass the limit is refused, and keeps none.
+    #[test]
+    fn admitted_prototypes_keep_their_boxes() {
+        let ball = |x: f64| Prototype {
+            spheres: vec![Sphere {
+                center: DVec3::new(x, 0.0, 0.0),
+                radius: 1.0,
+                material: 0,
+            }],
+            ..Prototype::default()
+        };
+        let mut boxes = PrototypeBoxes::default();
+        let mut prototypes = Vec::new();
+        assert!(boxes.admit(&prototypes, &ball(3.0)).is_none());
+        prototypes.push(ball(3.0));
+        assert_eq!(boxes.0.len(), 1);
+        let far = boxes
+            .admit(&prototypes, &ball(2e30))
+            .expect("past the limit");
+        assert!((far.far / 2e30 - 1.0).abs() < 1e-9, "{}", far.far);
+        assert_eq!(boxes.0.len(), 1);
+        let mut world = Prototype::default();
+        let mark = Mark::of(&world);
+        let t = Transform::new(DAffine3::from_scale(DVec3::splat(1e30))).unwrap();
+        world.instances.push(Instance::new(0, t));
+        let reach = too_far(&world, &mark, &prototypes, &mut boxes).unwrap().far;
+        assert!((reach / 4e30 - 1.0).abs() < 1e-9, "{reach:e}");
     }
 }

@@ -446,10 +446,9 @@ impl Builder<'_> {
         // Every level's boxes are held in its own frame, whatever scale its instances place it
         // at, so a definition whose own contents pass the limit (its nested groups' transforms
         // multiply) is its error. Checked here, level by level, no box past the limit reaches
-        // the next, and no product of transforms overflows to infinity.
-        let mark = Mark::default();
-        let boxes = &mut st.prototype_boxes;
-        if let Some(reach) = reach::too_far(&prototype, &mark, &st.prototypes, boxes) {
+        // the next, and no product of transforms overflows to infinity. (Its box, found here,
+        // is kept for the reach of what places it.)
+        if let Some(reach) = st.prototype_boxes.admit(&st.prototypes, &prototype) {
             let at = match def {
                 Def::Group(g) => g.span(),
                 Def::Sphere(s) => s.span(),
