@@ -8,7 +8,7 @@
 
 use crate::import::ImportedCamera;
 use glam::{DAffine3, DVec3};
-use quadray::{Camera, Projection};
+use quadray::{Camera, MAX_COORDINATE, Projection};
 
 /// The quadray camera for `camera` seen through a node placed by `to_world`; `json` is the
 /// camera's JSON, whose numbers are read in f64 when present.
@@ -66,7 +66,16 @@ pub fn convert(
         .ok_or("the camera node's transform is singular")?;
     // The target a power of two (exact in the product) at least as far as the position's largest
     // coordinate: one unit ahead of a camera at 1e17 rounds back onto the camera itself.
-    let reach = 2f64.powi(from.abs().max_element().max(1.0).log2().ceil() as i32);
+    let far = from.abs().max_element().max(1.0);
+    let mut reach = 2f64.powi(far.log2().ceil() as i32);
+    // The target within the coordinate limit, so a camera near the limit is not refused for
+    // it: halved while it stays at least 2⁻²⁶ of the position away, where rounding the target
+    // turns the view by at most about 2⁻²⁵ radians.
+    while (from + forward * reach).abs().max_element() > MAX_COORDINATE
+        && reach > far * 2f64.powi(-26)
+    {
+        reach *= 0.5;
+    }
     let camera_out = Camera {
         from,
         to: from + forward * reach,

@@ -18,7 +18,7 @@ use glam::{DAffine3, DVec3, Vec2, Vec3, Vec4};
 use gltf::Semantic;
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
-use quadray::Mesh;
+use quadray::{MAX_COORDINATE, Mesh};
 
 const POSITIONS: Expect = Expect {
     dimensions: &[Dimensions::Vec3],
@@ -104,13 +104,38 @@ pub struct Built {
     pub normal_map_skipped: Option<&'static str>,
 }
 
+/// Why a primitive could not be built.
+#[derive(Debug)]
+pub enum BuildError {
+    /// Its data is invalid; the message says how.
+    Data(String),
+    /// Its vertices lie within [`MAX_COORDINATE`], but its node's transform places them past it,
+    /// as far as `reach`: the transform's fault, not the data's.
+    PlacedTooFar {
+        /// The largest coordinate magnitude of a placed vertex.
+        reach: f64,
+    },
+}
+
+impl From<String> for BuildError {
+    fn from(message: String) -> BuildError {
+        BuildError::Data(message)
+    }
+}
+
+impl From<&str> for BuildError {
+    fn from(message: &str) -> BuildError {
+        BuildError::Data(message.to_string())
+    }
+}
+
 /// The quadray mesh of `primitive` placed by `to_world` (none when no triangle is left).
 pub fn build(
     primitive: &gltf::Primitive<'_>,
     file: &GltfFile,
     to_world: DAffine3,
     material: &MaterialUse,
-) -> Result<Built, String> {
+) -> Result<Built, BuildError> {
     let buffers = &file.buffers;
     let positions_accessor = primitive
         .get(&Semantic::Positions)
@@ -123,10 +148,10 @@ pub fn build(
         .collect();
     let n = local.len();
     if n != positions_accessor.count() {
-        return Err(format!(
+        return Err(BuildError::Data(format!(
             "POSITION: read {n} of {} vertices",
             positions_accessor.count()
-        ));
+        )));
     }
     let indices: Vec<u32> = match primitive.indices() {
         Some(acc) => {
@@ -137,10 +162,10 @@ pub fn build(
                 .into_u32()
                 .collect();
             if let Some(bad) = read.iter().find(|&&i| i as usize >= n) {
-                return Err(format!(
+                return Err(BuildError::Data(format!(
                     "indices: accessor {} holds vertex index {bad}, but the primitive has {n} vertices",
                     acc.index()
-                ));
+                )));
             }
             read
         }
@@ -165,14 +190,25 @@ pub fn build(
             t.swap(1, 2);
         }
     }
+    // How far the vertices reach before and after the transform (NaN data is left to the
+    // mesh's own check), so that a transform placing sound vertices past the limit is named
+    // before f32 turns them into infinities (two nested node scales of 1e20 do).
+    let (mut data_reach, mut placed_reach) = (0.0f64, 0.0f64);
     let positions: Vec<Vec3> = local
         .iter()
         .map(|&p| {
-            to_world
-                .transform_point3(DVec3::from(p.map(f64::from)))
-                .as_vec3()
+            let p = DVec3::from(p.map(f64::from));
+            let placed = to_world.transform_point3(p);
+            data_reach = data_reach.max(p.abs().max_element());
+            placed_reach = placed_reach.max(placed.abs().max_element());
+            placed.as_vec3()
         })
         .collect();
+    if placed_reach > MAX_COORDINATE && data_reach <= MAX_COORDINATE {
+        return Err(BuildError::PlacedTooFar {
+            reach: placed_reach,
+        });
+    }
     let normals = baked_normals(primitive, &reader, buffers, &to_world, n)?;
     let mesh = Mesh::new(positions, triangles, normals, material.id).map_err(|e| e.to_string())?;
     let mesh = with_surface_attributes(mesh, primitive, &reader, buffers, material)?;

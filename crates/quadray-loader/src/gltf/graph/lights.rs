@@ -6,7 +6,8 @@ use crate::error::LoadError;
 use crate::gltf::{camera as gltf_camera, light as gltf_light};
 use crate::import::Imported;
 use glam::DAffine3;
-use quadray::Prototype;
+use gltf::khr_lights_punctual::Kind;
+use quadray::{MAX_COORDINATE, Prototype};
 
 impl GraphBuild<'_> {
     /// Cameras and lights of `root`'s subtree, placed under `to_world`, on every path that
@@ -89,6 +90,20 @@ impl GraphBuild<'_> {
                 self.place_shape(shape, world, &key, &mut p, Some(&mut planes), &mut none)?;
                 out.geometry.planes.append(&mut planes);
             }
+        }
+        // A camera, point or spot light placed past the limit is its node's transform's fault
+        // (where a directional light stands does not matter).
+        let placed = match (node.camera(), node.light()) {
+            (Some(_), _) => Some("the camera"),
+            (None, Some(light)) if !matches!(light.kind(), Kind::Directional) => Some("the light"),
+            _ => None,
+        };
+        let reach = world.translation.abs().max_element();
+        if let Some(what) = placed
+            && (reach > MAX_COORDINATE || reach.is_nan())
+        {
+            let key = format!("nodes[{}]", node.index());
+            return Err(self.placed_too_far(&key, what, reach));
         }
         if let Some(camera) = node.camera() {
             let c = gltf_camera::convert(&camera, self.file.cameras.get(camera.index()), world)

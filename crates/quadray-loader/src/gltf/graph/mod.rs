@@ -11,7 +11,7 @@
 use crate::error::LoadError;
 use crate::gltf::document::GltfFile;
 use crate::gltf::material::{MaterialUse, Materials};
-use crate::gltf::mesh as gltf_mesh;
+use crate::gltf::mesh::{self as gltf_mesh, BuildError};
 use crate::gltf::node_graph::NodeGraph;
 use crate::gltf::quadrics_ext::{self, RootExtension};
 use crate::import::{Imported, PlacedShape};
@@ -270,14 +270,25 @@ impl<'a> GraphBuild<'a> {
         }
         match reach::too_far(out, mark, prototypes, &mut self.prototype_boxes) {
             None => Ok(()),
-            Some(reach::Reach { far: reach, .. }) => Err(self.invalid(
-                key.to_string(),
-                format!(
-                    "its transform, with its parents', places its contents at coordinates up to \
-                     {reach:.3e}; quadray supports magnitudes up to {MAX_COORDINATE:e}"
-                ),
-            )),
+            Some(reach::Reach { far, .. }) => Err(self.placed_too_far(key, "its contents", far)),
         }
+    }
+
+    /// The error of node `key`, whose transform with its parents' places `what` (its contents,
+    /// its camera or its light) at coordinates up to `reach`, past [`MAX_COORDINATE`].
+    fn placed_too_far(&self, key: &str, what: &str, reach: f64) -> LoadError {
+        // Under an includer's transform, that transform may be the one at fault.
+        let by = match self.checks_reach {
+            true => "its transform, with its parents',",
+            false => "its transform, with its parents' and the one the file is placed by,",
+        };
+        self.invalid(
+            key.to_string(),
+            format!(
+                "{by} places {what} at coordinates up to {reach:.3e}; quadray supports \
+                 magnitudes up to {MAX_COORDINATE:e}"
+            ),
+        )
     }
 
     /// An instance of `proto` placed by `m` (a singular map hides it, as it would a baked mesh).
@@ -323,7 +334,7 @@ impl<'a> GraphBuild<'a> {
                     None => {
                         let mut p = Prototype::default();
                         let copies = self.graph.mesh_placements[mesh.index()];
-                        self.build_mesh(&mesh, DAffine3::IDENTITY, &mut p, copies)?;
+                        self.build_mesh(&mesh, DAffine3::IDENTITY, &key, &mut p, copies)?;
                         prototypes.push(p);
                         let index = prototypes.len() as u32 - 1;
                         self.mesh_protos.insert(mesh.index(), index);
@@ -333,7 +344,7 @@ impl<'a> GraphBuild<'a> {
                 self.instance(proto, m, &key, out);
             } else {
                 let copies = self.graph.placements[node.index()];
-                self.build_mesh(&mesh, m, out, copies)?;
+                self.build_mesh(&mesh, m, &key, out, copies)?;
             }
         }
         // In the world (where `planes` go), what the node placed itself is checked here, so the
@@ -416,12 +427,13 @@ impl<'a> GraphBuild<'a> {
         add_shape(placed, out, planes).map_err(|e| self.invalid(key.to_string(), e))
     }
 
-    /// Every surface primitive of `mesh`, placed by `m`, into `out`, which the expanded scene
-    /// holds `copies` times (for the count of dropped triangles).
+    /// Every surface primitive of `mesh`, placed by `m` (node `key`'s map), into `out`, which
+    /// the expanded scene holds `copies` times (for the count of dropped triangles).
     fn build_mesh(
         &mut self,
         mesh: &gltf::Mesh<'_>,
         m: DAffine3,
+        key: &str,
         out: &mut Prototype,
         copies: u64,
     ) -> Result<(), LoadError> {
@@ -467,8 +479,13 @@ impl<'a> GraphBuild<'a> {
                     .get(&used, &mut self.notes)
                     .map_err(|e| self.invalid(key, e))?
             };
-            let built = gltf_mesh::build(&primitive, self.file, m, &material)
-                .map_err(|e| self.invalid(pkey.clone(), e))?;
+            let built =
+                gltf_mesh::build(&primitive, self.file, m, &material).map_err(|e| match e {
+                    BuildError::Data(message) => self.invalid(pkey.clone(), message),
+                    BuildError::PlacedTooFar { reach } => {
+                        self.placed_too_far(key, "its contents", reach)
+                    }
+                })?;
             if let Some(why) = built.normal_map_skipped {
                 self.notes
                     .push(format!("{pkey}: normal map left off: {why}"));
