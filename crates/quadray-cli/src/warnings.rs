@@ -67,9 +67,6 @@ pub fn scene_warnings(
              add a [[light]]"
         ));
     }
-    if let Some(w) = meshes_past_f32_range(scene) {
-        warnings.push(format!("{name}: {w}"));
-    }
     if camera_sees_nothing(scene, width as f64 / height.max(1) as f64) {
         warnings.push(format!(
             "{name}: the camera sees none of the scene's surfaces (a grid of {}x{} camera rays \
@@ -78,63 +75,6 @@ pub fn scene_warnings(
         ));
     }
     warnings
-}
-
-/// The E²·D past which parts of a mesh may be missed, E the extent of its largest triangle and
-/// D the extent of what rays start from (the scene's shapes and camera). The triangle test works
-/// in f32: its edge functions grow as E² and t's numerator as their products with sheared
-/// depths up to D, times factors up to about 40 from the shear and the sums, and f32 overflows
-/// at 3.4e38. Measured: a triangle 10¹³ across seen from 1.2·10¹³ away (E²·D = 1.2e39) vanished,
-/// one 5·10¹² across from 6·10¹² (1.5e38) rendered whole.
-const F32_TRIANGLE_REACH: f64 = 1e38;
-
-/// A warning naming the scene's own meshes (not the prototypes') whose triangles are too large
-/// for the f32 triangle test at the scene's extent ([`F32_TRIANGLE_REACH`]).
-fn meshes_past_f32_range(scene: &Scene) -> Option<String> {
-    let level = scene.geometry().level(0);
-    if level.meshes.is_empty() {
-        return None;
-    }
-    // What rays start from: the camera and the scene's bounded shapes (planes, unbounded, are
-    // left out).
-    let from = scene.camera().from;
-    let shapes = (level.spheres.iter())
-        .map(|s| (s.center - s.radius, s.center + s.radius))
-        .chain(level.quadrics.iter().map(Quadric::bounds));
-    let mut largest = Vec::with_capacity(level.meshes.len());
-    let mut mesh_boxes = Vec::with_capacity(level.meshes.len());
-    for mesh in level.meshes {
-        let p = mesh.positions();
-        let Some(&first) = p.first() else {
-            largest.push(0.0);
-            continue;
-        };
-        let mut extent = 0.0f32;
-        for t in mesh.indices() {
-            let [a, b, c] = t.map(|i| p[i as usize]);
-            extent = extent.max((a.max(b).max(c) - a.min(b).min(c)).max_element());
-        }
-        let (a, b) = p
-            .iter()
-            .fold((first, first), |(a, b), &v| (a.min(v), b.max(v)));
-        mesh_boxes.push((a.as_dvec3(), b.as_dvec3()));
-        largest.push(extent as f64);
-    }
-    let (lo, hi) =
-        (shapes.chain(mesh_boxes)).fold((from, from), |(lo, hi), (a, b)| (lo.min(a), hi.max(b)));
-    let across = (hi - lo).max_element();
-    let past: Vec<(usize, f64)> = (largest.iter().copied().enumerate())
-        .filter(|&(_, e)| e * e * across > F32_TRIANGLE_REACH)
-        .collect();
-    let &(_, extent) = past.iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
-    let names: Vec<String> = past.iter().map(|(i, _)| format!("mesh[{i}]")).collect();
-    Some(format!(
-        "{} holds triangles up to {extent:.2e} across in a scene {across:.2e} across: the \
-         triangle test works in 32-bit floating point, which overflows past about (triangle \
-         size)² × (scene size) = {F32_TRIANGLE_REACH:.0e}, so parts of these triangles may be \
-         missed; scale the scene down (spheres, planes and quadrics have no such limit)",
-        names.join(", ")
-    ))
 }
 
 /// Whether a coarse grid of camera rays over the image misses every surface.
@@ -266,45 +206,5 @@ mod tests {
         assert_eq!(three_digits(1.0e6), "1.00e6");
         assert_eq!(three_digits(2.5e-7), "2.50e-7");
         assert_eq!(three_digits(0.0), "0");
-    }
-
-    /// A square `half` across at the origin, seen from `1.2 × half` above it.
-    fn square_scene(half: f32) -> Scene {
-        use glam::{DVec3, Vec3};
-        let p = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-            .map(|(x, y)| Vec3::new(x, y, 0.0) * half)
-            .to_vec();
-        let square = Mesh::new(p, vec![[0, 1, 2], [0, 2, 3]], None, 0).unwrap();
-        Scene::new(quadray::SceneDescription {
-            camera: quadray::Camera {
-                from: DVec3::new(0.0, 0.0, 1.2 * half as f64),
-                to: DVec3::ZERO,
-                up: DVec3::Y,
-                projection: quadray::Projection::Perspective { vfov_deg: 60.0 },
-            },
-            background: Vec3::ZERO,
-            environment: None,
-            materials: vec![quadray::Material::default()],
-            lights: vec![],
-            geometry: Geometry {
-                meshes: vec![square],
-                ..Geometry::default()
-            },
-        })
-        .unwrap()
-    }
-
-    /// Triangles too large for the f32 test at the scene's extent are named (2·10¹³ across in a
-    /// scene as wide: E²·D = 8e39), ordinary ones (2·10⁶) are not.
-    #[test]
-    fn meshes_past_the_f32_tests_range_are_named() {
-        assert_eq!(meshes_past_f32_range(&square_scene(1e6)), None);
-        let warning = meshes_past_f32_range(&square_scene(1e13)).unwrap();
-        assert!(
-            warning.starts_with(
-                "mesh[0] holds triangles up to 2.00e13 across in a scene 2.00e13 across"
-            ),
-            "{warning}"
-        );
     }
 }

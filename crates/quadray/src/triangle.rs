@@ -13,7 +13,8 @@
 //! function of a shared edge is computed with the same products in both triangles (with opposite
 //! sign), so a ray crossing an edge hits at least one of the two triangles: no cracks. An edge
 //! function that rounds to exactly zero is recomputed in f64, where the products of f32 values are
-//! exact, so its sign is exact too.
+//! exact, so its sign is exact too; so is a whole test whose products overflow f32 (a triangle
+//! about 10¹³ across seen from as far: `intersect_overflowed`).
 
 use glam::{DVec3, Vec3};
 
@@ -22,7 +23,7 @@ const F32_UNIT_ROUNDOFF: f32 = f32::EPSILON * 0.5;
 
 /// Higham's gamma(n) for f32: the relative error bound of n chained roundings.
 #[inline(always)]
-fn gamma32(n: u32) -> f32 {
+pub(crate) fn gamma32(n: u32) -> f32 {
     let nu = n as f32 * F32_UNIT_ROUNDOFF;
     nu / (1.0 - nu)
 }
@@ -115,6 +116,15 @@ impl ShearedRay {
         )
     }
 
+    /// The three vertices of a triangle sheared as [`ShearedRay::intersect`] shears them.
+    #[inline(always)]
+    pub(crate) fn sheared(&self, [p0, p1, p2]: [[f32; 3]; 3]) -> [[f32; 3]; 3] {
+        [p0, p1, p2].map(|p| {
+            let (x, y, z) = self.shear(&p);
+            [x, y, z]
+        })
+    }
+
     /// The hit of this ray with triangle (`p0`, `p1`, `p2`) in (δt, `t_max`), where δt bounds the
     /// rounding error of the computed t (hits that close to the origin are not trusted).
     #[inline(always)]
@@ -143,14 +153,24 @@ impl ShearedRay {
             return None;
         }
         let det = u + v + w;
-        if det == 0.0 {
-            return None;
-        }
+        let sheared = [[ax, ay, az], [bx, by, bz], [cx, cy, cz]];
         // The shear's error depends on the unscaled z (pbrt-v3 uses the scaled one, which is only
         // valid for directions of length about 1).
         let max_z_unscaled = az.abs().max(bz.abs()).max(cz.abs());
         let (az, bz, cz) = (self.sz * az, self.sz * bz, self.sz * cz);
         let t_scaled = u * az + v * bz + w * cz;
+        // Before the test of a zero determinant, which f64 makes again (as the block test does).
+        if overflowed(det, t_scaled) {
+            let (t, b) = intersect_overflowed(sheared, self.sz, t_max)?;
+            let inv = 1.0 / (b[0] + b[1] + b[2]);
+            return Some(TriangleHit {
+                t,
+                barycentrics: [b[0] * inv, b[1] * inv, b[2] * inv],
+            });
+        }
+        if det == 0.0 {
+            return None;
+        }
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
         // pbrt-v3's bound on the error of t (Pharr, Jakob and Humphreys, 3rd ed., §3.9.6).
@@ -179,6 +199,65 @@ impl ShearedRay {
             barycentrics: [u * inv_det, v * inv_det, w * inv_det],
         })
     }
+}
+
+/// Whether the f32 test's determinant or t's numerator left f32's range: the edge functions grow
+/// as the square of a triangle's sheared extent and the numerator as their products with the
+/// sheared depths, so a triangle about 10¹³ across seen from as far overflows. One sum and one
+/// comparison, NaN and infinity alike failing it (the sum overflows only where both terms are
+/// within a factor two of f32's largest value, and the lane is then taken in f64 too).
+#[inline(always)]
+pub(crate) fn overflowed(det: f32, t_scaled: f32) -> bool {
+    !(det.abs() + t_scaled.abs()).is_finite()
+}
+
+/// [`ShearedRay::intersect`] in f64 for a triangle whose f32 products overflowed
+/// ([`overflowed`]), from the same sheared vertices (x', y', z before sz; f32 and finite within
+/// the coordinate limit). Products of f32 values are exact in f64, so the edge functions' signs
+/// are exact, and they are the signs every non-zero f32 edge function has (rounding is
+/// monotonic, and an overflow to infinity keeps the sign): a shared edge decides the same in a
+/// neighbour tested in f32, and meshes stay watertight. The bound on t is the f32 test's
+/// (its inputs carry f32's rounding), evaluated in f64. Returns t and the barycentrics u/det,
+/// v/det and w/det, which both the block test and the one-triangle test normalise once more as
+/// the block test does.
+#[cold]
+pub(crate) fn intersect_overflowed(
+    sheared: [[f32; 3]; 3],
+    sz: f32,
+    t_max: f32,
+) -> Option<(f32, [f32; 3])> {
+    let [[ax, ay, az], [bx, by, bz], [cx, cy, cz]] = sheared.map(|p| p.map(f64::from));
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return None;
+    }
+    let max_z_unscaled = az.abs().max(bz.abs()).max(cz.abs());
+    let sz = f64::from(sz);
+    let (az, bz, cz) = (sz * az, sz * bz, sz * cz);
+    let t = (u * az + v * bz + w * cz) / det;
+    let gamma = |n| f64::from(gamma32(n));
+    let max_z = az.abs().max(bz.abs()).max(cz.abs());
+    let max_x = ax.abs().max(bx.abs()).max(cx.abs());
+    let max_y = ay.abs().max(by.abs()).max(cy.abs());
+    let delta_z = gamma(3) * max_z;
+    let delta_x = gamma(5) * (max_x + max_z_unscaled);
+    let delta_y = gamma(5) * (max_y + max_z_unscaled);
+    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let max_e = u.abs().max(v.abs()).max(w.abs());
+    let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / det.abs();
+    let min_z = az.min(bz).min(cz);
+    let in_front = t > delta_t || (min_z > 2.0 * delta_z && t > 0.0);
+    let t32 = t as f32;
+    if !(in_front && t32 > 0.0 && t32 < t_max) {
+        return None;
+    }
+    Some((t32, [(u / det) as f32, (v / det) as f32, (w / det) as f32]))
 }
 
 /// The parameter where the f64 ray meets the plane of triangle (`v0`, `v1`, `v2`), or `fallback`
@@ -215,6 +294,40 @@ mod tests {
                     .is_some()
             })
             .count()
+    }
+
+    /// Where the f32 products overflow (a triangle 10¹³ across seen from as far, and past), the
+    /// hit is the one the same ray finds at unit scale: t and barycentrics to f32's precision,
+    /// the same hits and misses. (Before the f64 fallback, every hit was lost from 10¹³ on.)
+    #[test]
+    fn overflowing_triangles_hit_as_at_unit_scale() {
+        let mut hits = 0;
+        for scale in [1e13f32, 1e20, 1e29] {
+            let quad = QUAD.map(|p| p.map(|x| x * scale));
+            for k in 0..400 {
+                let o = Vec3::new(
+                    (k as f32 * 0.37).sin() * 1.3,
+                    (k as f32 * 0.71).cos() * 1.3,
+                    2.0,
+                );
+                let d = Vec3::new(0.2 * (k as f32).sin(), 0.3 * (k as f32).cos(), -1.0);
+                let unit = ShearedRay::new(o, d);
+                let far = ShearedRay::new(o * scale, d);
+                for [a, b, c] in [[0, 1, 2], [0, 2, 3]] {
+                    let want = unit.intersect(&QUAD[a], &QUAD[b], &QUAD[c], f32::INFINITY);
+                    let got = far.intersect(&quad[a], &quad[b], &quad[c], f32::INFINITY);
+                    assert_eq!(want.is_some(), got.is_some(), "scale {scale}, ray {k}");
+                    if let (Some(w), Some(g)) = (want, got) {
+                        assert!((g.t / scale - w.t).abs() <= 1e-6 * w.t, "{g:?} {w:?}");
+                        for (x, y) in g.barycentrics.iter().zip(w.barycentrics) {
+                            assert!((x - y).abs() <= 1e-6, "{g:?} {w:?}");
+                        }
+                        hits += 1;
+                    }
+                }
+            }
+        }
+        assert!(hits > 400, "{hits}");
     }
 
     #[test]

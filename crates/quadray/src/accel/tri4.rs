@@ -6,7 +6,7 @@
 //! triangle gives the same answer in a block as alone, and shared edges stay watertight across
 //! blocks. Unused lanes hold NaN vertices, which no comparison accepts.
 
-use crate::triangle::ShearedRay;
+use crate::triangle::{self, ShearedRay, gamma32};
 use glam::{BVec4A, DVec3, Vec4};
 
 /// Marks an unused lane of a block.
@@ -162,7 +162,12 @@ impl Tri4 {
         let inv_det = Vec4::ONE / det;
         let t = t_scaled * inv_det;
         let candidate: BVec4A = inside & det.cmpne(zero) & t.cmplt(Vec4::splat(t_max));
-        if !candidate.any() {
+        // `triangle::overflowed`, lane by lane: those lanes are finished in f64 below. Unused
+        // lanes, whose NaN vertices make everything NaN, are not overflowed: a used lane's
+        // sheared coordinates are finite.
+        let in_range = (det.abs() + t_scaled.abs()).cmplt(Vec4::splat(f32::INFINITY));
+        let overflowed = ax.cmpeq(ax) & !in_range;
+        if !(candidate | overflowed).any() {
             return BlockHits::NONE;
         }
         // In front of the origin, as in the scalar test: where all three sheared depths clearly
@@ -189,6 +194,17 @@ impl Tri4 {
                 * inv_det.abs();
             valid |= candidate & t.cmpgt(delta_t);
         }
+        if overflowed.any() {
+            let [t, u, v, w] = [t, u, v, w].map(|x| x.to_array());
+            let hits = BlockHits {
+                valid: valid.bitmask(),
+                t,
+                u,
+                v,
+                w,
+            };
+            return self.finish_overflowed(hits, overflowed.bitmask(), ray, t_max);
+        }
         BlockHits {
             valid: valid.bitmask(),
             t: t.to_array(),
@@ -199,11 +215,35 @@ impl Tri4 {
     }
 }
 
-/// Higham's gamma(n) for f32, as in [`crate::triangle`].
-#[inline(always)]
-fn gamma32(n: u32) -> f32 {
-    let nu = n as f32 * (f32::EPSILON * 0.5);
-    nu / (1.0 - nu)
+impl Tri4 {
+    /// The lanes of `lanes` decided by [`triangle::intersect_overflowed`], as the one-triangle
+    /// test decides them (their vertices sheared again by its arithmetic, the lanes' own: kept
+    /// from the block test, they cost every block their registers), into `hits`: a hit keeps
+    /// its barycentrics in place of u, v, w.
+    #[cold]
+    #[inline(never)]
+    fn finish_overflowed(
+        &self,
+        mut hits: BlockHits,
+        lanes: u32,
+        ray: &ShearedRay,
+        t_max: f32,
+    ) -> BlockHits {
+        for lane in (0..4).filter(|lane| lanes & (1 << lane) != 0) {
+            let vertex = |k: usize| std::array::from_fn(|axis| self.v[3 * k + axis][lane]);
+            let sheared = ray.sheared([vertex(0), vertex(1), vertex(2)]);
+            let (_, _, sz) = ray.shear_constants();
+            let bit = 1 << lane;
+            match triangle::intersect_overflowed(sheared, sz, t_max) {
+                Some((t, [u, v, w])) => {
+                    hits.valid |= bit;
+                    (hits.t[lane], hits.u[lane], hits.v[lane], hits.w[lane]) = (t, u, v, w);
+                }
+                None => hits.valid &= !bit,
+            }
+        }
+        hits
+    }
 }
 
 #[cfg(test)]
@@ -271,6 +311,34 @@ mod tests {
                 (scalar.t, scalar.barycentrics),
                 "lane {lane}"
             );
+        }
+        // At scales whose f32 products overflow (10¹³: t's numerator; 10²⁰ and 10²⁹: the edge
+        // functions too), the lanes are finished in f64 and still agree bit for bit, beside a
+        // lane too small to overflow.
+        for scale in [1e13f32, 1e20, 1e29] {
+            let mut scaled: Vec<[[f32; 3]; 3]> = tris[..3]
+                .iter()
+                .map(|t| t.map(|p| p.map(|x| x * scale)))
+                .collect();
+            scaled.push(tris[3]);
+            let block = Tri4::new(&scaled.iter().copied().zip(0..4).collect::<Vec<_>>());
+            let mut hit = 0;
+            for k in 0..200 {
+                let o = Vec3::new((k as f32 * 0.37).sin(), (k as f32 * 0.71).cos(), 3.0) * scale;
+                let d = Vec3::new(0.1 * (k as f32).sin(), 0.2 * (k as f32).cos(), -1.0);
+                let ray = ShearedRay::new(o, d);
+                let hits = block.intersect(&ray, f32::INFINITY);
+                for (lane, t) in scaled.iter().enumerate() {
+                    let scalar = ray.intersect(&t[0], &t[1], &t[2], f32::INFINITY);
+                    assert_eq!(scalar.is_some(), hits.valid & (1 << lane) != 0);
+                    if let Some(s) = scalar {
+                        let h = hits.nearest(1 << lane).unwrap();
+                        assert_eq!((h.t, h.barycentrics), (s.t, s.barycentrics));
+                        hit += usize::from(lane < 3);
+                    }
+                }
+            }
+            assert!(hit > 100, "scale {scale}: {hit} hits");
         }
         // Unused lanes never hit.
         let single = Tri4::new(&[(tris[0], 7)]);

@@ -58,9 +58,17 @@ pub(super) struct Plan<'a, const N: usize> {
     bvh2: &'a Bvh2,
     leaf_weight: u32,
     costs: Weights,
+    /// What box areas are multiplied by in f64 when f32 cannot hold them ([`Plan::area`]).
+    area_scale: Option<f64>,
     /// Bit 0: a leaf. For budget i from 2 to `N`, bit i − 1: one subtree is cheapest; bits
     /// `N` + 3(i − 2) up: k − 1 of D(n, i).
     choices: Box<[AtomicU32]>,
+}
+
+/// Half the surface area of `node`'s box, in f64.
+fn half_area_f64(node: &obvhs::bvh2::node::Bvh2Node) -> f64 {
+    let d = (node.aabb().max - node.aabb().min).as_dvec3();
+    d.x * d.y + d.y * d.z + d.z * d.x
 }
 
 /// D(n, b + 1) for b ≥ 1 from the costs of n's children, and the k giving it: budget b + 1 as
@@ -112,9 +120,16 @@ impl<'a, const N: usize> Plan<'a, N> {
         const { assert!(N >= 2 && N <= 8) };
         // Memory costs are shares of the root's area, so they weigh alike in every scene.
         let root = bvh2.nodes[0].aabb().half_area();
+        // Areas past 1e30 (boxes past 10¹⁵ across) are taken relative to the root's: the costs,
+        // sums of areas over the tree, would overflow f32, and a plan whose every cost is
+        // infinite ties its leaves with its nodes. Below, the areas are f32's, as they were.
+        let area_scale =
+            (root >= 1e30 || root.is_nan()).then(|| 1.0 / half_area_f64(&bvh2.nodes[0]));
+        let root = if area_scale.is_some() { 1.0 } else { root };
         Plan {
             bvh2,
             leaf_weight,
+            area_scale,
             costs: Weights {
                 node: costs.node,
                 block: costs.block,
@@ -122,6 +137,15 @@ impl<'a, const N: usize> Plan<'a, N> {
                 block_memory: costs.per_byte * root * block_bytes as f32,
             },
             choices: (0..bvh2.nodes.len()).map(|_| AtomicU32::new(0)).collect(),
+        }
+    }
+
+    /// Half the surface area of `node`'s box: f32's, or relative to the root's where the scene
+    /// is too large for f32 to hold its areas.
+    fn area(&self, node: &obvhs::bvh2::node::Bvh2Node) -> f32 {
+        match self.area_scale {
+            None => node.aabb().half_area(),
+            Some(scale) => (half_area_f64(node) * scale) as f32,
         }
     }
 
@@ -134,7 +158,7 @@ impl<'a, const N: usize> Plan<'a, N> {
         children: Option<(&Costs<N>, &Costs<N>)>,
     ) -> Costs<N> {
         let node = &self.bvh2.nodes[i as usize];
-        let area = node.aabb().half_area();
+        let area = self.area(node);
         let leaf = if weight > self.leaf_weight && !node.is_leaf() {
             f32::INFINITY
         } else {
