@@ -291,13 +291,18 @@ impl<'a> GraphBuild<'a> {
         )
     }
 
+    /// The note that node `key`'s singular transform hides what it places.
+    fn note_hidden(&mut self, key: &str) {
+        self.notes.push(format!(
+            "{key}: a singular transform (a zero scale) hides what the node places"
+        ));
+    }
+
     /// An instance of `proto` placed by `m` (a singular map hides it, as it would a baked mesh).
     fn instance(&mut self, proto: u32, m: DAffine3, key: &str, out: &mut Prototype) {
         match Transform::new(m) {
             Some(t) => out.instances.push(Instance::new(proto, t)),
-            None => self.notes.push(format!(
-                "{key}: a singular transform (a zero scale) hides what the node places"
-            )),
+            None => self.note_hidden(key),
         }
     }
 
@@ -316,6 +321,13 @@ impl<'a> GraphBuild<'a> {
                 key,
                 format!("the node hierarchy is deeper than {MAX_DEPTH} levels"),
             ));
+        }
+        // A zero scale hides the node and everything below it (glTF's way to hide a node), as it
+        // hides an instance: one note for the node, none for its descendants, which it flattens
+        // too. A map that is not finite is left to the checks of how far things reach.
+        if m.is_finite() && Transform::new(m).is_none() {
+            self.note_hidden(&key);
+            return Ok(());
         }
         let in_world = walk.levels.len() - 1 == WORLD;
         let out = walk.levels.last_mut().expect("the world is open");
