@@ -162,15 +162,7 @@ impl Transform {
 
     /// Wraps an object-to-world affine map; `None` when it is singular or not finite.
     pub fn new(to_world: DAffine3) -> Option<Transform> {
-        let det = to_world.matrix3.determinant();
-        if !det.is_finite() || det == 0.0 || !to_world.translation.is_finite() {
-            return None;
-        }
-        // Relative singularity: the determinant against the product of column lengths.
-        let cols = to_world.matrix3.x_axis.length()
-            * to_world.matrix3.y_axis.length()
-            * to_world.matrix3.z_axis.length();
-        if det.abs() <= cols * 1e-12 {
+        if !Transform::is_invertible(&to_world) {
             return None;
         }
         let from_world = to_world.inverse();
@@ -179,6 +171,20 @@ impl Transform {
             from_world,
             normal_to_world: from_world.matrix3.transpose(),
         })
+    }
+
+    /// Whether [`Transform::new`] takes `to_world`: finite, and not singular relative to its
+    /// columns' lengths. Without building the inverse.
+    pub fn is_invertible(to_world: &DAffine3) -> bool {
+        let det = to_world.matrix3.determinant();
+        if !det.is_finite() || det == 0.0 || !to_world.translation.is_finite() {
+            return false;
+        }
+        // Relative singularity: the determinant against the product of column lengths.
+        let cols = to_world.matrix3.x_axis.length()
+            * to_world.matrix3.y_axis.length()
+            * to_world.matrix3.z_axis.length();
+        det.abs() > cols * 1e-12
     }
 
     /// Scale, then rotate (Euler angles in degrees about x, then y, then z), then translate.

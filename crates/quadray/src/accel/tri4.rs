@@ -229,10 +229,10 @@ impl Tri4 {
         ray: &ShearedRay,
         t_max: f32,
     ) -> BlockHits {
+        let (_, _, sz) = ray.shear_constants();
         for lane in (0..4).filter(|lane| lanes & (1 << lane) != 0) {
             let vertex = |k: usize| std::array::from_fn(|axis| self.v[3 * k + axis][lane]);
             let sheared = ray.sheared([vertex(0), vertex(1), vertex(2)]);
-            let (_, _, sz) = ray.shear_constants();
             let bit = 1 << lane;
             match triangle::intersect_overflowed(sheared, sz, t_max) {
                 Some((t, [u, v, w])) => {

@@ -325,7 +325,7 @@ impl<'a> GraphBuild<'a> {
         // A zero scale hides the node and everything below it (glTF's way to hide a node), as it
         // hides an instance: one note for the node, none for its descendants, which it flattens
         // too. A map that is not finite is left to the checks of how far things reach.
-        if m.is_finite() && Transform::new(m).is_none() {
+        if m.is_finite() && !Transform::is_invertible(&m) {
             self.note_hidden(&key);
             return Ok(());
         }
