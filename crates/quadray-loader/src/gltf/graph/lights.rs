@@ -98,9 +98,14 @@ impl GraphBuild<'_> {
             (None, Some(light)) if !matches!(light.kind(), Kind::Directional) => Some("the light"),
             _ => None,
         };
-        let reach = world.translation.abs().max_element();
+        // `max_element` passes over a NaN (an overflowed product times a zero), which is past
+        // every limit.
+        let reach = match world.translation.is_finite() {
+            true => world.translation.abs().max_element(),
+            false => f64::INFINITY,
+        };
         if let Some(what) = placed
-            && (reach > MAX_COORDINATE || reach.is_nan())
+            && reach > MAX_COORDINATE
         {
             let key = format!("nodes[{}]", node.index());
             return Err(self.placed_too_far(&key, what, reach));
