@@ -205,6 +205,7 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
     s.spp = args.spp.unwrap_or(s.spp);
     s.max_depth = args.max_depth.unwrap_or(s.max_depth);
     s.adaptive = args.sampling.resolve(args.spp, s.adaptive)?;
+    s.antialias = (args.sampling).resolve_antialias(s.spp, &mut s.adaptive, s.antialias)?;
     let mut settings = s.render_settings();
     settings.seed = args.seed;
     settings.texture_filter = args.texture_filter == crate::args::TextureFilterArg::Box;
@@ -406,9 +407,13 @@ fn scene_hash(args: &RenderArgs, inputs: &[PathBuf]) -> Result<String> {
 /// The settings every piece of one frame must share, as text: every setting that changes a
 /// pixel (quadray's version included: two versions may render a pixel differently).
 fn settings_text(settings: &RenderSettings, selection: AovSelection, half: bool) -> String {
-    let sampling = match &settings.adaptive {
-        None => format!("spp {}", settings.spp),
-        Some(a) => format!(
+    let sampling = match (&settings.adaptive, &settings.antialias) {
+        (None, None) => format!("spp {}", settings.spp),
+        (None, Some(aa)) => format!(
+            "spp {}, anti-aliased by contrast above {} with {} spp",
+            settings.spp, aa.threshold, aa.spp
+        ),
+        (Some(a), _) => format!(
             "adaptive: {:?} rule, target error {}, spp {}..{}, time limit {:?}, spp budget {:?}",
             a.rule, a.target_error, a.min_spp, a.max_spp, a.time_limit, a.spp_budget
         ),

@@ -1,12 +1,13 @@
 //! The command line's adaptive sampling options (`--target-error`, `--pixel-error`,
-//! `--time-limit`, `--spp-budget`, `--min-spp`, `--max-spp`) and how they combine with `--spp`
-//! and a scene's `[render]` table.
+//! `--time-limit`, `--spp-budget`, `--min-spp`, `--max-spp`), its anti-aliasing by contrast
+//! (`--aa-threshold`, `--aa-spp`), and how they combine with `--spp` and a scene's `[render]`
+//! table.
 
 use crate::StatusError;
 use clap::Args;
-use quadray::Adaptive;
 use quadray::adaptive::ErrorRule;
 use quadray::render::MAX_SPP;
+use quadray::{Adaptive, Antialias};
 
 /// Adaptive sampling on the command line; each option overrides the scene's value.
 #[derive(Args, Debug, Default)]
@@ -38,6 +39,31 @@ pub struct SamplingArgs {
     /// The most samples an adaptive render puts in a pixel (default 1024).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=MAX_SPP as i64), conflicts_with = "spp")]
     pub max_spp: Option<u32>,
+    /// Anti-alias by contrast, as POV-Ray's +A: after the render's spp in every pixel, render
+    /// again with --aa-spp samples each pixel whose 8-bit display value (over 255: 0 to 1)
+    /// differs from one of its eight neighbours' by more than T in some channel. Sets no error
+    /// and reports none; --spp 1 makes POV-Ray's first pass
+    #[arg(long, value_name = "T", value_parser = parse_threshold, conflicts_with_all = ["target_error", "pixel_error", "time_limit", "spp_budget", "min_spp", "max_spp"])]
+    pub aa_threshold: Option<f32>,
+    /// Samples of a pixel anti-aliased by contrast (default 16, or four times the render's spp
+    /// from 16 on)
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=MAX_SPP as i64))]
+    pub aa_spp: Option<u32>,
+}
+
+/// A number in [0, 1]: a difference of display values.
+fn parse_threshold(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a number, got \"{s}\""))?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "must be a number from 0 to 1 (a difference of display values), got {s}"
+        ))
+    }
 }
 
 /// A finite number above zero.
@@ -110,6 +136,44 @@ impl SamplingArgs {
         a.validate()
             .map_err(|e| StatusError::usage(format!("adaptive sampling: {e}")))?;
         Ok(Some(a))
+    }
+
+    /// The anti-aliasing by contrast to render `spp` samples a pixel with, given the scene's and
+    /// the adaptive sampling [`SamplingArgs::resolve`] chose: `--aa-threshold` turns it on (and
+    /// the scene's adaptive sampling off), the command line's adaptive sampling turns the scene's
+    /// off, and `--aa-spp` tunes whichever is on.
+    pub fn resolve_antialias(
+        &self,
+        spp: u32,
+        adaptive: &mut Option<Adaptive>,
+        scene: Option<Antialias>,
+    ) -> Result<Option<Antialias>, StatusError> {
+        let mut antialias = match (self.aa_threshold, scene) {
+            (Some(threshold), scene) => {
+                *adaptive = None;
+                Antialias {
+                    threshold,
+                    spp: scene.map_or(Antialias::default_spp(spp), |a| a.spp),
+                }
+            }
+            (None, Some(scene)) if adaptive.is_none() => scene,
+            _ => {
+                if self.aa_spp.is_some() {
+                    return Err(StatusError::usage(
+                        "--aa-spp tunes anti-aliasing by contrast: add --aa-threshold T (or give \
+                         the scene a render.antialias_threshold)",
+                    ));
+                }
+                return Ok(None);
+            }
+        };
+        if let Some(n) = self.aa_spp {
+            antialias.spp = n;
+        }
+        antialias
+            .validate(spp)
+            .map_err(|e| StatusError::usage(format!("anti-aliasing: {e}")))?;
+        Ok(Some(antialias))
     }
 }
 

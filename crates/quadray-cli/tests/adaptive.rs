@@ -137,7 +137,7 @@ fn impossible_targets_stop_at_the_maximum_and_bad_values_are_refused() {
     let line = stderr(&o);
     assert!(line.contains("stopped at max spp 32"), "{line}");
 
-    for (args, says) in [
+    let cases = [
         (vec!["--target-error=-0.1"], "above 0"),
         (vec!["--target-error", "nan"], "above 0"),
         (vec!["--target-error", "0"], "above 0"),
@@ -152,12 +152,6 @@ fn impossible_targets_stop_at_the_maximum_and_bad_values_are_refused() {
             "cannot be used with",
         ),
         (vec!["--time-limit", "0"], "above 0"),
-    ] {
-        let scene_path = scene("defense.toml");
-        let mut full = vec!["render", &scene_path, "-o", out.to_str().unwrap()];
-        full.extend(args.iter().copied());
-        let o = quadray(&full);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
-        assert!(stderr(&o).contains(says), "{args:?}: {}", stderr(&o));
-    }
+    ];
+    common::assert_usage_errors("defense.toml", &out, &cases);
 }

@@ -1,6 +1,7 @@
 //! The command line end to end: every module runs the real `quadray` binary (one test binary for the crate, as ripgrep has: each integration-test binary links the whole workspace).
 
 mod adaptive;
+mod antialias;
 mod cli;
 mod common;
 mod distributed;

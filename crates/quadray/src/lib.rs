@@ -104,8 +104,8 @@ pub use quadric::{
     ClipBox, Coefficients, Quadric, QuadricClass, QuadricError, QuadricKind, QuadricSurface,
 };
 pub use render::{
-    NoProgress, PixelMemory, PixelWindow, Progress, RenderError, RenderSettings, Rendered,
-    pixel_memory, render, render_with_aovs,
+    Antialias, AntialiasError, DEFAULT_ANTIALIAS_SPP, NoProgress, PixelMemory, PixelWindow,
+    Progress, RenderError, RenderSettings, Rendered, pixel_memory, render, render_with_aovs,
 };
 pub use scene::{MAX_COORDINATE, Scene, SceneDescription, SceneError};
 pub use shape::{LocalPrim, PrimRef, SurfaceGeometry, SurfaceHit};

@@ -1,7 +1,8 @@
 //! `quadray bench images`: render time against image error. A scene (by default
 //! `scenes/defense.toml`) is rendered at every power of two of uniform samples up to the largest
-//! asked, at image-error targets, per-pixel error targets, time limits and previews (the
-//! per-pixel rule from a first round of [`PREVIEW_MIN_SPP`] samples), and compared with a
+//! asked, at image-error targets, per-pixel error targets, time limits, previews (the
+//! per-pixel rule from a first round of [`PREVIEW_MIN_SPP`] samples) and anti-aliasing by
+//! contrast (from one sample a pixel, as POV-Ray's first pass), and compared with a
 //! high-sample reference by [`crate::compare`] (RMSE in linear space and of the 8-bit display
 //! image, FLIP on the display images); with `--povray`, the same scene's POV-Ray file is
 //! rendered at several anti-aliasing settings and compared with POV-Ray's own converged image,
@@ -23,7 +24,7 @@ use anyhow::{Context, Result, bail, ensure};
 use clap::Args;
 use quadray::adaptive::ErrorRule;
 use quadray::{
-    Adaptive, Film, NoProgress, RayCounts, RenderSettings, SamplingStats, Scene, render,
+    Adaptive, Antialias, Film, NoProgress, RayCounts, RenderSettings, SamplingStats, Scene, render,
 };
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -108,6 +109,16 @@ pub struct ImagesArgs {
         default_value = "0.08,0.04,0.02"
     )]
     pub preview: Vec<f64>,
+    /// Renders anti-aliased by contrast from one sample a pixel (`--spp 1 --aa-threshold T
+    /// --aa-spp N`), as THRESHOLD:SAMPLES pairs, comma-separated (none: `--antialias ""`).
+    #[arg(
+        long,
+        value_name = "T:N,T:N,...",
+        value_delimiter = ',',
+        value_parser = parse_antialias,
+        default_value = "0.2:8,0.1:16,0.1:32,0.05:64,0.02:128"
+    )]
+    pub antialias: Vec<Antialias>,
     /// Largest samples per pixel of the adaptive renders.
     #[arg(long, value_name = "N", default_value_t = quadray::adaptive::DEFAULT_MAX_SPP)]
     pub max_spp: u32,
@@ -164,6 +175,8 @@ pub enum Method {
     TimeLimit(f64),
     /// quadray, adaptive sampling to this per-pixel error from [`PREVIEW_MIN_SPP`] samples.
     Preview(f64),
+    /// quadray, anti-aliased by contrast from one sample a pixel.
+    Antialias(Antialias),
     /// POV-Ray with these anti-aliasing options.
     PovRay(String),
 }
@@ -185,6 +198,7 @@ impl Method {
             Method::Pixel(e) => format!("pixel {e}"),
             Method::TimeLimit(t) => format!("time {t} s"),
             Method::Preview(e) => format!("preview {e}"),
+            Method::Antialias(aa) => format!("aa {} ({} spp)", aa.threshold, aa.spp),
             Method::PovRay(o) => o.clone(),
         }
     }
@@ -291,6 +305,19 @@ fn timed_render(
         .and_then(|t| t.try_elapsed().ok())
         .map(|d| d.as_secs_f64());
     Ok((rendered.film, rendered.counts, rendered.sampling, wall, cpu))
+}
+
+/// A THRESHOLD:SAMPLES pair of `--antialias`.
+fn parse_antialias(s: &str) -> Result<Antialias, String> {
+    let (threshold, spp) =
+        (s.split_once(':')).ok_or_else(|| format!("expected THRESHOLD:SAMPLES, got \"{s}\""))?;
+    let antialias = Antialias {
+        threshold: (threshold.trim().parse())
+            .map_err(|_| format!("expected a threshold from 0 to 1, got \"{threshold}\""))?,
+        spp: (spp.trim().parse()).map_err(|_| format!("expected a sample count, got \"{spp}\""))?,
+    };
+    antialias.validate(1).map_err(|e| e.to_string())?;
+    Ok(antialias)
 }
 
 /// Checks the arguments before any work is done.
@@ -443,7 +470,7 @@ pub fn measure(a: &ImagesArgs, progress: &mut dyn FnMut(&str)) -> Result<ImageRe
             &Thresholds::default(),
         )?)
     };
-    // The test renders: uniform counts, then adaptive targets, then previews.
+    // The test renders: uniform counts, then adaptive targets, previews and anti-aliasing.
     let uniform = a
         .spp
         .iter()
@@ -468,8 +495,15 @@ pub fn measure(a: &ImagesArgs, progress: &mut dyn FnMut(&str)) -> Result<ImageRe
             };
             (method, s)
         });
+    let antialiased = a.antialias.iter().map(|&antialias| {
+        let s = RenderSettings {
+            antialias: Some(antialias),
+            ..settings(1, TEST_SEED)
+        };
+        (Method::Antialias(antialias), s)
+    });
     let mut rows = Vec::new();
-    for (method, s) in uniform.chain(adaptive_renders) {
+    for (method, s) in uniform.chain(adaptive_renders).chain(antialiased) {
         progress(&format!("{}, {} runs", method.label(), a.runs));
         rows.push(test_row(&scene, &s, method, a.runs, &reference)?);
     }

@@ -1,7 +1,7 @@
 //! The image-error report as markdown tables and a log–log SVG plot: CPU time against the
-//! display RMSE, for quadray's uniform and adaptive renders and POV-Ray's anti-aliasing settings,
-//! and the race between them (time to reach each POV-Ray setting's error; error within its time),
-//! from measured points only.
+//! display RMSE, for quadray's uniform, adaptive and anti-aliased renders and POV-Ray's
+//! anti-aliasing settings, and the race between them (time to reach each POV-Ray setting's
+//! error; error within its time), from measured points only.
 
 use super::{
     CHECK_SEED, ImageReport, Method, POV_CHECK_SCALE, POV_REFERENCE_SCALE, REFERENCE_SEED, Row,
@@ -72,13 +72,14 @@ pub fn error_at(points: &[(f64, f64)], time: f64) -> Option<f64> {
 type Racer = (&'static str, fn(&Method) -> bool);
 
 /// The kinds of quadray render the race compares with POV-Ray, each a curve of its own.
-const RACERS: [Racer; 4] = [
+const RACERS: [Racer; 5] = [
     ("uniform", |m| matches!(m, Method::Uniform(_))),
     ("image target", |m| matches!(m, Method::Adaptive(_))),
     ("per-pixel", |m| {
         matches!(m, Method::Pixel(_) | Method::Preview(_))
     }),
     ("time limit", |m| matches!(m, Method::TimeLimit(_))),
+    ("anti-aliased", |m| matches!(m, Method::Antialias(_))),
 ];
 
 impl ImageReport {
@@ -244,6 +245,11 @@ impl ImageReport {
                 "quadray, preview (from 2 spp)",
                 RGBColor(148, 103, 189).to_rgba(),
                 points(&self.rows, &|m| matches!(m, Method::Preview(_))),
+            ),
+            (
+                "quadray, anti-aliased by contrast",
+                RGBColor(140, 86, 75).to_rgba(),
+                points(&self.rows, &|m| matches!(m, Method::Antialias(_))),
             ),
         ];
         if let Some(pov) = &self.povray {

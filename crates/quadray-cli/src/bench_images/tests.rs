@@ -75,6 +75,21 @@ fn error_falls_with_samples_and_the_files_are_written() {
         ("pixel 0.04", "preview 0.04")
     );
     assert!(mean_spp(&preview[1]) < mean_spp(&pixel[2]), "{md}");
+    // The anti-aliased rows: from one sample a pixel, more error than the uniform render at
+    // their own top count (some pixels keep one sample) but less than at one sample, for less.
+    let aa = table("| aa ");
+    assert_eq!(aa.len(), 5, "{md}");
+    assert_eq!(aa[1][1], "aa 0.1 (16 spp)", "{md}");
+    let aa_16: f64 = aa[1][7].parse().unwrap();
+    assert!(
+        rmse[0] > aa_16 && aa_16 > rmse[2],
+        "{rmse:?} and {aa_16}\n{md}"
+    );
+    assert!(
+        mean_spp(&aa[1]) < 16.0 && aa[1][2].ends_with("(1..16)"),
+        "{md}"
+    );
+    assert!(md.contains("quadray anti-aliased: CPU s to reach it") || !md.contains("POV-Ray"));
     // The time-limited rows: a longer limit, more samples.
     let timed = table("| time ");
     assert_eq!(timed.len(), 2, "{md}");
@@ -82,7 +97,9 @@ fn error_falls_with_samples_and_the_files_are_written() {
     let svg = std::fs::read_to_string(dir.path().join("image-error.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("64 spp") && svg.contains("image target"));
     assert!(
-        svg.contains("preview 0.04") && svg.contains("time 0.1 s"),
+        svg.contains("preview 0.04")
+            && svg.contains("time 0.1 s")
+            && svg.contains("aa 0.1 (16 spp)"),
         "{svg}"
     );
     let png = image::open(dir.path().join("image-error-reference.png")).unwrap();
@@ -100,6 +117,9 @@ fn bad_arguments_are_refused_before_rendering() {
         vec!["--spp", "0,4"],
         vec!["--runs", "0"],
         vec!["--res", "0x10"],
+        vec!["--antialias", "0.1"],
+        vec!["--antialias", "1.5:16"],
+        vec!["--antialias", "0.1:1"],
     ] {
         let mut args = vec!["bench", "images", "--scene", &scene, "--quiet"];
         args.extend(bad.iter().copied());

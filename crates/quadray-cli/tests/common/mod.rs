@@ -25,6 +25,20 @@ pub fn render_to(name: &str, out: &Path, res: &str) -> Output {
     ])
 }
 
+/// Renders the bundled scene `name` to `out` with each of `cases`' extra arguments, and checks
+/// that each is refused as a usage error (exit status 2) whose message holds the case's text.
+pub fn assert_usage_errors(name: &str, out: &Path, cases: &[(Vec<&str>, &str)]) {
+    let scene_path = scene(name);
+    for (args, says) in cases {
+        let mut full = vec!["render", &scene_path, "-o", out.to_str().unwrap()];
+        full.extend(args.iter().copied());
+        let o = quadray(&full);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+    }
+}
+
 /// Path of a bundled scene in `scenes/`.
 pub fn scene(name: &str) -> String {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -57,6 +57,8 @@ pub struct SceneSettings {
     pub max_depth: u32,
     /// Adaptive sampling (`render.target_error` and its companions) instead of `spp`.
     pub adaptive: Option<quadray::Adaptive>,
+    /// Anti-aliasing by contrast (`render.antialias_threshold`, `render.antialias_spp`).
+    pub antialias: Option<quadray::Antialias>,
 }
 
 impl SceneSettings {
@@ -67,6 +69,7 @@ impl SceneSettings {
             height: self.height,
             spp: self.spp,
             adaptive: self.adaptive,
+            antialias: self.antialias,
             whitted: quadray::Whitted {
                 max_depth: self.max_depth,
                 ..quadray::Whitted::default()
@@ -89,6 +92,7 @@ impl Default for SceneSettings {
             spp: DEFAULT_SPP,
             max_depth: 8,
             adaptive: None,
+            antialias: None,
         }
     }
 }

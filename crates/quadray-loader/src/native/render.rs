@@ -1,9 +1,9 @@
-//! `[render]`: the image's size, how it is sampled (a fixed count, or adaptively to a target
-//! error) and how deep its rays go.
+//! `[render]`: the image's size, how it is sampled (a fixed count, anti-aliased by contrast, or
+//! adaptively to a target error) and how deep its rays go.
 
 use super::*;
-use quadray::Adaptive;
 use quadray::adaptive::{AdaptiveError, ErrorRule};
+use quadray::{Adaptive, Antialias, AntialiasError};
 
 impl Builder<'_> {
     /// The settings, the background and the environment (when set) of `[render]`.
@@ -30,6 +30,7 @@ impl Builder<'_> {
             s.spp = self.count(v, "render.spp", MAX_SPP)?;
         }
         s.adaptive = self.adaptive(r)?;
+        s.antialias = self.antialias(r, s.spp)?;
         if let Some(v) = &r.max_depth {
             s.max_depth = self.count(v, "render.max_depth", MAX_DEPTH)?;
         }
@@ -131,5 +132,50 @@ impl Builder<'_> {
                 _ => self.err(0..0, "render", e.to_string()),
             })?;
         Ok(Some(a))
+    }
+
+    /// Anti-aliasing by contrast, on when `antialias_threshold` is given; `antialias_spp` tunes it
+    /// and means nothing without it, and adaptive sampling excludes it.
+    fn antialias(&self, r: &RenderSpec, spp: u32) -> Result<Option<Antialias>, LoadError> {
+        let Some(threshold) = &r.antialias_threshold else {
+            if let Some(v) = &r.antialias_spp {
+                return Err(self.err(
+                    v.span(),
+                    "render.antialias_spp",
+                    "applies to anti-aliasing by contrast only: give render.antialias_threshold \
+                     as well",
+                ));
+            }
+            return Ok(None);
+        };
+        let key = "render.antialias_threshold";
+        if r.target_error.is_some()
+            || r.pixel_error.is_some()
+            || r.time_limit.is_some()
+            || r.spp_budget.is_some()
+        {
+            return Err(self.err(
+                threshold.span(),
+                key,
+                "anti-aliasing by contrast excludes adaptive sampling (render.target_error, \
+                 render.pixel_error, render.time_limit, render.spp_budget): give one of them",
+            ));
+        }
+        let antialias = Antialias {
+            threshold: self.number(threshold, key)? as f32,
+            spp: match &r.antialias_spp {
+                Some(v) => self.count(v, "render.antialias_spp", MAX_SPP)?,
+                None => Antialias::default_spp(spp),
+            },
+        };
+        antialias
+            .validate(spp)
+            .map_err(|e| match (&e, &r.antialias_spp) {
+                (AntialiasError::Spp { .. }, Some(v)) => {
+                    self.err(v.span(), "render.antialias_spp", e.to_string())
+                }
+                _ => self.err(threshold.span(), key, e.to_string()),
+            })?;
+        Ok(Some(antialias))
     }
 }

@@ -121,6 +121,8 @@ pub(super) struct RenderSpec {
     pub(super) min_spp: Option<Spanned<i64>>,
     pub(super) max_spp: Option<Spanned<i64>>,
     pub(super) time_limit: Option<Spanned<f64>>,
+    pub(super) antialias_threshold: Option<Spanned<f64>>,
+    pub(super) antialias_spp: Option<Spanned<i64>>,
     pub(super) max_depth: Option<Spanned<i64>>,
     pub(super) background: Option<Spanned<V3>>,
     pub(super) environment: Option<Spanned<V3>>,

@@ -82,6 +82,7 @@ direction = [0, 0, -1]
             spp: 4,
             max_depth: 8,
             adaptive: None,
+            antialias: None,
         }
     );
     assert_eq!(g.planes[0].normal, DVec3::Z);
@@ -461,6 +462,65 @@ fn render_tables_choose_adaptive_sampling() {
             "power of two",
         ),
         ("time_limit = 0", "render.time_limit", "positive"),
+    ] {
+        let e = error(&format!("[render]\n{extra}\n"));
+        assert!(e.contains(key) && e.contains(says), "{extra}: {e}");
+    }
+}
+
+#[test]
+fn render_tables_choose_antialiasing_by_contrast() {
+    let s = parse("[render]\nspp = 1\nantialias_threshold = 0.1\nantialias_spp = 32\n").unwrap();
+    let aa = s.settings.antialias.expect("anti-aliased");
+    assert_eq!((aa.threshold, aa.spp, s.settings.spp), (0.1, 32, 1));
+    assert_eq!(s.settings.render_settings().antialias, Some(aa));
+    // The count's default: 16, or four times spp from 16 on.
+    let default_of = |spp: u32| {
+        let s = parse(&format!("[render]\nspp = {spp}\nantialias_threshold = 0\n")).unwrap();
+        s.settings.antialias.unwrap().spp
+    };
+    assert_eq!((default_of(1), default_of(4), default_of(16)), (16, 16, 64));
+    assert_eq!(
+        parse("[render]\nspp = 4\n").unwrap().settings.antialias,
+        None
+    );
+
+    for (extra, key, says) in [
+        (
+            "antialias_spp = 16",
+            "render.antialias_spp",
+            "anti-aliasing by contrast only",
+        ),
+        (
+            "antialias_threshold = 0.1\ntarget_error = 0.01",
+            "render.antialias_threshold",
+            "excludes adaptive",
+        ),
+        (
+            "antialias_threshold = 1.5",
+            "render.antialias_threshold",
+            "in [0, 1]",
+        ),
+        (
+            "antialias_threshold = -0.1",
+            "render.antialias_threshold",
+            "in [0, 1]",
+        ),
+        (
+            "antialias_threshold = nan",
+            "render.antialias_threshold",
+            "finite",
+        ),
+        (
+            "spp = 8\nantialias_threshold = 0.1\nantialias_spp = 8",
+            "render.antialias_spp",
+            "more samples than the render's 8",
+        ),
+        (
+            "antialias_threshold = 0.1\nantialias_spp = -3",
+            "render.antialias_spp",
+            "between 1 and 65536, got -3",
+        ),
     ] {
         let e = error(&format!("[render]\n{extra}\n"));
         assert!(e.contains(key) && e.contains(says), "{extra}: {e}");

@@ -3,6 +3,7 @@
 use crate::limits::{MAX_ASPECT, MAX_DEPTH, MAX_PIXELS, MAX_SIDE, MAX_SPP};
 use crate::render::PixelWindow;
 use crate::render::adaptive::AdaptiveError;
+use crate::render::antialias::AntialiasError;
 
 /// Why settings cannot be rendered.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -37,6 +38,14 @@ pub enum RenderError {
     /// `#[from]`, which would also make it the source, and error chains would print it twice.)
     #[error("adaptive sampling: {0}")]
     Adaptive(AdaptiveError),
+    /// Anti-aliasing settings outside their limits.
+    #[error("anti-aliasing: {0}")]
+    Antialias(AntialiasError),
+    /// Both anti-aliasing by contrast and adaptive sampling asked for.
+    #[error(
+        "anti-aliasing by contrast and adaptive sampling are two ways to place samples: choose one"
+    )]
+    AntialiasAndAdaptive,
     /// The camera cannot produce rays at this aspect.
     #[error("camera: {0}")]
     Camera(crate::camera::CameraError),
@@ -48,6 +57,12 @@ pub enum RenderError {
 impl From<AdaptiveError> for RenderError {
     fn from(e: AdaptiveError) -> RenderError {
         RenderError::Adaptive(e)
+    }
+}
+
+impl From<AntialiasError> for RenderError {
+    fn from(e: AntialiasError) -> RenderError {
+        RenderError::Antialias(e)
     }
 }
 

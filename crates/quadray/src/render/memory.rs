@@ -35,6 +35,11 @@ const PILOT_PIXEL_BYTES: u64 = 224;
 /// Bytes a pilot pixel's boxed second moment takes on the heap, under the variance pass.
 const PILOT_MOMENT_BYTES: u64 = 32;
 
+/// Bytes a render anti-aliased by contrast holds for each pixel of its window and border while it
+/// renders: the first samples' f32 film (12) and their display values (12), which the window's
+/// own film is copied from; its passes, when selected, are copied as well ([`PASS_BYTES`]).
+const ANTIALIAS_BYTES: u64 = 24;
+
 /// The memory a render holds for its pixels ([`pixel_memory`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PixelMemory {
@@ -42,7 +47,7 @@ pub struct PixelMemory {
     /// windows one after another and writes them together holds each window's.
     pub kept: u64,
     /// Bytes held while the window renders and freed when it is done (an adaptive render's
-    /// estimates, state and pilot; 0 for a uniform one).
+    /// estimates, state and pilot; an anti-aliased one's first samples; 0 for a uniform one).
     pub working: u64,
 }
 
@@ -56,24 +61,32 @@ pub fn pixel_memory(
 ) -> PixelMemory {
     let pixels = |w: PixelWindow| u64::from(w.width()) * u64::from(w.height());
     let kept_per_pixel = FILM_BYTES + if selection.any() { PASS_BYTES } else { 0 };
-    let working = settings.adaptive.map_or(0, |adaptive| {
-        let (width, height) = (settings.width, settings.height);
-        let sampled = sampled_window(window, &adaptive, width, height);
-        // The variance pass keeps each pixel's second moment beside its estimate.
-        let moment = |bytes: u64| if selection.variance { bytes } else { 0 };
-        let crop = if sampled == window {
-            0
-        } else {
-            pixels(window) * (CROP_BYTES + moment(MOMENT_BYTES))
-        };
-        // The pilot covers the whole image, whatever the window.
-        let pilot = match adaptive.is_planned() {
-            true => pilot_pixels(width, height) * (PILOT_PIXEL_BYTES + moment(PILOT_MOMENT_BYTES)),
-            false => 0,
-        };
-        let per_pixel = ADAPTIVE_BYTES + moment(MOMENT_BYTES);
-        (pixels(sampled) * per_pixel).saturating_add(crop + pilot)
+    let first_samples = settings.antialias.map_or(0, |_| {
+        let passes = if selection.any() { PASS_BYTES } else { 0 };
+        let bordered = (u64::from(window.width()) + 2) * (u64::from(window.height()) + 2);
+        bordered * (ANTIALIAS_BYTES + passes)
     });
+    let working = first_samples
+        + settings.adaptive.map_or(0, |adaptive| {
+            let (width, height) = (settings.width, settings.height);
+            let sampled = sampled_window(window, &adaptive, width, height);
+            // The variance pass keeps each pixel's second moment beside its estimate.
+            let moment = |bytes: u64| if selection.variance { bytes } else { 0 };
+            let crop = if sampled == window {
+                0
+            } else {
+                pixels(window) * (CROP_BYTES + moment(MOMENT_BYTES))
+            };
+            // The pilot covers the whole image, whatever the window.
+            let pilot = match adaptive.is_planned() {
+                true => {
+                    pilot_pixels(width, height) * (PILOT_PIXEL_BYTES + moment(PILOT_MOMENT_BYTES))
+                }
+                false => 0,
+            };
+            let per_pixel = ADAPTIVE_BYTES + moment(MOMENT_BYTES);
+            (pixels(sampled) * per_pixel).saturating_add(crop + pilot)
+        });
     PixelMemory {
         kept: pixels(window).saturating_mul(kept_per_pixel),
         working,

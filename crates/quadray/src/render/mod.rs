@@ -3,6 +3,7 @@
 //! the errors and progress reports in their own modules.
 
 pub mod adaptive;
+mod antialias;
 mod context;
 mod empty_tiles;
 mod error;
@@ -12,6 +13,7 @@ pub mod progressive;
 mod row_order;
 mod uniform;
 
+pub use antialias::{Antialias, AntialiasError, DEFAULT_ANTIALIAS_SPP};
 pub(crate) use context::SampleContext;
 pub use error::{RenderError, check_resolution};
 pub use memory::{PixelMemory, pixel_memory};
@@ -45,6 +47,9 @@ pub struct RenderSettings {
     pub crop: Option<PixelWindow>,
     /// Error-targeted adaptive sampling instead of `spp` samples in every pixel.
     pub adaptive: Option<Adaptive>,
+    /// Anti-aliasing by contrast: `spp` samples in every pixel, more where a pixel differs from
+    /// a neighbour ([`Antialias`]); not with [`RenderSettings::adaptive`].
+    pub antialias: Option<Antialias>,
     /// A camera to render through instead of the scene's (an interactive view that moved away
     /// from it), so the scene and its acceleration structure need not be rebuilt.
     pub camera: Option<crate::camera::Camera>,
@@ -135,6 +140,7 @@ impl Default for RenderSettings {
             whitted: Whitted::default(),
             crop: None,
             adaptive: None,
+            antialias: None,
             camera: None,
             texture_filter: true,
         }
@@ -150,6 +156,12 @@ impl RenderSettings {
         }
         if let Some(adaptive) = &self.adaptive {
             adaptive.validate()?;
+        }
+        if let Some(antialias) = &self.antialias {
+            if self.adaptive.is_some() {
+                return Err(RenderError::AntialiasAndAdaptive);
+            }
+            antialias.validate(self.spp)?;
         }
         if !(1..=MAX_DEPTH).contains(&self.whitted.max_depth) {
             return Err(RenderError::Depth(self.whitted.max_depth));
@@ -206,9 +218,10 @@ pub fn render_with_aovs(
 ) -> Result<(Rendered, Option<Aovs>), RenderError> {
     settings.validate()?;
     let context = SampleContext::new(scene, settings, selection)?;
-    match settings.adaptive {
-        Some(adaptive) => adaptive::render_adaptive(&context, &adaptive, progress),
-        None => uniform::render_uniform(&context, progress),
+    match (settings.adaptive, settings.antialias) {
+        (Some(adaptive), _) => adaptive::render_adaptive(&context, &adaptive, progress),
+        (None, Some(antialias)) => antialias::render_antialiased(&context, &antialias, progress),
+        (None, None) => uniform::render_uniform(&context, progress),
     }
 }
 

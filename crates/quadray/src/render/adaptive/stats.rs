@@ -176,7 +176,15 @@ impl SamplingStats {
     /// range of the counts and the error reached.
     pub fn summary(&self) -> String {
         let Some(e) = self.error else {
-            return format!("{} spp", self.min_spp);
+            // Uniform, or anti-aliased by contrast (some pixels with more samples).
+            return if self.min_spp == self.max_spp {
+                format!("{} spp", self.min_spp)
+            } else {
+                format!(
+                    "{:.2} spp mean ({}..{})",
+                    self.mean_spp, self.min_spp, self.max_spp
+                )
+            };
         };
         let rounds = match e.rounds {
             1 => "1 round".to_string(),

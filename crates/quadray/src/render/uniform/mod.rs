@@ -25,7 +25,7 @@ const BATCH_SAMPLES: usize = 32;
 
 /// A thread's sampler and the buffers of its batches of camera rays, made once a thread and
 /// reused across its tiles.
-struct Batches {
+pub(super) struct Batches {
     /// The pixels' sample points.
     sampler: PixelSampler,
     /// The batch's pixels' offsets in the unit pixel, pixel after pixel.
@@ -43,7 +43,7 @@ struct Batches {
 
 impl Batches {
     /// The buffers of batches of `spp` samples a pixel.
-    fn new(spp: u32) -> Batches {
+    pub(super) fn new(spp: u32) -> Batches {
         let samples = BATCH_SAMPLES.max(spp as usize);
         Batches {
             sampler: PixelSampler::new(spp),
@@ -61,6 +61,23 @@ pub(super) fn render_uniform(
     context: &SampleContext<'_>,
     progress: &dyn Progress,
 ) -> Result<(Rendered, Option<Aovs>), RenderError> {
+    let (film, aov_samples, counts) = render_uniform_parts(context, progress)?;
+    Ok((
+        Rendered {
+            film,
+            window: context.window,
+            counts,
+            sampling: SamplingStats::uniform(context.settings.spp),
+        },
+        context.finish_aovs(aov_samples),
+    ))
+}
+
+/// [`render_uniform`]'s image, its pass samples (empty when no pass is selected) and its rays.
+pub(super) fn render_uniform_parts(
+    context: &SampleContext<'_>,
+    progress: &dyn Progress,
+) -> Result<(Film, Vec<AovSample>, RayCounts), RenderError> {
     let (settings, window) = (context.settings, context.window);
     let mut film = Film::new(window.width(), window.height());
     // Pass samples are allocated and computed only when a pass is selected.
@@ -104,21 +121,13 @@ pub(super) fn render_uniform(
         return Err(RenderError::Cancelled);
     }
     let counts = totals.into_inner().unwrap_or_else(|e| e.into_inner());
-    Ok((
-        Rendered {
-            film,
-            window,
-            counts,
-            sampling: SamplingStats::uniform(settings.spp),
-        },
-        context.finish_aovs(aov_samples),
-    ))
+    Ok((film, aov_samples, counts))
 }
 
 /// Samples the pixels of image row `y` from window column `first_column` on (`pixels`, and
 /// their passes `aovs` when selected), counting the rays into `counts`. Pixels are sampled by
 /// their position in the full image, so a window's pixels equal the whole render's.
-fn render_segment(
+pub(super) fn render_segment(
     context: &SampleContext<'_>,
     y: u32,
     (first_column, pixels, mut aovs): (usize, &mut [Vec3], Option<&mut [AovSample]>),
