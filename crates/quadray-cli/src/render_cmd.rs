@@ -411,7 +411,9 @@ fn settings_text(settings: &RenderSettings, selection: AovSelection, half: bool)
         (None, None) => format!("spp {}", settings.spp),
         (None, Some(aa)) => format!(
             "spp {}, anti-aliased by contrast above {} with {} spp",
-            settings.spp, aa.threshold, aa.spp
+            settings.spp,
+            aa.threshold,
+            aa.samples(settings.spp)
         ),
         (Some(a), _) => format!(
             "adaptive: {:?} rule, target error {}, spp {}..{}, time limit {:?}, spp budget {:?}",

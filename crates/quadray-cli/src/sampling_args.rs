@@ -153,22 +153,28 @@ impl SamplingArgs {
                 *adaptive = None;
                 Antialias {
                     threshold,
-                    spp: scene.map_or(Antialias::default_spp(spp), |a| a.spp),
+                    spp: scene.and_then(|a| a.spp),
                 }
             }
             (None, Some(scene)) if adaptive.is_none() => scene,
-            _ => {
+            (None, scene) => {
                 if self.aa_spp.is_some() {
-                    return Err(StatusError::usage(
-                        "--aa-spp tunes anti-aliasing by contrast: add --aa-threshold T (or give \
-                         the scene a render.antialias_threshold)",
-                    ));
+                    return Err(StatusError::usage(match scene {
+                        Some(_) => {
+                            "--aa-spp tunes the scene's anti-aliasing by contrast, which adaptive \
+                             sampling replaces here: drop --aa-spp or the adaptive option"
+                        }
+                        None => {
+                            "--aa-spp tunes anti-aliasing by contrast: add --aa-threshold T (or \
+                             give the scene a render.antialias_threshold)"
+                        }
+                    }));
                 }
                 return Ok(None);
             }
         };
         if let Some(n) = self.aa_spp {
-            antialias.spp = n;
+            antialias.spp = Some(n);
         }
         antialias
             .validate(spp)

@@ -59,6 +59,22 @@ fn antialiased_renders_report_their_samples_and_are_deterministic() {
     );
     assert!(line.contains("spp mean (1..16)"), "{line}");
     assert_eq!(decode(&from_scene), aa);
+    // A scene's count left to its default follows --spp: four times 16 from 16 samples on.
+    let sixteen = tmp(&dir, "sixteen.png");
+    let o = quadray(&[
+        "render",
+        &scene("defense.toml"),
+        "--res",
+        "48x27",
+        "--set",
+        "render.antialias_threshold=0.1",
+        "--spp",
+        "16",
+        "-o",
+        sixteen.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("spp mean (16..64)"), "{}", stderr(&o));
     let (crop, _) = render(
         &["--aa-threshold", "0.1", "--crop", "0.25,0.75,0.5,1"],
         "crop.png",
@@ -87,6 +103,17 @@ fn bad_antialiasing_values_are_refused() {
             "more samples than the render's 16",
         ),
         (vec!["--aa-threshold", "0.1", "--aa-spp", "1"], "aa-spp"),
+        (
+            vec![
+                "--set",
+                "render.antialias_threshold=0.1",
+                "--target-error",
+                "0.01",
+                "--aa-spp",
+                "32",
+            ],
+            "adaptive sampling replaces here",
+        ),
     ];
     common::assert_usage_errors("defense.toml", &out, &cases);
     assert!(!out.exists());

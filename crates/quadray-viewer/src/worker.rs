@@ -257,6 +257,7 @@ impl Looper {
         );
         let settings = RenderSettings {
             adaptive: None,
+            antialias: None,
             crop: None,
             spp: 1,
             ..request.settings

@@ -74,47 +74,54 @@ pub struct ImagesArgs {
     )]
     pub spp: Vec<u32>,
     /// Image-error targets of the test renders (`--target-error`), comma-separated (none:
-    /// `--adaptive ""`).
+    /// `--adaptive` with no value).
     #[arg(
         long,
         value_name = "E,E,...",
         value_delimiter = ',',
+        num_args = 0..,
         default_value = "0.016,0.008,0.004,0.002,0.001,0.0005"
     )]
     pub adaptive: Vec<f64>,
     /// Per-pixel error targets of the test renders (`--pixel-error`), comma-separated (none:
-    /// `--pixel ""`).
+    /// `--pixel` with no value).
     #[arg(
         long,
         value_name = "E,E,...",
         value_delimiter = ',',
+        num_args = 0..,
         default_value = "0.16,0.08,0.04,0.02,0.01"
     )]
     pub pixel: Vec<f64>,
     /// Time limits of the test renders in seconds (`--time-limit`, no target), comma-separated
-    /// (none: `--time-limit ""`).
+    /// (none: `--time-limit` with no value).
     #[arg(
         long,
         value_name = "S,S,...",
         value_delimiter = ',',
+        num_args = 0..,
         default_value = "0.1,0.2,0.4,0.8,1.6"
     )]
     pub time_limit: Vec<f64>,
     /// Per-pixel error targets rendered as previews, from a first round of 2 samples
-    /// (`--pixel-error E --min-spp 2`), comma-separated (none: `--preview ""`).
+    /// (`--pixel-error E --min-spp 2`), comma-separated (none: `--preview` with no
+    /// value).
     #[arg(
         long,
         value_name = "E,E,...",
         value_delimiter = ',',
+        num_args = 0..,
         default_value = "0.08,0.04,0.02"
     )]
     pub preview: Vec<f64>,
     /// Renders anti-aliased by contrast from one sample a pixel (`--spp 1 --aa-threshold T
-    /// --aa-spp N`), as THRESHOLD:SAMPLES pairs, comma-separated (none: `--antialias ""`).
+    /// --aa-spp N`), as THRESHOLD:SAMPLES pairs, comma-separated (none: `--antialias` with
+    /// no value).
     #[arg(
         long,
         value_name = "T:N,T:N,...",
         value_delimiter = ',',
+        num_args = 0..,
         value_parser = parse_antialias,
         default_value = "0.2:8,0.1:16,0.1:32,0.05:64,0.02:128"
     )]
@@ -198,7 +205,7 @@ impl Method {
             Method::Pixel(e) => format!("pixel {e}"),
             Method::TimeLimit(t) => format!("time {t} s"),
             Method::Preview(e) => format!("preview {e}"),
-            Method::Antialias(aa) => format!("aa {} ({} spp)", aa.threshold, aa.spp),
+            Method::Antialias(aa) => format!("aa {} ({} spp)", aa.threshold, aa.samples(1)),
             Method::PovRay(o) => o.clone(),
         }
     }
@@ -314,7 +321,9 @@ fn parse_antialias(s: &str) -> Result<Antialias, String> {
     let antialias = Antialias {
         threshold: (threshold.trim().parse())
             .map_err(|_| format!("expected a threshold from 0 to 1, got \"{threshold}\""))?,
-        spp: (spp.trim().parse()).map_err(|_| format!("expected a sample count, got \"{spp}\""))?,
+        spp: Some(
+            (spp.trim().parse()).map_err(|_| format!("expected a sample count, got \"{spp}\""))?,
+        ),
     };
     antialias.validate(1).map_err(|e| e.to_string())?;
     Ok(antialias)

@@ -126,6 +126,19 @@ fn bad_arguments_are_refused_before_rendering() {
         let err = crate::run_args(args).unwrap_err();
         assert!(!format!("{err:#}").is_empty());
     }
+    // A list given with no value is empty: the arguments parse, and only --runs 0 is refused.
+    let mut args = vec![
+        "bench", "images", "--scene", &scene, "--quiet", "--runs", "0",
+    ];
+    args.extend([
+        "--adaptive",
+        "--pixel",
+        "--time-limit",
+        "--preview",
+        "--antialias",
+    ]);
+    let err = format!("{:#}", crate::run_args(args).unwrap_err());
+    assert!(err.contains("--runs must be at least 1"), "{err}");
     let err = crate::run_args(["bench", "images", "--scene", "/no/such/scene.toml"]).unwrap_err();
     assert!(
         format!("{err:#}").contains("/no/such/scene.toml"),

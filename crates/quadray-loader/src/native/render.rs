@@ -163,10 +163,9 @@ impl Builder<'_> {
         }
         let antialias = Antialias {
             threshold: self.number(threshold, key)? as f32,
-            spp: match &r.antialias_spp {
-                Some(v) => self.count(v, "render.antialias_spp", MAX_SPP)?,
-                None => Antialias::default_spp(spp),
-            },
+            spp: (r.antialias_spp.as_ref())
+                .map(|v| self.count(v, "render.antialias_spp", MAX_SPP))
+                .transpose()?,
         };
         antialias
             .validate(spp)

@@ -472,12 +472,14 @@ fn render_tables_choose_adaptive_sampling() {
 fn render_tables_choose_antialiasing_by_contrast() {
     let s = parse("[render]\nspp = 1\nantialias_threshold = 0.1\nantialias_spp = 32\n").unwrap();
     let aa = s.settings.antialias.expect("anti-aliased");
-    assert_eq!((aa.threshold, aa.spp, s.settings.spp), (0.1, 32, 1));
+    assert_eq!((aa.threshold, aa.spp, s.settings.spp), (0.1, Some(32), 1));
     assert_eq!(s.settings.render_settings().antialias, Some(aa));
-    // The count's default: 16, or four times spp from 16 on.
+    // The count's default: 16, or four times spp from 16 on (left to the render's final spp).
     let default_of = |spp: u32| {
         let s = parse(&format!("[render]\nspp = {spp}\nantialias_threshold = 0\n")).unwrap();
-        s.settings.antialias.unwrap().spp
+        let aa = s.settings.antialias.unwrap();
+        assert_eq!(aa.spp, None);
+        aa.samples(s.settings.spp)
     };
     assert_eq!((default_of(1), default_of(4), default_of(16)), (16, 16, 64));
     assert_eq!(

@@ -38,9 +38,9 @@ pub struct Antialias {
     /// by channel, a pixel may show against one of its eight neighbours and keep its first
     /// samples.
     pub threshold: f32,
-    /// The samples a pixel above the threshold is rendered with instead: more than the render's
-    /// `spp`.
-    pub spp: u32,
+    /// The samples a pixel above the threshold is rendered with instead, more than the render's
+    /// `spp`; `None`: [`Antialias::default_spp`] of the render's `spp`, whatever sets it.
+    pub spp: Option<u32>,
 }
 
 /// Why anti-aliasing settings cannot be rendered.
@@ -73,14 +73,20 @@ impl Antialias {
         }
     }
 
+    /// The samples of a pixel above the threshold in a render of `base_spp` samples a pixel.
+    pub fn samples(&self, base_spp: u32) -> u32 {
+        self.spp.unwrap_or_else(|| Antialias::default_spp(base_spp))
+    }
+
     /// Checks the settings against a render of `base_spp` samples per pixel.
     pub fn validate(&self, base_spp: u32) -> Result<(), AntialiasError> {
         if !(0.0..=1.0).contains(&self.threshold) {
             return Err(AntialiasError::Threshold(self.threshold));
         }
-        if self.spp <= base_spp || self.spp > MAX_SPP {
+        let spp = self.samples(base_spp);
+        if spp <= base_spp || spp > MAX_SPP {
             return Err(AntialiasError::Spp {
-                spp: self.spp,
+                spp,
                 base: base_spp,
             });
         }
@@ -172,7 +178,12 @@ pub(super) fn render_antialiased(
     progress: &dyn Progress,
 ) -> Result<(Rendered, Option<Aovs>), RenderError> {
     let first = first_samples(context, antialias.threshold, progress)?;
-    refine(context, antialias, first, progress)
+    refine(
+        context,
+        antialias.samples(context.settings.spp),
+        first,
+        progress,
+    )
 }
 
 /// The window's first samples, taken with a border of one pixel (clipped to the image) so that
@@ -215,11 +226,11 @@ fn first_samples(
     })
 }
 
-/// Renders again, with the anti-aliased count, each pixel of the window above the threshold, in
-/// place in its first samples' image and passes.
+/// Renders again, with `spp` samples, each pixel of the window above the threshold, in place in
+/// its first samples' image and passes.
 fn refine(
     context: &SampleContext<'_>,
-    antialias: &Antialias,
+    spp: u32,
     first: FirstSamples,
     progress: &dyn Progress,
 ) -> Result<(Rendered, Option<Aovs>), RenderError> {
@@ -230,13 +241,10 @@ fn refine(
         marks,
         counts,
     } = first;
-    let refined_settings = RenderSettings {
-        spp: antialias.spp,
-        ..*settings
-    };
+    let refined_settings = RenderSettings { spp, ..*settings };
     let refined = SampleContext::new(context.scene, &refined_settings, context.selection)?
         .with_window(window);
-    let cone = refined.sample_cone(antialias.spp);
+    let cone = refined.sample_cone(spp);
     let ww = window.width() as usize;
     let aov_rows = refined.optional_rows(&mut aov_samples);
     let rows: Vec<_> = (film.pixels_mut().chunks_mut(ww))
@@ -246,7 +254,7 @@ fn refine(
         .collect();
     let totals = Mutex::new((counts, 0u64));
     rows.into_par_iter().for_each_init(
-        || Batches::new(antialias.spp),
+        || Batches::new(spp),
         |batches, (row, ((pixels, mut aovs), marks))| {
             if progress.cancelled() {
                 return;
@@ -274,7 +282,7 @@ fn refine(
     }
     let (counts, refined_pixels) = totals.into_inner().unwrap_or_else(|e| e.into_inner());
     let total = ww as u64 * u64::from(window.height());
-    let (base, more) = (settings.spp, antialias.spp);
+    let (base, more) = (settings.spp, spp);
     let sampling = SamplingStats {
         min_spp: if refined_pixels == total { more } else { base },
         max_spp: if refined_pixels > 0 { more } else { base },
@@ -357,7 +365,7 @@ mod tests {
         let scene = discs();
         let antialias = Antialias {
             threshold: 0.1,
-            spp: 16,
+            spp: Some(16),
         };
         let (first, first_aovs) = run(2, &scene, &settings(1, None));
         let (many, many_aovs) = run(2, &scene, &settings(16, None));
@@ -420,7 +428,7 @@ mod tests {
             2,
             Some(Antialias {
                 threshold: 0.05,
-                spp: 32,
+                spp: Some(32),
             }),
         );
         let (one, one_aovs) = run(1, &scene, &s);
@@ -478,13 +486,26 @@ mod tests {
             .expect_err("refused")
         };
         for threshold in [f32::NAN, -0.01, 1.5, f32::INFINITY] {
-            let e = refused(1, Antialias { threshold, spp: 16 });
+            let e = refused(
+                1,
+                Antialias {
+                    threshold,
+                    spp: Some(16),
+                },
+            );
             assert!(
                 matches!(e, RenderError::Antialias(AntialiasError::Threshold(_))),
                 "{e}"
             );
         }
-        for (base, spp) in [(4, 4), (4, 2), (1, MAX_SPP + 1)] {
+        // Counts not above the render's, given or by default (a render of the most samples has
+        // no more to give), and past the limit.
+        for (base, spp) in [
+            (4, Some(4)),
+            (4, Some(2)),
+            (1, Some(MAX_SPP + 1)),
+            (MAX_SPP, None),
+        ] {
             let e = refused(
                 base,
                 Antialias {
@@ -503,13 +524,27 @@ mod tests {
                 1,
                 Some(Antialias {
                     threshold: 0.1,
-                    spp: 16,
+                    spp: Some(16),
                 }),
             )
         };
         assert_eq!(both.validate(), Err(RenderError::AntialiasAndAdaptive));
-        assert_eq!(Antialias::default_spp(1), 16);
-        assert_eq!(Antialias::default_spp(16), 64);
-        assert_eq!(Antialias::default_spp(MAX_SPP), MAX_SPP);
+        // The default follows the render's count, whatever set it.
+        let default = Antialias {
+            threshold: 0.1,
+            spp: None,
+        };
+        assert_eq!(
+            [1, 4, 16, 32, MAX_SPP].map(|base| default.samples(base)),
+            [16, 16, 64, 128, MAX_SPP]
+        );
+        assert_eq!(
+            Some(16).map(|n| Antialias {
+                spp: Some(n),
+                ..default
+            }
+            .samples(64)),
+            Some(16)
+        );
     }
 }

@@ -36,8 +36,9 @@ const PILOT_PIXEL_BYTES: u64 = 224;
 const PILOT_MOMENT_BYTES: u64 = 32;
 
 /// Bytes a render anti-aliased by contrast holds for each pixel of its window and border while it
-/// renders: the first samples' f32 film (12) and their display values (12), which the window's
-/// own film is copied from; its passes, when selected, are copied as well ([`PASS_BYTES`]).
+/// renders: the first samples' f32 film (12), which the window's own film is copied from, and for
+/// the marks their 8-bit codes, each row's least and greatest codes and the marks (10), rounded
+/// up; its passes, when selected, are copied as well ([`PASS_BYTES`]).
 const ANTIALIAS_BYTES: u64 = 24;
 
 /// The memory a render holds for its pixels ([`pixel_memory`]).
