@@ -6,6 +6,31 @@ use anyhow::{Context, Result};
 use quadray::Scene;
 use std::time::Instant;
 
+/// How a scene's `[render]` table samples its pixels, in a few words.
+fn sampling_text(settings: &quadray_loader::SceneSettings) -> String {
+    match (&settings.adaptive, &settings.antialias) {
+        (Some(a), _) => {
+            let goal = match (a.rule, a.target_error > 0.0) {
+                (_, false) => "adaptive".to_string(),
+                (quadray::adaptive::ErrorRule::Image, true) => {
+                    format!("adaptive to image error {}", a.target_error)
+                }
+                (quadray::adaptive::ErrorRule::Pixel, true) => {
+                    format!("adaptive to pixel error {}", a.target_error)
+                }
+            };
+            format!("{goal}, {}..{} spp", a.min_spp, a.max_spp)
+        }
+        (None, Some(aa)) => format!(
+            "{} spp, {} where a pixel differs from a neighbour by more than {}",
+            settings.spp,
+            aa.samples(settings.spp),
+            aa.threshold
+        ),
+        (None, None) => format!("{} spp", settings.spp),
+    }
+}
+
 /// Runs the check subcommand: exit status 0 when the scene is valid, with a summary on stdout.
 pub fn run(args: &CheckArgs) -> Result<()> {
     let start = Instant::now();
@@ -39,12 +64,12 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         settings.height,
     );
     outln!(
-        "{}: ok: {}; {}x{}, {} spp, max depth {}",
+        "{}: ok: {}; {}x{}, {}, max depth {}",
         args.scene.display(),
         contents_line(&scene),
         settings.width,
         settings.height,
-        settings.spp,
+        sampling_text(&settings),
         settings.max_depth
     )?;
     outln!("{}", structure_line(&scene))?;

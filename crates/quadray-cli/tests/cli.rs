@@ -395,8 +395,53 @@ fn check_validates_without_rendering() {
     assert!(o.status.success());
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(
-        text.contains("ok: 2 spheres, 1 plane, 4 quadrics, 1 mesh (20 triangles), 2 lights"),
+        text.contains("ok: 2 spheres, 1 plane, 4 quadrics, 1 mesh (20 triangles), 2 lights")
+            && text.contains("640x360, 4 spp, max depth 8"),
         "{text}"
+    );
+    // How the scene samples, as its [render] table says.
+    for (set, says) in [
+        (
+            vec!["--set", "render.antialias_threshold=0.1"],
+            "4 spp, 16 where a pixel differs from a neighbour by more than 0.1, max depth 8",
+        ),
+        (
+            vec![
+                "--set",
+                "render.spp=2",
+                "--set",
+                "render.antialias_threshold=0.05",
+                "--set",
+                "render.antialias_spp=32",
+            ],
+            "2 spp, 32 where a pixel differs from a neighbour by more than 0.05",
+        ),
+    ] {
+        let scene_path = scene("defense.toml");
+        let mut args = vec!["check", &scene_path];
+        args.extend(set);
+        let o = quadray(&args);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success() && text.contains(says), "{text}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let adaptive = dir.path().join("adaptive.toml");
+    let defense = std::fs::read_to_string(scene("defense.toml")).unwrap();
+    let without_spp: String = (defense.lines())
+        .filter(|l| !l.trim_start().starts_with("spp"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(
+        &adaptive,
+        without_spp.replace("[render]\n", "[render]\ntarget_error = 0.01\n"),
+    )
+    .unwrap();
+    let o = quadray(&["check", adaptive.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("adaptive to image error 0.01, 8..1024 spp, max depth 8"),
+        "{text}{}",
+        String::from_utf8_lossy(&o.stderr)
     );
     assert!(
         text.contains("structure: 0 prototypes, 0 instances (0 placements); 26 shapes stored (20 triangles), 20 triangles instanced"),
