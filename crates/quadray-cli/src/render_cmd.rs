@@ -262,7 +262,10 @@ fn render_windows(
     windows: &[PixelWindow],
     selection: AovSelection,
 ) -> Result<Vec<(Rendered, Option<Aovs>)>> {
-    let bar = RowBar::new(windows.iter().map(|w| w.height()).sum(), args.quiet);
+    // Anti-aliasing by contrast reports each row twice: its first samples, then its refinement.
+    let passes = if settings.antialias.is_some() { 2 } else { 1 };
+    let rows: u32 = windows.iter().map(|w| w.height()).sum();
+    let bar = RowBar::new(passes * rows, args.quiet);
     let mut parts = Vec::with_capacity(windows.len());
     for window in windows {
         let settings = RenderSettings {

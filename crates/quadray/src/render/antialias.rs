@@ -25,6 +25,7 @@ use crate::render::uniform::{Batches, render_segment, render_uniform_parts};
 use crate::render::{PixelWindow, Progress, RenderError, RenderSettings, Rendered};
 use rayon::prelude::*;
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// The samples an anti-aliased pixel takes when no count is given: on the quadric grid
 /// (480x270, from one sample a pixel at threshold 0.1) 16 brought the display RMSE from 1.06e-2
@@ -150,15 +151,26 @@ fn above_threshold(codes: &[u8], width: usize, threshold: f32) -> Vec<bool> {
     marks
 }
 
-/// A progress sink that passes on cancellation only: the first samples' rows are not the rows
-/// the caller counts.
-struct CancelOnly<'a>(&'a dyn Progress);
+/// The first samples' progress: their rows as the window's (each row of the window is reported
+/// done twice, by the first samples and by the refinement; the border's rows are not reported).
+struct FirstPass<'a> {
+    progress: &'a dyn Progress,
+    /// Rows of the window not yet reported.
+    rows_left: AtomicU32,
+}
 
-impl Progress for CancelOnly<'_> {
-    fn row_done(&self) {}
+impl Progress for FirstPass<'_> {
+    fn row_done(&self) {
+        let counted = (self.rows_left).fetch_update(Ordering::Relaxed, Ordering::Relaxed, |left| {
+            left.checked_sub(1)
+        });
+        if counted.is_ok() {
+            self.progress.row_done();
+        }
+    }
 
     fn cancelled(&self) -> bool {
-        self.0.cancelled()
+        self.progress.cancelled()
     }
 }
 
@@ -195,8 +207,11 @@ fn first_samples(
 ) -> Result<FirstSamples, RenderError> {
     let (settings, window) = (context.settings, context.window);
     let border = with_border(window, settings.width, settings.height);
-    let (film, aovs, counts) =
-        render_uniform_parts(&context.with_window(border), &CancelOnly(progress))?;
+    let first_pass = FirstPass {
+        progress,
+        rows_left: AtomicU32::new(window.height()),
+    };
+    let (film, aovs, counts) = render_uniform_parts(&context.with_window(border), &first_pass)?;
     let (bw, ww) = (border.width() as usize, window.width() as usize);
     let marked = above_threshold(&encode_srgb8_pixels(film.pixels()), bw, threshold);
     let (dx, dy) = (
@@ -468,6 +483,41 @@ mod tests {
                     assert_eq!(cropped_aovs.get(cx, cy), one_aovs.get(x, y), "({x}, {y})");
                 }
             }
+        }
+    }
+
+    /// A row counter.
+    struct Rows(std::sync::atomic::AtomicUsize);
+
+    impl Progress for Rows {
+        fn row_done(&self) {
+            self.0.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    /// Each row of the window is reported twice, once by its first samples and once by its
+    /// refinement, and the border's rows not at all: a progress bar of twice the rows ends full.
+    #[test]
+    fn each_row_of_the_window_is_reported_twice() {
+        let scene = discs();
+        let antialias = Some(Antialias {
+            threshold: 0.1,
+            spp: None,
+        });
+        let crop = PixelWindow {
+            x0: 5,
+            y0: 17,
+            x1: 30,
+            y1: 40,
+        };
+        for (window, rows) in [(None, 48), (Some(crop), 23)] {
+            let settings = RenderSettings {
+                crop: window,
+                ..settings(1, antialias)
+            };
+            let counter = Rows(std::sync::atomic::AtomicUsize::new(0));
+            render_with_aovs(&scene, &settings, AovSelection::NONE, &counter).unwrap();
+            assert_eq!(counter.0.into_inner(), 2 * rows, "{window:?}");
         }
     }
 

@@ -4,7 +4,8 @@ use crate::render::adaptive;
 
 /// Receives progress while rendering (implemented by front ends, e.g. a progress bar).
 pub trait Progress: Sync {
-    /// Called after each finished row (of each round, when sampling is adaptive).
+    /// Called after each finished row (of each round, when sampling is adaptive; of the first
+    /// samples and then of the refinement, each row twice, when anti-aliasing by contrast).
     fn row_done(&self);
 
     /// Called after each round of adaptive sampling, with where the image stands.
