@@ -30,7 +30,7 @@ impl Builder<'_> {
             s.spp = self.count(v, "render.spp", MAX_SPP)?;
         }
         s.adaptive = self.adaptive(r)?;
-        s.antialias = self.antialias(r, s.spp)?;
+        s.antialias = self.antialias(r, s.spp, s.adaptive.is_some())?;
         if let Some(v) = &r.max_depth {
             s.max_depth = self.count(v, "render.max_depth", MAX_DEPTH)?;
         }
@@ -135,8 +135,14 @@ impl Builder<'_> {
     }
 
     /// Anti-aliasing by contrast, on when `antialias_threshold` is given; `antialias_spp` tunes it
-    /// and means nothing without it, and adaptive sampling excludes it.
-    fn antialias(&self, r: &RenderSpec, spp: u32) -> Result<Option<Antialias>, LoadError> {
+    /// and means nothing without it, and adaptive sampling (`adaptive`, as [`Builder::adaptive`]
+    /// found it) excludes it.
+    fn antialias(
+        &self,
+        r: &RenderSpec,
+        spp: u32,
+        adaptive: bool,
+    ) -> Result<Option<Antialias>, LoadError> {
         let Some(threshold) = &r.antialias_threshold else {
             if let Some(v) = &r.antialias_spp {
                 return Err(self.err(
@@ -149,11 +155,7 @@ impl Builder<'_> {
             return Ok(None);
         };
         let key = "render.antialias_threshold";
-        if r.target_error.is_some()
-            || r.pixel_error.is_some()
-            || r.time_limit.is_some()
-            || r.spp_budget.is_some()
-        {
+        if adaptive {
             return Err(self.err(
                 threshold.span(),
                 key,

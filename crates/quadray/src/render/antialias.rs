@@ -267,7 +267,7 @@ fn refine(
         .zip(marks.chunks(ww))
         .enumerate()
         .collect();
-    let totals = Mutex::new((counts, 0u64));
+    let totals = Mutex::new(counts);
     rows.into_par_iter().for_each_init(
         || Batches::new(spp),
         |batches, (row, ((pixels, mut aovs), marks))| {
@@ -284,18 +284,15 @@ fn refine(
                 let segment = (start, &mut pixels[start..column], run_aovs);
                 render_segment(&refined, y, segment, batches, cone, &mut counts);
             }
-            let refined_pixels = marks.iter().filter(|&&m| m).count() as u64;
-            let mut totals = totals.lock().unwrap_or_else(|e| e.into_inner());
-            totals.0 += counts;
-            totals.1 += refined_pixels;
-            drop(totals);
+            *totals.lock().unwrap_or_else(|e| e.into_inner()) += counts;
             progress.row_done();
         },
     );
     if progress.cancelled() {
         return Err(RenderError::Cancelled);
     }
-    let (counts, refined_pixels) = totals.into_inner().unwrap_or_else(|e| e.into_inner());
+    let counts = totals.into_inner().unwrap_or_else(|e| e.into_inner());
+    let refined_pixels = marks.iter().filter(|&&m| m).count() as u64;
     let total = ww as u64 * u64::from(window.height());
     let (base, more) = (settings.spp, spp);
     let sampling = SamplingStats {

@@ -61,36 +61,34 @@ pub fn pixel_memory(
     window: PixelWindow,
 ) -> PixelMemory {
     let pixels = |w: PixelWindow| u64::from(w.width()) * u64::from(w.height());
-    let kept_per_pixel = FILM_BYTES + if selection.any() { PASS_BYTES } else { 0 };
+    let passes = if selection.any() { PASS_BYTES } else { 0 };
+    let kept_per_pixel = FILM_BYTES + passes;
+    let working = settings.adaptive.map_or(0, |adaptive| {
+        let (width, height) = (settings.width, settings.height);
+        let sampled = sampled_window(window, &adaptive, width, height);
+        // The variance pass keeps each pixel's second moment beside its estimate.
+        let moment = |bytes: u64| if selection.variance { bytes } else { 0 };
+        let crop = if sampled == window {
+            0
+        } else {
+            pixels(window) * (CROP_BYTES + moment(MOMENT_BYTES))
+        };
+        // The pilot covers the whole image, whatever the window.
+        let pilot = match adaptive.is_planned() {
+            true => pilot_pixels(width, height) * (PILOT_PIXEL_BYTES + moment(PILOT_MOMENT_BYTES)),
+            false => 0,
+        };
+        let per_pixel = ADAPTIVE_BYTES + moment(MOMENT_BYTES);
+        (pixels(sampled) * per_pixel).saturating_add(crop + pilot)
+    });
+    // Anti-aliasing's first samples, of the window and its border.
     let first_samples = settings.antialias.map_or(0, |_| {
-        let passes = if selection.any() { PASS_BYTES } else { 0 };
         let bordered = (u64::from(window.width()) + 2) * (u64::from(window.height()) + 2);
         bordered * (ANTIALIAS_BYTES + passes)
     });
-    let working = first_samples
-        + settings.adaptive.map_or(0, |adaptive| {
-            let (width, height) = (settings.width, settings.height);
-            let sampled = sampled_window(window, &adaptive, width, height);
-            // The variance pass keeps each pixel's second moment beside its estimate.
-            let moment = |bytes: u64| if selection.variance { bytes } else { 0 };
-            let crop = if sampled == window {
-                0
-            } else {
-                pixels(window) * (CROP_BYTES + moment(MOMENT_BYTES))
-            };
-            // The pilot covers the whole image, whatever the window.
-            let pilot = match adaptive.is_planned() {
-                true => {
-                    pilot_pixels(width, height) * (PILOT_PIXEL_BYTES + moment(PILOT_MOMENT_BYTES))
-                }
-                false => 0,
-            };
-            let per_pixel = ADAPTIVE_BYTES + moment(MOMENT_BYTES);
-            (pixels(sampled) * per_pixel).saturating_add(crop + pilot)
-        });
     PixelMemory {
         kept: pixels(window).saturating_mul(kept_per_pixel),
-        working,
+        working: working + first_samples,
     }
 }
 
