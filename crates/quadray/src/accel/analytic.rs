@@ -23,7 +23,9 @@ use super::round_up;
 use super::sphere_clusters::{CLUSTER, CLUSTER_FROM, morton_order};
 use super::sphere4::{FilterRay, Sphere4};
 use super::stack::local_cell;
-use super::wide::{BoxRay, LEAF, LEAF_WEIGHT, Node4, collapse, leaf_blocks, pop_nearer};
+use super::wide::{
+    BoxRay, LEAF, LEAF_WEIGHT, Node4, collapse, leaf_blocks, pop_nearer, whole_blocks,
+};
 use crate::geometry::Level;
 use crate::math::Ray;
 use crate::shape::LocalPrim;
@@ -160,7 +162,9 @@ impl AnalyticBvh {
             None,
             weight,
             |prims, blocks: &mut Vec<Block>| {
-                pack_leaf(blocks, level, prims, sphere_items, &spheres_of)
+                let first = blocks.len();
+                pack_leaf(blocks, level, prims, sphere_items, &spheres_of);
+                (first, whole_blocks(blocks.len() - first))
             },
         );
         Some(AnalyticBvh {

@@ -72,22 +72,36 @@ impl BlockHits {
 }
 
 impl Tri4 {
+    /// A block with every lane unused.
+    pub(crate) const EMPTY: Tri4 = Tri4 {
+        v: [[f32::NAN; 4]; 9],
+        tri: [NO_TRIANGLE; 4],
+    };
+
     /// A block of up to four triangles (`tri` numbers them); missing lanes stay unused.
+    #[cfg(test)]
     pub(crate) fn new(triangles: &[([[f32; 3]; 3], u32)]) -> Tri4 {
         debug_assert!(triangles.len() <= 4);
-        let mut block = Tri4 {
-            v: [[f32::NAN; 4]; 9],
-            tri: [NO_TRIANGLE; 4],
-        };
-        for (lane, (vertices, tri)) in triangles.iter().enumerate() {
-            for (vertex, p) in vertices.iter().enumerate() {
-                for (axis, &coordinate) in p.iter().enumerate() {
-                    block.v[3 * vertex + axis][lane] = coordinate;
-                }
-            }
-            block.tri[lane] = *tri;
+        let mut block = Tri4::EMPTY;
+        for (lane, &(vertices, tri)) in triangles.iter().enumerate() {
+            block.set(lane, vertices, tri);
         }
         block
+    }
+
+    /// Puts triangle number `tri` with `vertices` in lane `lane` (below 4).
+    pub(crate) fn set(&mut self, lane: usize, vertices: [[f32; 3]; 3], tri: u32) {
+        for (vertex, p) in vertices.iter().enumerate() {
+            for (axis, &coordinate) in p.iter().enumerate() {
+                self.v[3 * vertex + axis][lane] = coordinate;
+            }
+        }
+        self.tri[lane] = tri;
+    }
+
+    /// How many lanes are in use: lanes fill from the first.
+    pub(crate) fn lanes_used(&self) -> usize {
+        self.tri.iter().take_while(|&&t| t != NO_TRIANGLE).count()
     }
 
     /// The vertices of lane `lane` (below 4)'s triangle, in f64.
@@ -118,9 +132,11 @@ impl Tri4 {
         (x, y, z)
     }
 
-    /// The lanes whose triangle the ray meets in (δt, `t_max`), with what is needed to finish them.
+    /// The lanes among `lanes` (bit l for lane l) whose triangle the ray meets in (δt, `t_max`),
+    /// with what is needed to finish them. The other lanes are computed alike but decide nothing:
+    /// neither the early exits nor the fallbacks to f64 wait on them.
     #[inline(always)]
-    pub(crate) fn intersect(&self, ray: &ShearedRay, t_max: f32) -> BlockHits {
+    pub(crate) fn intersect(&self, ray: &ShearedRay, t_max: f32, lanes: u32) -> BlockHits {
         let (ax, ay, az) = self.shear(ray, 0);
         let (bx, by, bz) = self.shear(ray, 1);
         let (cx, cy, cz) = self.shear(ray, 2);
@@ -129,7 +145,7 @@ impl Tri4 {
         let mut w = bx * ay - by * ax;
         let zero = Vec4::ZERO;
         let degenerate = u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero);
-        if degenerate.any() {
+        if degenerate.bitmask() & lanes != 0 {
             // An edge function rounded to zero: recompute that lane in f64, where the products
             // are exact (only that lane, as the scalar test does).
             let f = |a: Vec4, b: Vec4, c: Vec4, d: Vec4| {
@@ -150,7 +166,7 @@ impl Tri4 {
         // A block none of whose triangles holds the ray stops here, and one whose crossings all
         // lie at or beyond `t_max` stops below, before the bound on t's error. The lanes that go
         // on compute everything as before, so their answers are unchanged.
-        if !inside.any() {
+        if inside.bitmask() & lanes == 0 {
             return BlockHits::NONE;
         }
         let det = u + v + w;
@@ -167,7 +183,7 @@ impl Tri4 {
         // sheared coordinates are finite.
         let in_range = (det.abs() + t_scaled.abs()).cmplt(Vec4::splat(f32::INFINITY));
         let overflowed = ax.cmpeq(ax) & !in_range;
-        if !(candidate | overflowed).any() {
+        if (candidate | overflowed).bitmask() & lanes == 0 {
             return BlockHits::NONE;
         }
         // In front of the origin, as in the scalar test: where all three sheared depths clearly
@@ -179,7 +195,7 @@ impl Tri4 {
         let delta_z = g3 * max_z;
         let min_z = az.min(bz).min(cz);
         let mut valid = candidate & min_z.cmpgt(Vec4::splat(2.0) * delta_z) & t.cmpgt(zero);
-        if (candidate & !valid).any() {
+        if (candidate & !valid).bitmask() & lanes != 0 {
             let max_x = ax.abs().max(bx.abs()).max(cx.abs());
             let max_y = ay.abs().max(by.abs()).max(cy.abs());
             let g2 = Vec4::splat(gamma32(2));
@@ -194,19 +210,19 @@ impl Tri4 {
                 * inv_det.abs();
             valid |= candidate & t.cmpgt(delta_t);
         }
-        if overflowed.any() {
+        if overflowed.bitmask() & lanes != 0 {
             let [t, u, v, w] = [t, u, v, w].map(|x| x.to_array());
             let hits = BlockHits {
-                valid: valid.bitmask(),
+                valid: valid.bitmask() & lanes,
                 t,
                 u,
                 v,
                 w,
             };
-            return self.finish_overflowed(hits, overflowed.bitmask(), ray, t_max);
+            return self.finish_overflowed(hits, overflowed.bitmask() & lanes, ray, t_max);
         }
         BlockHits {
-            valid: valid.bitmask(),
+            valid: valid.bitmask() & lanes,
             t: t.to_array(),
             u: u.to_array(),
             v: v.to_array(),
@@ -274,7 +290,7 @@ mod tests {
             );
             let d = Vec3::new(0.1 * (k as f32).sin(), 0.2 * (k as f32).cos(), -1.0);
             let ray = ShearedRay::new(o, d);
-            let hits = block.intersect(&ray, f32::INFINITY);
+            let hits = block.intersect(&ray, f32::INFINITY, 0xF);
             for (lane, t) in tris.iter().enumerate() {
                 let scalar = ray.intersect(&t[0], &t[1], &t[2], f32::INFINITY);
                 assert_eq!(
@@ -302,7 +318,7 @@ mod tests {
         ];
         let block = Tri4::new(&[(pair[0], 0), (pair[1], 1)]);
         let ray = ShearedRay::new(Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0));
-        let hits = block.intersect(&ray, f32::INFINITY);
+        let hits = block.intersect(&ray, f32::INFINITY, 0xF);
         for (lane, t) in pair.iter().enumerate() {
             let scalar = ray.intersect(&t[0], &t[1], &t[2], f32::INFINITY).unwrap();
             let h = hits.nearest(1 << lane).unwrap();
@@ -327,7 +343,7 @@ mod tests {
                 let o = Vec3::new((k as f32 * 0.37).sin(), (k as f32 * 0.71).cos(), 3.0) * scale;
                 let d = Vec3::new(0.1 * (k as f32).sin(), 0.2 * (k as f32).cos(), -1.0);
                 let ray = ShearedRay::new(o, d);
-                let hits = block.intersect(&ray, f32::INFINITY);
+                let hits = block.intersect(&ray, f32::INFINITY, 0xF);
                 for (lane, t) in scaled.iter().enumerate() {
                     let scalar = ray.intersect(&t[0], &t[1], &t[2], f32::INFINITY);
                     assert_eq!(scalar.is_some(), hits.valid & (1 << lane) != 0);
@@ -343,6 +359,6 @@ mod tests {
         // Unused lanes never hit.
         let single = Tri4::new(&[(tris[0], 7)]);
         let ray = ShearedRay::new(Vec3::new(0.0, -0.5, 3.0), Vec3::new(0.0, 0.0, -1.0));
-        assert_eq!(single.intersect(&ray, f32::INFINITY).valid, 1);
+        assert_eq!(single.intersect(&ray, f32::INFINITY, 0xF).valid, 1);
     }
 }

@@ -1,7 +1,7 @@
 //! The bottom level for triangle meshes: an 8-wide BVH of quadray's own layout ([`super::wide`]),
 //! collapsed from obvhs' BVH2 build (PLOC, reinsertion) by a plan of least cost ([`MESH_COSTS`]),
-//! with leaves of one or two blocks of four triangles ([`Tri4`]), each block tested at once; the
-//! children a ray enters are visited nearest first.
+//! with leaves of up to eight triangles in blocks of four ([`Tri4`]), each block tested at once
+//! and shared by small leaves ([`leaves`]); the children a ray enters are visited nearest first.
 //!
 //! Eight children a node rather than four (Embree's BVH8 on AVX2): the AVX2 path tests a node in
 //! one pass of 8-lane registers, and a ray passes about two thirds as many levels. Measured
@@ -15,6 +15,7 @@
 //! names its triangle by number: over a single mesh the mesh's triangle index, over several meshes
 //! an index into a table of (mesh, triangle).
 
+mod leaves;
 mod traverse;
 
 use super::tri4::Tri4;
@@ -169,15 +170,7 @@ impl MeshBvh {
             MESH_LEAF_TRIANGLES,
             Some(MESH_COSTS),
             |_| 1,
-            |prims, blocks: &mut Vec<Tri4>| {
-                for lanes in prims.chunks(4) {
-                    let mut block = [([[0.0; 3]; 3], 0); 4];
-                    for (slot, &p) in block.iter_mut().zip(lanes) {
-                        *slot = (triangle(p), p);
-                    }
-                    blocks.push(Tri4::new(&block[..lanes.len()]));
-                }
-            },
+            |prims, blocks: &mut Vec<Tri4>| leaves::pack_leaf(blocks, prims, triangle),
         );
         let nodes = nodes.into_boxed_slice().into_vec();
         let blocks = blocks.into_boxed_slice().into_vec();

@@ -2,10 +2,11 @@
 //! former, each compiled twice (the AVX2 path's copy inlined into its caller, the baseline's a
 //! function of its own: see [`MeshBvh::closest_on`]).
 
+use super::leaves::LeafLanes;
 use super::{MeshBvh, MeshHit, MeshRay, TriId};
 use crate::accel::stack::local_cell;
 use crate::accel::tri4::{BlockHits, Tri4};
-use crate::accel::wide::{LEAF, Node8, leaf_blocks, pop_nearer};
+use crate::accel::wide::{LEAF, Node8, pop_nearer};
 use crate::mesh::Mesh;
 use crate::triangle::TriangleHit;
 use std::cell::Cell;
@@ -30,7 +31,7 @@ impl MeshBvh {
                 let node = self.nodes.as_ptr().wrapping_add(reference as usize);
                 (node.cast(), size_of::<Node8>())
             } else {
-                let first = leaf_blocks(reference).start;
+                let first = LeafLanes::of(reference).first_block();
                 let block = self.blocks.as_ptr().wrapping_add(first);
                 (block.cast(), size_of::<Tri4>())
             };
@@ -42,18 +43,19 @@ impl MeshBvh {
         }
     }
 
-    /// The lanes of `block` the ray hits in (0, `t_max`) that count: not `skip`, and kept by the
-    /// meshes' alpha cut-outs.
+    /// The lanes of `block` among `lanes` (a leaf's, bit l for lane l) the ray hits in
+    /// (0, `t_max`) that count: not `skip`, and kept by the meshes' alpha cut-outs.
     #[inline(always)]
     fn block_hits(
         &self,
         meshes: &[Mesh],
         block: &Tri4,
+        lanes: u32,
         ray: &MeshRay,
         t_max: f32,
         skip: Option<TriId>,
     ) -> (BlockHits, u32) {
-        let hits = block.intersect(&ray.sheared, t_max);
+        let hits = block.intersect(&ray.sheared, t_max, lanes);
         let mut mask = hits.valid;
         if mask != 0 && (skip.is_some() || self.masked) {
             for lane in 0..4 {
@@ -176,10 +178,13 @@ impl MeshBvh {
                     continue;
                 }
             } else {
-                let blocks = leaf_blocks(current);
-                let first = blocks.start;
-                for (k, block) in self.blocks[blocks].iter().enumerate() {
-                    let (hits, mask) = self.block_hits(meshes, block, ray, limit, skip);
+                // The leaf's blocks in turn, four lane bits each.
+                let leaf = LeafLanes::of(current);
+                let (mut lanes, mut index) = (leaf.lane_bits(), leaf.first_block());
+                while lanes != 0 {
+                    let block = &self.blocks[index];
+                    let (hits, mask) =
+                        self.block_hits(meshes, block, lanes & 0xF, ray, limit, skip);
                     if let Some(h) = hits.nearest(mask) {
                         limit = h.t;
                         let hit = TriangleHit {
@@ -187,8 +192,9 @@ impl MeshBvh {
                             barycentrics: h.barycentrics,
                         };
                         best = Some((block.tri[h.lane], hit));
-                        best_lane = ((first + k) * 4 + h.lane) as u32;
+                        best_lane = (index * 4 + h.lane) as u32;
                     }
+                    (lanes, index) = (lanes >> 4, index + 1);
                 }
             }
             // Pop the next child that may still hold a nearer hit.
@@ -259,10 +265,18 @@ impl MeshBvh {
                     continue;
                 }
             } else {
-                for block in &self.blocks[leaf_blocks(current)] {
-                    if self.block_hits(meshes, block, ray, t_max, skip).1 != 0 {
+                let leaf = LeafLanes::of(current);
+                let (mut lanes, mut index) = (leaf.lane_bits(), leaf.first_block());
+                while lanes != 0 {
+                    let block = &self.blocks[index];
+                    if self
+                        .block_hits(meshes, block, lanes & 0xF, ray, t_max, skip)
+                        .1
+                        != 0
+                    {
                         break 'search true;
                     }
+                    (lanes, index) = (lanes >> 4, index + 1);
                 }
             }
             match stack.pop() {

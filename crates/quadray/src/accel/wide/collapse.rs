@@ -20,9 +20,10 @@ use std::ops::Range;
 /// The weight of one block: four lanes.
 pub(in crate::accel) const LEAF_WEIGHT: u32 = 4;
 
-/// A leaf reference's payload: its first block, shifted past the low bits that hold its count
-/// less one (a leaf has one block at least, so three bits count up to eight).
-const LEAF_COUNT_BITS: u32 = 3;
+/// The low bits of a leaf reference's payload, below its first block: a tag whose meaning the
+/// BVH that packs the leaf defines (the analytic leaves' count of whole blocks, [`whole_blocks`];
+/// the meshes' first lane and count of triangles).
+pub(in crate::accel) const LEAF_TAG_BITS: u32 = 5;
 
 /// Roughly how many subtrees the collapse is split into (enough for two cores to share evenly).
 const TASKS: u32 = 64;
@@ -31,22 +32,36 @@ const TASKS: u32 = 64;
 /// saves.
 const MIN_TASK_WEIGHT: u32 = 4096;
 
-/// The reference of a leaf of `count` blocks from block `first`.
-fn leaf_reference(first: usize, count: usize) -> u32 {
-    // At most 2²⁸ blocks: the payload's 31 bits are then never all ones, which [`EMPTY`] is.
+/// The reference of a leaf whose first block is `first`, with its packer's `tag`.
+fn leaf_reference(first: usize, tag: u32) -> u32 {
+    // Below 2²⁶ − 1 blocks: the payload's 31 bits are then never all ones, which [`EMPTY`] is.
     assert!(
-        (1..=1 << LEAF_COUNT_BITS).contains(&count) && first + count <= 1 << 28,
-        "a BVH leaf holds one to 8 blocks, and a BVH at most 2^28 blocks"
+        tag < 1 << LEAF_TAG_BITS && first + 1 < 1 << (31 - LEAF_TAG_BITS),
+        "a BVH holds at most 2^26 - 2 leaf blocks"
     );
-    LEAF | ((first as u32) << LEAF_COUNT_BITS) | (count - 1) as u32
+    LEAF | ((first as u32) << LEAF_TAG_BITS) | tag
 }
 
-/// The blocks of leaf reference `leaf` (made by the collapse).
+/// The first block and the packer's tag of leaf reference `leaf` (made by the collapse).
+#[inline(always)]
+pub(in crate::accel) fn leaf_parts(leaf: u32) -> (usize, u32) {
+    (
+        ((leaf & !LEAF) >> LEAF_TAG_BITS) as usize,
+        leaf & ((1 << LEAF_TAG_BITS) - 1),
+    )
+}
+
+/// The tag of a leaf of `count` whole blocks (one to 8), which [`leaf_blocks`] reads back.
+pub(in crate::accel) fn whole_blocks(count: usize) -> u32 {
+    assert!((1..=8).contains(&count), "a leaf holds one to 8 blocks");
+    (count - 1) as u32
+}
+
+/// The blocks of a leaf of whole blocks ([`whole_blocks`]).
 #[inline(always)]
 pub(in crate::accel) fn leaf_blocks(leaf: u32) -> Range<usize> {
-    let first = ((leaf & !LEAF) >> LEAF_COUNT_BITS) as usize;
-    let count = (leaf & ((1 << LEAF_COUNT_BITS) - 1)) as usize + 1;
-    first..first + count
+    let (first, tag) = leaf_parts(leaf);
+    first..first + (tag & 7) as usize + 1
 }
 
 /// A BVH2 node to collapse.
@@ -143,7 +158,7 @@ impl<const N: usize> Collapse<'_, N> {
         &self,
         (nodes, blocks): (&mut Vec<Node<N>>, &mut Vec<B>),
         mut work: Vec<Work>,
-        pack: &impl Fn(&[u32], &mut Vec<B>),
+        pack: &impl Fn(&[u32], &mut Vec<B>) -> (usize, u32),
         split: Option<(u32, &mut Vec<Work>)>,
     ) {
         let (split, mut tasks) = match split {
@@ -154,9 +169,8 @@ impl<const N: usize> Collapse<'_, N> {
             let reference = if self.is_leaf(w.index) {
                 let start = w.start as usize;
                 let count = self.subtrees.count(w.index) as usize;
-                let first = blocks.len();
-                pack(&self.subtrees.primitives[start..start + count], blocks);
-                leaf_reference(first, blocks.len() - first)
+                let (first, tag) = pack(&self.subtrees.primitives[start..start + count], blocks);
+                leaf_reference(first, tag)
             } else if let Some(tasks) = tasks
                 .as_mut()
                 .filter(|_| self.subtrees.weight(w.index) <= split)
@@ -219,8 +233,10 @@ fn concatenate<T: Sync, U: Send>(
 }
 
 /// Collapses a BVH2 (built down to single primitives) into `N`-wide nodes and leaf blocks, whose
-/// blocks `pack` appends from a leaf's primitives (one to 8 blocks; [`leaf_blocks`] gives them
-/// back from the reference). No leaf weighs more than `leaf_weight`, and a primitive that weighs
+/// blocks `pack` fills from a leaf's primitives, returning the leaf's first block and a tag for its
+/// reference ([`leaf_parts`] gives both back; a packer of whole blocks tags their count,
+/// [`whole_blocks`]). A packer may place a leaf in blocks it filled before, but only in those of
+/// its own call's vector. No leaf weighs more than `leaf_weight`, and a primitive that weighs
 /// that much is a leaf of its own. With `costs`, leaves and each wide node's children are those
 /// of least cost ([`SahCosts`]); without, every subtree light enough becomes a leaf, and each
 /// wide node takes the `N` largest subtrees below a BVH2 node (Embree's BVH4 and BVH8 collapse).
@@ -229,7 +245,7 @@ pub(in crate::accel) fn collapse<const N: usize, B: Clone + Send + Sync>(
     leaf_weight: u32,
     costs: Option<SahCosts>,
     weight: impl Fn(u32) -> u32 + Sync,
-    pack: impl Fn(&[u32], &mut Vec<B>) + Sync,
+    pack: impl Fn(&[u32], &mut Vec<B>) -> (usize, u32) + Sync,
 ) -> (Vec<Node<N>>, Vec<B>) {
     let sizes = (size_of::<Node<N>>(), size_of::<B>());
     let plan = costs.map(|costs| Plan::new(bvh2, leaf_weight, costs, sizes));
@@ -286,8 +302,8 @@ pub(in crate::accel) fn collapse<const N: usize, B: Clone + Send + Sync>(
                 *child = match *child {
                     EMPTY => EMPTY,
                     leaf if leaf & LEAF != 0 => {
-                        let range = leaf_blocks(leaf);
-                        leaf_reference(range.start + block_starts[part], range.len())
+                        let (first, tag) = leaf_parts(leaf);
+                        leaf_reference(first + block_starts[part], tag)
                     }
                     inner => inner + node_starts[part] as u32,
                 };
@@ -356,7 +372,9 @@ pub(super) mod tests {
                 costs,
                 |_| 1,
                 |prims, blocks: &mut Vec<Vec<u32>>| {
-                    blocks.extend(prims.chunks(4).map(<[u32]>::to_vec))
+                    let first = blocks.len();
+                    blocks.extend(prims.chunks(4).map(<[u32]>::to_vec));
+                    (first, whole_blocks(blocks.len() - first))
                 },
             )
         })
