@@ -24,7 +24,7 @@ use super::sphere_clusters::{CLUSTER, CLUSTER_FROM, morton_order};
 use super::sphere4::{FilterRay, Sphere4};
 use super::stack::local_cell;
 use super::wide::{
-    BoxRay, LEAF, LEAF_WEIGHT, Node4, collapse, leaf_blocks, pop_nearer, whole_blocks,
+    BoxRay, LEAF, LEAF_WEIGHT, LeafLayout, Node4, collapse, leaf_blocks, pop_nearer, whole_blocks,
 };
 use crate::geometry::Level;
 use crate::math::Ray;
@@ -158,6 +158,7 @@ impl AnalyticBvh {
         };
         let (nodes, blocks) = collapse(
             &bvh2,
+            LeafLayout::SHORT_TAG,
             leaf_weight,
             None,
             weight,

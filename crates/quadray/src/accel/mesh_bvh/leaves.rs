@@ -6,35 +6,43 @@
 //!
 //! Why: a leaf is a subtree of at most eight triangles, and one block a leaf left the blocks 3.2
 //! triangles full on the dragon (4.0 is full), 50 of its 75 bytes a triangle. Shared, they hold
-//! 3.7 (below). A leaf still tests no more blocks than its count needs (⌈n/4⌉): a leaf is placed
+//! 3.6 ([`WINDOW`]). A leaf still tests no more blocks than its count needs (⌈n/4⌉): a leaf is placed
 //! where that holds, else in fresh blocks.
+//!
+//! A leaf's tag is its first lane (two bits) and its count less one (three bits), so its first
+//! block has 26 bits of the reference ([`LeafLayout::LONG_TAG`]). A BVH over more triangles than
+//! that many blocks are sure to hold (each holds one at least) gives each leaf blocks of its own
+//! from lane 0, as every BVH did before, and tags only the count ([`LeafLayout::SHORT_TAG`],
+//! 2²⁸ blocks): the same reading of the tag serves both.
 
 use super::super::tri4::Tri4;
-use crate::accel::wide::leaf_parts;
+use crate::accel::wide::LeafLayout;
 
 /// How many of the latest blocks a leaf of one to three triangles may join: the fullest of them
 /// with room for it (the latest of equals), so shared blocks hold leaves built side by side, near
 /// each other in the tree and in space. Blocks the dragon's leaves take: 271 206 in leaves of
-/// their own, 242 381 with a window of 4, 235 373 with 16, 233 441 with 32, 217 854 if full.
-const WINDOW: usize = 16;
+/// their own, 242 381 with a window of 4, 235 373 with 16, 217 854 if full. A window of 16 made
+/// the kitchen's rays 3–4% slower in three alternating rounds of `bench rays` (its leaves' blocks
+/// farther apart), where 4 kept its speed.
+const WINDOW: usize = 4;
 
-/// A leaf's triangles: `count` lanes from lane `lane` of block `first` on.
+/// A leaf's triangles: the lanes set in `bits` of the blocks from `first` on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct LeafLanes {
     first: usize,
-    lane: u32,
-    count: u32,
+    bits: u32,
 }
 
 impl LeafLanes {
-    /// The leaf of reference `leaf` (made by the collapse from [`pack_leaf`]'s tag).
+    /// The leaf of reference `leaf` in a BVH of `layout` (made by the collapse from
+    /// [`pack_leaf`]'s or [`pack_own_blocks`]' tag).
     #[inline(always)]
-    pub(super) fn of(leaf: u32) -> LeafLanes {
-        let (first, tag) = leaf_parts(leaf);
+    pub(super) fn of(leaf: u32, layout: LeafLayout) -> LeafLanes {
+        // The tag: the first lane (none in a short tag), then the count less one.
+        let (first, tag) = layout.parts(leaf);
         LeafLanes {
             first,
-            lane: tag >> 3,
-            count: (tag & 7) + 1,
+            bits: ((2 << (tag & 7)) - 1) << (tag >> 3),
         }
     }
 
@@ -51,16 +59,45 @@ impl LeafLanes {
     }
 
     /// The leaf's lanes as bits of its blocks' lanes in turn (bit 4k + l: lane l of its k-th
-    /// block): at most eight bits, since a leaf never spans more than two blocks.
+    /// block).
     #[inline(always)]
     pub(super) fn lane_bits(self) -> u32 {
-        ((1 << self.count) - 1) << self.lane
+        self.bits
     }
 }
 
+/// The layout of a BVH over `triangles`: shared blocks where its blocks fit a long tag's
+/// references whatever the leaves, else blocks of their own.
+pub(super) fn layout_for(triangles: usize) -> LeafLayout {
+    if triangles <= LeafLayout::LONG_TAG.max_blocks() {
+        LeafLayout::LONG_TAG
+    } else {
+        LeafLayout::SHORT_TAG
+    }
+}
+
+/// Places a leaf's triangles `prims` (one to 8; `triangle` gives each one's vertices) in blocks
+/// of its own appended to `blocks`, from lane 0 ([`LeafLayout::SHORT_TAG`]), returning its first
+/// block and tag.
+pub(super) fn pack_own_blocks(
+    blocks: &mut Vec<Tri4>,
+    prims: &[u32],
+    triangle: impl Fn(u32) -> [[f32; 3]; 3],
+) -> (usize, u32) {
+    let first = blocks.len();
+    for lanes in prims.chunks(4) {
+        let mut block = Tri4::EMPTY;
+        for (lane, &p) in lanes.iter().enumerate() {
+            block.set(lane, triangle(p), p);
+        }
+        blocks.push(block);
+    }
+    (first, LeafLanes::tag(0, prims.len()))
+}
+
 /// Places a leaf's triangles `prims` (one to 8; `triangle` gives each one's vertices) in
-/// `blocks`, in blocks this call's vector already holds where they fit, and returns its first
-/// block and its tag for the collapse ([`LeafLanes::of`] reads them back).
+/// `blocks` ([`LeafLayout::LONG_TAG`]), in blocks the vector already holds where they fit, and
+/// returns its first block and its tag for the collapse ([`LeafLanes::of`] reads them back).
 pub(super) fn pack_leaf(
     blocks: &mut Vec<Tri4>,
     prims: &[u32],
@@ -94,7 +131,7 @@ pub(super) fn pack_leaf(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::wide::{LEAF, LEAF_TAG_BITS};
+    use crate::accel::wide::LEAF;
 
     /// Packs leaves of the given sizes in turn, numbering their triangles 0, 1, 2, … (each
     /// triangle's vertices its number), and returns the blocks and each leaf's lanes.
@@ -104,7 +141,10 @@ mod tests {
             let prims: Vec<u32> = (next..next + n as u32).collect();
             next += n as u32;
             let (first, tag) = pack_leaf(&mut blocks, &prims, |p| [[p as f32; 3]; 3]);
-            leaves.push(LeafLanes::of(LEAF | (first as u32) << LEAF_TAG_BITS | tag));
+            leaves.push(LeafLanes::of(
+                LEAF | (first as u32) << 5 | tag,
+                LeafLayout::LONG_TAG,
+            ));
         }
         (blocks, leaves)
     }
@@ -151,5 +191,19 @@ mod tests {
         let (blocks, leaves) = packed(&[3, 5]);
         assert_eq!(blocks.len(), 2);
         assert_eq!(leaves[1].lane_bits(), 0b1111_1000);
+    }
+
+    /// Leaves in blocks of their own read back their lanes from lane 0; the long tag is taken
+    /// while every block is sure to fit a reference.
+    #[test]
+    fn own_block_leaves_and_the_layout_choice() {
+        let mut blocks = Vec::new();
+        let (first, tag) = pack_own_blocks(&mut blocks, &[7, 8, 9, 10, 11], |p| [[p as f32; 3]; 3]);
+        let leaf = LeafLanes::of(LEAF | (first as u32) << 3 | tag, LeafLayout::SHORT_TAG);
+        assert_eq!((leaf.first_block(), leaf.lane_bits()), (0, 0b1_1111));
+        assert_eq!(blocks[1].tri[0], 11);
+        assert_eq!(layout_for(1 << 20), LeafLayout::LONG_TAG);
+        assert_eq!(layout_for((1 << 26) - 2), LeafLayout::LONG_TAG);
+        assert_eq!(layout_for((1 << 26) - 1), LeafLayout::SHORT_TAG);
     }
 }

@@ -19,7 +19,7 @@ mod leaves;
 mod traverse;
 
 use super::tri4::Tri4;
-use super::wide::{BoxRay, Node8, SahCosts, collapse, covering_boxes};
+use super::wide::{BoxRay, LeafLayout, Node8, SahCosts, collapse, covering_boxes};
 use crate::mesh::Mesh;
 use crate::triangle::{ShearedRay, TriangleHit};
 use glam::{DVec3, Vec3, Vec3A};
@@ -71,6 +71,8 @@ pub(crate) struct MeshBvh {
     ids: Vec<TriId>,
     /// Whether any of the meshes has an alpha cut-out.
     masked: bool,
+    /// How leaf references name their lanes ([`leaves::layout_for`]).
+    layout: LeafLayout,
 }
 
 /// An f32 ray in a mesh's space, prepared for the node and triangle tests.
@@ -116,6 +118,12 @@ fn tri_id(ids: &[TriId], number: u32) -> TriId {
 impl MeshBvh {
     /// Builds the BVH over `meshes`.
     pub(crate) fn build(meshes: &[Mesh]) -> MeshBvh {
+        let triangles = meshes.iter().map(Mesh::triangle_count).sum();
+        MeshBvh::build_in(meshes, leaves::layout_for(triangles))
+    }
+
+    /// [`MeshBvh::build`] with leaves of `layout`.
+    fn build_in(meshes: &[Mesh], layout: LeafLayout) -> MeshBvh {
         let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         for p in meshes.iter().flat_map(|m| m.positions()) {
             lo = lo.min(*p);
@@ -156,6 +164,7 @@ impl MeshBvh {
             blocks: Vec::new(),
             ids: Vec::new(),
             masked,
+            layout,
         };
         if aabbs.is_empty() {
             return bvh;
@@ -165,12 +174,17 @@ impl MeshBvh {
         // would leave the blocks 60% full). Measured on the kitchen: obvhs' slow build (wider PLOC search, more
         // reinsertion) and spatial pre-splits change throughput by under 2% at 1.2-2x the time.
         let bvh2 = super::build::build_single_leaves(&aabbs);
+        let shared = bvh.layout == LeafLayout::LONG_TAG;
         let (nodes, blocks) = collapse(
             &bvh2,
+            bvh.layout,
             MESH_LEAF_TRIANGLES,
             Some(MESH_COSTS),
             |_| 1,
-            |prims, blocks: &mut Vec<Tri4>| leaves::pack_leaf(blocks, prims, triangle),
+            |prims, blocks: &mut Vec<Tri4>| match shared {
+                true => leaves::pack_leaf(blocks, prims, triangle),
+                false => leaves::pack_own_blocks(blocks, prims, triangle),
+            },
         );
         let nodes = nodes.into_boxed_slice().into_vec();
         let blocks = blocks.into_boxed_slice().into_vec();

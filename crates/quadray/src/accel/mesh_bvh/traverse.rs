@@ -31,7 +31,7 @@ impl MeshBvh {
                 let node = self.nodes.as_ptr().wrapping_add(reference as usize);
                 (node.cast(), size_of::<Node8>())
             } else {
-                let first = LeafLanes::of(reference).first_block();
+                let first = LeafLanes::of(reference, self.layout).first_block();
                 let block = self.blocks.as_ptr().wrapping_add(first);
                 (block.cast(), size_of::<Tri4>())
             };
@@ -179,7 +179,7 @@ impl MeshBvh {
                 }
             } else {
                 // The leaf's blocks in turn, four lane bits each.
-                let leaf = LeafLanes::of(current);
+                let leaf = LeafLanes::of(current, self.layout);
                 let (mut lanes, mut index) = (leaf.lane_bits(), leaf.first_block());
                 while lanes != 0 {
                     let block = &self.blocks[index];
@@ -265,7 +265,7 @@ impl MeshBvh {
                     continue;
                 }
             } else {
-                let leaf = LeafLanes::of(current);
+                let leaf = LeafLanes::of(current, self.layout);
                 let (mut lanes, mut index) = (leaf.lane_bits(), leaf.first_block());
                 while lanes != 0 {
                     let block = &self.blocks[index];
@@ -293,6 +293,7 @@ impl MeshBvh {
 mod tests {
     use super::super::tests::grid;
     use super::*;
+    use crate::accel::wide::LeafLayout;
     use crate::accel::{SimdPath, simd_path};
     use glam::Vec3;
 
@@ -438,6 +439,65 @@ mod tests {
                 "ray {k}"
             );
             hits += base.is_some() as u32;
+        }
+        assert!(hits > 5000, "{hits} hits");
+    }
+
+    /// Leaves sharing blocks give every hit, t and any-hit answer that leaves in blocks of their
+    /// own give, on both paths, in fewer blocks.
+    #[test]
+    fn shared_and_own_block_leaves_agree() {
+        let flat = grid(48, 0);
+        let bumpy: Vec<Vec3> = (flat.positions().iter())
+            .map(|p| Vec3::new(p.x, p.y, (p.x * 0.9).sin() * (p.y * 0.35).cos() * 4.0))
+            .collect();
+        let meshes = [Mesh::new(bumpy, flat.indices().to_vec(), None, 0).unwrap()];
+        let shared = MeshBvh::build_in(&meshes, LeafLayout::LONG_TAG);
+        let own = MeshBvh::build_in(&meshes, LeafLayout::SHORT_TAG);
+        assert!(shared.blocks.len() < own.blocks.len());
+        let avx2 = simd_path() == SimdPath::Avx2;
+        let mut hits = 0;
+        for k in 0..20_000u32 {
+            let f = k as f32;
+            let origin = Vec3::new(
+                24.0 + 40.0 * (f * 0.618_034).fract() - 20.0,
+                24.0 + 40.0 * (f * 0.414_213_5).fract() - 20.0,
+                if k % 2 == 0 { 10.0 } else { -10.0 },
+            );
+            let target = Vec3::new(
+                48.0 * (f * 0.302_775).fract(),
+                48.0 * (f * 0.732_05).fract(),
+                0.0,
+            );
+            let ray = MeshRay::new(origin, target - origin);
+            let t_max = if k % 3 == 0 { 0.5 } else { f32::INFINITY };
+            let key = |bvh: &MeshBvh, h: Option<MeshHit>| {
+                h.map(|h| {
+                    (
+                        h.id,
+                        h.hit.t.to_bits(),
+                        bvh.vertices(&h).map(|v| v.to_array()),
+                    )
+                })
+            };
+            let want = key(&own, own.closest::<false>(&meshes, &ray, t_max, None));
+            assert_eq!(
+                key(&shared, shared.closest::<false>(&meshes, &ray, t_max, None)),
+                want
+            );
+            let blocked = own.occluded::<false>(&meshes, &ray, t_max, None);
+            assert_eq!(
+                shared.occluded::<false>(&meshes, &ray, t_max, None),
+                blocked
+            );
+            if avx2 {
+                assert_eq!(
+                    key(&shared, shared.closest::<true>(&meshes, &ray, t_max, None)),
+                    want
+                );
+                assert_eq!(shared.occluded::<true>(&meshes, &ray, t_max, None), blocked);
+            }
+            hits += want.is_some() as u32;
         }
         assert!(hits > 5000, "{hits} hits");
     }

@@ -20,10 +20,45 @@ use std::ops::Range;
 /// The weight of one block: four lanes.
 pub(in crate::accel) const LEAF_WEIGHT: u32 = 4;
 
-/// The low bits of a leaf reference's payload, below its first block: a tag whose meaning the
-/// BVH that packs the leaf defines (the analytic leaves' count of whole blocks, [`whole_blocks`];
-/// the meshes' first lane and count of triangles).
-pub(in crate::accel) const LEAF_TAG_BITS: u32 = 5;
+/// How a BVH's leaf references split their 31-bit payload: the leaf's first block, above a tag
+/// of `tag_bits` whose meaning the BVH that packs the leaf defines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(in crate::accel) struct LeafLayout {
+    tag_bits: u32,
+}
+
+impl LeafLayout {
+    /// A tag of three bits (the analytic leaves' count of whole blocks, [`whole_blocks`]; the
+    /// meshes' count of triangles in leaves of their own blocks): up to 2²⁸ − 2 blocks.
+    pub(in crate::accel) const SHORT_TAG: LeafLayout = LeafLayout { tag_bits: 3 };
+    /// A tag of five bits (the meshes' first lane and count of triangles, in shared blocks): up
+    /// to 2²⁶ − 2 blocks.
+    pub(in crate::accel) const LONG_TAG: LeafLayout = LeafLayout { tag_bits: 5 };
+
+    /// The most blocks a BVH of this layout may hold: the payload of a leaf in the last one is
+    /// then never all ones, which [`EMPTY`] is.
+    pub(in crate::accel) const fn max_blocks(self) -> usize {
+        (1 << (31 - self.tag_bits)) - 2
+    }
+
+    /// The reference of a leaf whose first block is `first`, with its packer's `tag`.
+    fn reference(self, first: usize, tag: u32) -> u32 {
+        assert!(
+            tag < 1 << self.tag_bits && first < self.max_blocks(),
+            "a leaf's first block beyond the BVH's capacity"
+        );
+        LEAF | ((first as u32) << self.tag_bits) | tag
+    }
+
+    /// The first block and the packer's tag of leaf reference `leaf` (made by the collapse).
+    #[inline(always)]
+    pub(in crate::accel) fn parts(self, leaf: u32) -> (usize, u32) {
+        (
+            ((leaf & !LEAF) >> self.tag_bits) as usize,
+            leaf & ((1 << self.tag_bits) - 1),
+        )
+    }
+}
 
 /// Roughly how many subtrees the collapse is split into (enough for two cores to share evenly).
 const TASKS: u32 = 64;
@@ -32,36 +67,17 @@ const TASKS: u32 = 64;
 /// saves.
 const MIN_TASK_WEIGHT: u32 = 4096;
 
-/// The reference of a leaf whose first block is `first`, with its packer's `tag`.
-fn leaf_reference(first: usize, tag: u32) -> u32 {
-    // Below 2²⁶ − 1 blocks: the payload's 31 bits are then never all ones, which [`EMPTY`] is.
-    assert!(
-        tag < 1 << LEAF_TAG_BITS && first + 1 < 1 << (31 - LEAF_TAG_BITS),
-        "a BVH holds at most 2^26 - 2 leaf blocks"
-    );
-    LEAF | ((first as u32) << LEAF_TAG_BITS) | tag
-}
-
-/// The first block and the packer's tag of leaf reference `leaf` (made by the collapse).
-#[inline(always)]
-pub(in crate::accel) fn leaf_parts(leaf: u32) -> (usize, u32) {
-    (
-        ((leaf & !LEAF) >> LEAF_TAG_BITS) as usize,
-        leaf & ((1 << LEAF_TAG_BITS) - 1),
-    )
-}
-
 /// The tag of a leaf of `count` whole blocks (one to 8), which [`leaf_blocks`] reads back.
 pub(in crate::accel) fn whole_blocks(count: usize) -> u32 {
     assert!((1..=8).contains(&count), "a leaf holds one to 8 blocks");
     (count - 1) as u32
 }
 
-/// The blocks of a leaf of whole blocks ([`whole_blocks`]).
+/// The blocks of a leaf tagged by [`whole_blocks`] in [`LeafLayout::SHORT_TAG`].
 #[inline(always)]
 pub(in crate::accel) fn leaf_blocks(leaf: u32) -> Range<usize> {
-    let (first, tag) = leaf_parts(leaf);
-    first..first + (tag & 7) as usize + 1
+    let (first, tag) = LeafLayout::SHORT_TAG.parts(leaf);
+    first..first + tag as usize + 1
 }
 
 /// A BVH2 node to collapse.
@@ -85,6 +101,8 @@ struct Collapse<'a, const N: usize> {
     leaf_weight: u32,
     /// The leaves and children chosen by cost, where the caller gave costs.
     plan: Option<Plan<'a, N>>,
+    /// How leaf references hold their first block and tag.
+    layout: LeafLayout,
 }
 
 impl<const N: usize> Collapse<'_, N> {
@@ -170,7 +188,7 @@ impl<const N: usize> Collapse<'_, N> {
                 let start = w.start as usize;
                 let count = self.subtrees.count(w.index) as usize;
                 let (first, tag) = pack(&self.subtrees.primitives[start..start + count], blocks);
-                leaf_reference(first, tag)
+                self.layout.reference(first, tag)
             } else if let Some(tasks) = tasks
                 .as_mut()
                 .filter(|_| self.subtrees.weight(w.index) <= split)
@@ -234,14 +252,15 @@ fn concatenate<T: Sync, U: Send>(
 
 /// Collapses a BVH2 (built down to single primitives) into `N`-wide nodes and leaf blocks, whose
 /// blocks `pack` fills from a leaf's primitives, returning the leaf's first block and a tag for its
-/// reference ([`leaf_parts`] gives both back; a packer of whole blocks tags their count,
-/// [`whole_blocks`]). A packer may place a leaf in blocks it filled before, but only in those of
+/// reference in `layout` ([`LeafLayout::parts`] gives both back; a packer of whole blocks tags
+/// their count, [`whole_blocks`]). A packer may place a leaf in blocks it filled before, but only in those of
 /// its own call's vector. No leaf weighs more than `leaf_weight`, and a primitive that weighs
 /// that much is a leaf of its own. With `costs`, leaves and each wide node's children are those
 /// of least cost ([`SahCosts`]); without, every subtree light enough becomes a leaf, and each
 /// wide node takes the `N` largest subtrees below a BVH2 node (Embree's BVH4 and BVH8 collapse).
 pub(in crate::accel) fn collapse<const N: usize, B: Clone + Send + Sync>(
     bvh2: &Bvh2,
+    layout: LeafLayout,
     leaf_weight: u32,
     costs: Option<SahCosts>,
     weight: impl Fn(u32) -> u32 + Sync,
@@ -254,6 +273,7 @@ pub(in crate::accel) fn collapse<const N: usize, B: Clone + Send + Sync>(
         subtrees: subtrees(bvh2, &weight, plan.as_ref()),
         leaf_weight,
         plan,
+        layout,
     };
     let (mut nodes, mut blocks) = (vec![Node::EMPTY], Vec::new());
     // The root wide node takes the BVH2 root's children (or the root itself when it is a leaf).
@@ -302,8 +322,8 @@ pub(in crate::accel) fn collapse<const N: usize, B: Clone + Send + Sync>(
                 *child = match *child {
                     EMPTY => EMPTY,
                     leaf if leaf & LEAF != 0 => {
-                        let (first, tag) = leaf_parts(leaf);
-                        leaf_reference(first + block_starts[part], tag)
+                        let (first, tag) = layout.parts(leaf);
+                        layout.reference(first + block_starts[part], tag)
                     }
                     inner => inner + node_starts[part] as u32,
                 };
@@ -368,6 +388,7 @@ pub(super) mod tests {
             // moved too).
             collapse(
                 &bvh2,
+                LeafLayout::SHORT_TAG,
                 2 * LEAF_WEIGHT,
                 costs,
                 |_| 1,

@@ -20,9 +20,7 @@ mod collapse;
 mod sah_plan;
 mod subtrees;
 
-#[cfg(test)]
-pub(super) use collapse::LEAF_TAG_BITS;
-pub(super) use collapse::{LEAF_WEIGHT, collapse, leaf_blocks, leaf_parts, whole_blocks};
+pub(super) use collapse::{LEAF_WEIGHT, LeafLayout, collapse, leaf_blocks, whole_blocks};
 use glam::{Vec3A, Vec4};
 pub(super) use sah_plan::SahCosts;
 
