@@ -399,6 +399,44 @@ mod tests {
         );
     }
 
+    /// A 48x48 grid bent into hills of height `height`, `waves` giving the bends' frequencies
+    /// along x and y.
+    fn bumpy_grid(waves: (f32, f32), height: f32) -> Mesh {
+        let flat = grid(48, 0);
+        let bumpy: Vec<Vec3> = (flat.positions().iter())
+            .map(|p| {
+                Vec3::new(
+                    p.x,
+                    p.y,
+                    (p.x * waves.0).sin() * (p.y * waves.1).cos() * height,
+                )
+            })
+            .collect();
+        Mesh::new(bumpy, flat.indices().to_vec(), None, 0).unwrap()
+    }
+
+    /// Probe ray `k` of a bumpy grid, from above or below at any slant, and its `t_max` (every
+    /// third one short).
+    fn probe(k: u32) -> (MeshRay, f32) {
+        let f = k as f32;
+        let origin = Vec3::new(
+            24.0 + 40.0 * (f * 0.618_034).fract() - 20.0,
+            24.0 + 40.0 * (f * 0.414_213_5).fract() - 20.0,
+            if k.is_multiple_of(2) { 10.0 } else { -10.0 },
+        );
+        let target = Vec3::new(
+            48.0 * (f * 0.302_775).fract(),
+            48.0 * (f * 0.732_05).fract(),
+            0.0,
+        );
+        let t_max = if k.is_multiple_of(3) {
+            0.5
+        } else {
+            f32::INFINITY
+        };
+        (MeshRay::new(origin, target - origin), t_max)
+    }
+
     /// The AVX2 path's traversal (its 8-wide nodes tested in AVX registers) finds the same hits
     /// as the baseline's, bit for bit, on a bumpy mesh hit from every side; skipped (and said)
     /// where this process does not take the AVX2 path.
@@ -408,27 +446,11 @@ mod tests {
             eprintln!("skipped: this machine or QUADRAY_SIMD does not take the AVX2 path");
             return;
         }
-        let flat = grid(48, 0);
-        let bumpy: Vec<Vec3> = (flat.positions().iter())
-            .map(|p| Vec3::new(p.x, p.y, (p.x * 0.7).sin() * (p.y * 0.45).cos() * 3.0))
-            .collect();
-        let meshes = [Mesh::new(bumpy, flat.indices().to_vec(), None, 0).unwrap()];
+        let meshes = [bumpy_grid((0.7, 0.45), 3.0)];
         let bvh = MeshBvh::build(&meshes);
         let mut hits = 0;
         for k in 0..20_000u32 {
-            let f = k as f32;
-            let origin = Vec3::new(
-                24.0 + 40.0 * (f * 0.618_034).fract() - 20.0,
-                24.0 + 40.0 * (f * 0.414_213_5).fract() - 20.0,
-                if k % 2 == 0 { 10.0 } else { -10.0 },
-            );
-            let target = Vec3::new(
-                48.0 * (f * 0.302_775).fract(),
-                48.0 * (f * 0.732_05).fract(),
-                0.0,
-            );
-            let ray = MeshRay::new(origin, target - origin);
-            let t_max = if k % 3 == 0 { 0.5 } else { f32::INFINITY };
+            let (ray, t_max) = probe(k);
             let avx = bvh.closest::<true>(&meshes, &ray, t_max, None);
             let base = bvh.closest::<false>(&meshes, &ray, t_max, None);
             let key = |h: Option<MeshHit>| h.map(|h| (h.id, h.hit.t.to_bits(), h.block, h.lane));
@@ -447,30 +469,14 @@ mod tests {
     /// own give, on both paths, in fewer blocks.
     #[test]
     fn shared_and_own_block_leaves_agree() {
-        let flat = grid(48, 0);
-        let bumpy: Vec<Vec3> = (flat.positions().iter())
-            .map(|p| Vec3::new(p.x, p.y, (p.x * 0.9).sin() * (p.y * 0.35).cos() * 4.0))
-            .collect();
-        let meshes = [Mesh::new(bumpy, flat.indices().to_vec(), None, 0).unwrap()];
+        let meshes = [bumpy_grid((0.9, 0.35), 4.0)];
         let shared = MeshBvh::build_in(&meshes, LeafLayout::LONG_TAG);
         let own = MeshBvh::build_in(&meshes, LeafLayout::SHORT_TAG);
         assert!(shared.blocks.len() < own.blocks.len());
         let avx2 = simd_path() == SimdPath::Avx2;
         let mut hits = 0;
         for k in 0..20_000u32 {
-            let f = k as f32;
-            let origin = Vec3::new(
-                24.0 + 40.0 * (f * 0.618_034).fract() - 20.0,
-                24.0 + 40.0 * (f * 0.414_213_5).fract() - 20.0,
-                if k % 2 == 0 { 10.0 } else { -10.0 },
-            );
-            let target = Vec3::new(
-                48.0 * (f * 0.302_775).fract(),
-                48.0 * (f * 0.732_05).fract(),
-                0.0,
-            );
-            let ray = MeshRay::new(origin, target - origin);
-            let t_max = if k % 3 == 0 { 0.5 } else { f32::INFINITY };
+            let (ray, t_max) = probe(k);
             let key = |bvh: &MeshBvh, h: Option<MeshHit>| {
                 h.map(|h| {
                     (
