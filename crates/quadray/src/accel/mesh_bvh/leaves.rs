@@ -48,7 +48,11 @@ impl LeafLanes {
 
     /// The tag of a leaf of `count` triangles (one to 8) from lane `lane` (below 4).
     fn tag(lane: usize, count: usize) -> u32 {
-        debug_assert!(lane < 4 && (1..=8).contains(&count) && lane + count <= 8);
+        // Checked in release builds too: a tag out of range would name other leaves' lanes.
+        assert!(
+            lane < 4 && (1..=8).contains(&count) && lane + count <= 8,
+            "a mesh leaf holds one to 8 triangles in at most two blocks"
+        );
         ((lane << 3) | (count - 1)) as u32
     }
 
