@@ -21,9 +21,10 @@ use crate::accel::wide::LeafLayout;
 /// How many of the latest blocks a leaf of one to three triangles may join: the fullest of them
 /// with room for it (the latest of equals), so shared blocks hold leaves built side by side, near
 /// each other in the tree and in space. Blocks the dragon's leaves take: 271 206 in leaves of
-/// their own, 242 381 with a window of 4, 235 373 with 16, 217 854 if full. A window of 16 made
-/// the kitchen's rays 3–4% slower in three alternating rounds of `bench rays` (its leaves' blocks
-/// farther apart), where 4 kept its speed.
+/// their own, 242 381 with a window of 4, 235 373 with 16, 217 854 if full. With 16 the kitchen's
+/// rays ran 3–4% slower in three alternating rounds of `bench rays` (its leaves' blocks farther
+/// apart, or the code's placement, which alone moves these timings by as much), where 4 kept its
+/// speed.
 const WINDOW: usize = 4;
 
 /// A leaf's triangles: the lanes set in `bits` of the blocks from `first` on.
