@@ -88,7 +88,7 @@ pub fn pixel_memory(
     });
     PixelMemory {
         kept: pixels(window).saturating_mul(kept_per_pixel),
-        working: working + first_samples,
+        working: working.saturating_add(first_samples),
     }
 }
 

@@ -36,7 +36,7 @@ pub(super) struct LeafLanes {
 
 impl LeafLanes {
     /// The leaf of reference `leaf` in a BVH of `layout` (made by the collapse from
-    /// [`pack_leaf`]'s or [`pack_own_blocks`]' tag).
+    /// [`pack_leaf`]'s tag).
     #[inline(always)]
     pub(super) fn of(leaf: u32, layout: LeafLayout) -> LeafLanes {
         // The tag: the first lane (none in a short tag), then the count less one.
@@ -81,36 +81,19 @@ pub(super) fn layout_for(triangles: usize) -> LeafLayout {
     }
 }
 
-/// Places a leaf's triangles `prims` (one to 8; `triangle` gives each one's vertices) in blocks
-/// of its own appended to `blocks`, from lane 0 ([`LeafLayout::SHORT_TAG`]), returning its first
-/// block and tag.
-pub(super) fn pack_own_blocks(
-    blocks: &mut Vec<Tri4>,
-    prims: &[u32],
-    triangle: impl Fn(u32) -> [[f32; 3]; 3],
-) -> (usize, u32) {
-    let first = blocks.len();
-    for lanes in prims.chunks(4) {
-        let mut block = Tri4::EMPTY;
-        for (lane, &p) in lanes.iter().enumerate() {
-            block.set(lane, triangle(p), p);
-        }
-        blocks.push(block);
-    }
-    (first, LeafLanes::tag(0, prims.len()))
-}
-
 /// Places a leaf's triangles `prims` (one to 8; `triangle` gives each one's vertices) in
-/// `blocks` ([`LeafLayout::LONG_TAG`]), in blocks the vector already holds where they fit, and
-/// returns its first block and its tag for the collapse ([`LeafLanes::of`] reads them back).
+/// `blocks` and returns its first block and its tag for the collapse ([`LeafLanes::of`] reads
+/// them back). With [`LeafLayout::LONG_TAG`] the leaf joins blocks the vector already holds where
+/// it fits; with [`LeafLayout::SHORT_TAG`] it takes blocks of its own from lane 0.
 pub(super) fn pack_leaf(
+    layout: LeafLayout,
     blocks: &mut Vec<Tri4>,
     prims: &[u32],
     triangle: impl Fn(u32) -> [[f32; 3]; 3],
 ) -> (usize, u32) {
     let n = prims.len();
-    debug_assert!((1..=8).contains(&n));
     let start = match n {
+        _ if layout == LeafLayout::SHORT_TAG => None,
         // The fullest of the latest blocks with room, the latest of equals.
         1..=3 => (blocks.len().saturating_sub(WINDOW)..blocks.len())
             .map(|b| (b, blocks[b].lanes_used()))
@@ -123,6 +106,8 @@ pub(super) fn pack_leaf(
         _ => None,
     };
     let (first, lane) = start.unwrap_or((blocks.len(), 0));
+    // Checked before any lane is written.
+    let tag = LeafLanes::tag(lane, n);
     for (k, &p) in prims.iter().enumerate() {
         let (block, slot) = (first + (lane + k) / 4, (lane + k) % 4);
         if block == blocks.len() {
@@ -130,7 +115,7 @@ pub(super) fn pack_leaf(
         }
         blocks[block].set(slot, triangle(p), p);
     }
-    (first, LeafLanes::tag(lane, n))
+    (first, tag)
 }
 
 #[cfg(test)]
@@ -145,7 +130,9 @@ mod tests {
         for &n in sizes {
             let prims: Vec<u32> = (next..next + n as u32).collect();
             next += n as u32;
-            let (first, tag) = pack_leaf(&mut blocks, &prims, |p| [[p as f32; 3]; 3]);
+            let (first, tag) = pack_leaf(LeafLayout::LONG_TAG, &mut blocks, &prims, |p| {
+                [[p as f32; 3]; 3]
+            });
             leaves.push(LeafLanes::of(
                 LEAF | (first as u32) << 5 | tag,
                 LeafLayout::LONG_TAG,
@@ -203,7 +190,12 @@ mod tests {
     #[test]
     fn own_block_leaves_and_the_layout_choice() {
         let mut blocks = Vec::new();
-        let (first, tag) = pack_own_blocks(&mut blocks, &[7, 8, 9, 10, 11], |p| [[p as f32; 3]; 3]);
+        let (first, tag) = pack_leaf(
+            LeafLayout::SHORT_TAG,
+            &mut blocks,
+            &[7, 8, 9, 10, 11],
+            |p| [[p as f32; 3]; 3],
+        );
         let leaf = LeafLanes::of(LEAF | (first as u32) << 3 | tag, LeafLayout::SHORT_TAG);
         assert_eq!((leaf.first_block(), leaf.lane_bits()), (0, 0b1_1111));
         assert_eq!(blocks[1].tri[0], 11);

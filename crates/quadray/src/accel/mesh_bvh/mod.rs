@@ -174,17 +174,14 @@ impl MeshBvh {
         // would leave the blocks 60% full). Measured on the kitchen: obvhs' slow build (wider PLOC search, more
         // reinsertion) and spatial pre-splits change throughput by under 2% at 1.2-2x the time.
         let bvh2 = super::build::build_single_leaves(&aabbs);
-        let shared = bvh.layout == LeafLayout::LONG_TAG;
+        let layout = bvh.layout;
         let (nodes, blocks) = collapse(
             &bvh2,
-            bvh.layout,
+            layout,
             MESH_LEAF_TRIANGLES,
             Some(MESH_COSTS),
             |_| 1,
-            |prims, blocks: &mut Vec<Tri4>| match shared {
-                true => leaves::pack_leaf(blocks, prims, triangle),
-                false => leaves::pack_own_blocks(blocks, prims, triangle),
-            },
+            |prims, blocks: &mut Vec<Tri4>| leaves::pack_leaf(layout, blocks, prims, triangle),
         );
         let nodes = nodes.into_boxed_slice().into_vec();
         let blocks = blocks.into_boxed_slice().into_vec();

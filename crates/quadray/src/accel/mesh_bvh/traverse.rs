@@ -31,7 +31,7 @@ impl MeshBvh {
                 let node = self.nodes.as_ptr().wrapping_add(reference as usize);
                 (node.cast(), size_of::<Node8>())
             } else {
-                let first = LeafLanes::of(reference, self.layout).first_block();
+                let (first, _) = self.layout.parts(reference);
                 let block = self.blocks.as_ptr().wrapping_add(first);
                 (block.cast(), size_of::<Tri4>())
             };
