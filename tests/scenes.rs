@@ -127,3 +127,29 @@ fn checked_pixels_of_the_defense_scene() {
         "checker squares alternate along a floor row: {lo} .. {hi}"
     );
 }
+
+/// A compact mesh BVH, asked for by `--compact-meshes` or by the scene's `render.compact_meshes`,
+/// writes the image the default BVH writes, byte for byte (scenes/obj-mesh.toml: two copies of an
+/// OBJ mesh beside quadrics, a sphere and a mirror); a value that is not true or false is refused.
+#[test]
+fn compact_meshes_write_the_same_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene_file = scene_path("obj-mesh.toml");
+    let render = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec!["render", scene_file.to_str().unwrap(), "-o"];
+        args.push(out.to_str().unwrap());
+        args.extend(["--res", "64x40", "--spp", "1", "-q"]);
+        args.extend(extra);
+        quadray_cli::run_args(args).map(|_| std::fs::read(&out).unwrap())
+    };
+    let default = render("default.png", &[]).unwrap();
+    let flag = render("flag.png", &["--compact-meshes"]).unwrap();
+    let key = render("key.png", &["--set", "render.compact_meshes=true"]).unwrap();
+    assert!(default == flag && default == key);
+    let refused = render("refused.png", &["--set", "render.compact_meshes=1"]).unwrap_err();
+    assert!(
+        format!("{refused:#}").contains("expected true or false"),
+        "{refused:#}"
+    );
+}

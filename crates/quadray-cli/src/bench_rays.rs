@@ -32,6 +32,9 @@ pub struct RaysArgs {
     /// BVH builds to time (the median is reported).
     #[arg(long, value_name = "N", default_value_t = 3)]
     pub builds: usize,
+    /// Build the compact mesh BVH (`render --compact-meshes`).
+    #[arg(long)]
+    pub compact_meshes: bool,
 }
 
 /// Reads a `RAYS` file.
@@ -119,7 +122,10 @@ pub fn run(a: &RaysArgs) -> Result<()> {
         let geometry = imported.geometry.clone();
         let cpu = cpu_time::ProcessTime::now();
         let start = Instant::now();
-        let built = pool.install(|| Scene::new(description(geometry)))?;
+        let options = quadray::BuildOptions {
+            compact_meshes: a.compact_meshes,
+        };
+        let built = pool.install(|| Scene::build(description(geometry), options))?;
         builds.push(start.elapsed().as_secs_f64() * 1e3);
         build_cpu.push(cpu.elapsed().as_secs_f64() * 1e3);
         scene = Some(built);
@@ -131,7 +137,7 @@ pub fn run(a: &RaysArgs) -> Result<()> {
     let accel_bytes = scene.accel().memory_bytes();
     outln!(
         "BUILD mesh={name} impl=quadray threads={} triangles={triangles} ms_median={:.2} cpu_ms={:.2} \
-         mesh_bytes_per_tri={:.1} accel_bytes_per_tri={:.1} bytes_per_tri={:.1} simd={}",
+         mesh_bytes_per_tri={:.1} accel_bytes_per_tri={:.1} bytes_per_tri={:.1} simd={} leaves={}",
         a.threads,
         median(builds),
         median(build_cpu),
@@ -139,6 +145,11 @@ pub fn run(a: &RaysArgs) -> Result<()> {
         accel_bytes as f64 / triangles.max(1) as f64,
         (mesh_bytes + accel_bytes) as f64 / triangles.max(1) as f64,
         scene.accel().traversal_path(),
+        if a.compact_meshes {
+            "compact"
+        } else {
+            "copied"
+        },
     )?;
     for path in &a.rays {
         let rays = read_rays(path)?;

@@ -32,6 +32,8 @@ struct Job {
     format: Format,
     selection: AovSelection,
     loaded_in: Duration,
+    /// How the scene's BVH is built (the scene's choice, or `--compact-meshes`).
+    build_options: quadray::BuildOptions,
     /// The files the scene read (its own first), which a piece's scene hash covers.
     inputs: Vec<PathBuf>,
 }
@@ -49,7 +51,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let pool = crate::args::thread_pool(args.threads)?;
     let build_start = Instant::now();
     let scene = pool
-        .install(|| Scene::new(loaded.description))
+        .install(|| Scene::build(loaded.description, job.build_options))
         .with_context(|| format!("invalid scene {}", args.scene.display()))?;
     crate::check::log_built(&scene, build_start);
     let built_in = build_start.elapsed();
@@ -207,6 +209,9 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
     s.adaptive = args.sampling.resolve(args.spp, s.adaptive)?;
     s.antialias = (args.sampling).resolve_antialias(s.spp, &mut s.adaptive, s.antialias)?;
     let mut settings = s.render_settings();
+    let build_options = quadray::BuildOptions {
+        compact_meshes: s.compact_meshes || args.compact_meshes,
+    };
     settings.seed = args.seed;
     settings.texture_filter = args.texture_filter == crate::args::TextureFilterArg::Box;
     if let Some(crop) = args.crop {
@@ -232,6 +237,7 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
         format,
         selection,
         loaded_in,
+        build_options,
         inputs,
     };
     Ok((loaded, job))

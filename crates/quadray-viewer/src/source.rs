@@ -39,7 +39,7 @@ pub fn load(path: &Path) -> Result<LoadedFile> {
         .clone()
         .unwrap_or_else(|| quadray_app::scene_file::default_output(path));
     let settings = loaded.settings.render_settings();
-    let scene = Scene::new(loaded.description)
+    let scene = Scene::build(loaded.description, loaded.settings.build_options())
         .with_context(|| format!("invalid scene {}", path.display()))?;
     Ok(LoadedFile {
         scene: Arc::new(scene),

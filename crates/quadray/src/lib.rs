@@ -81,7 +81,7 @@ pub use texture::image as image_texture;
 mod test_rng;
 pub mod triangle;
 
-pub use accel::{AccelStats, MAX_OVERLAP};
+pub use accel::{AccelStats, BuildOptions, MAX_OVERLAP};
 pub use adaptive::{Adaptive, AdaptiveError, SamplingStats};
 pub use aov::{AovSample, AovSelection, Aovs};
 pub use camera::{Camera, CameraError, CameraFrame, Projection};

@@ -457,7 +457,7 @@ pub fn measure(a: &ImagesArgs, progress: &mut dyn FnMut(&str)) -> Result<ImageRe
     let loaded = quadray_loader::load_any(&a.scene)?;
     let mut base = loaded.settings.render_settings();
     (base.width, base.height) = a.res;
-    let scene = Scene::new(loaded.description)
+    let scene = Scene::build(loaded.description, loaded.settings.build_options())
         .with_context(|| format!("invalid scene {}", a.scene.display()))?;
     let settings = |spp: u32, seed: u32| RenderSettings { spp, seed, ..base };
 

@@ -59,6 +59,9 @@ pub struct SceneSettings {
     pub adaptive: Option<quadray::Adaptive>,
     /// Anti-aliasing by contrast (`render.antialias_threshold`, `render.antialias_spp`).
     pub antialias: Option<quadray::Antialias>,
+    /// Mesh BVHs in their compact form (`render.compact_meshes`:
+    /// [`quadray::BuildOptions::compact_meshes`]).
+    pub compact_meshes: bool,
 }
 
 impl SceneSettings {
@@ -77,6 +80,13 @@ impl SceneSettings {
             ..quadray::RenderSettings::default()
         }
     }
+
+    /// How the scene's BVH is to be built for these values.
+    pub fn build_options(&self) -> quadray::BuildOptions {
+        quadray::BuildOptions {
+            compact_meshes: self.compact_meshes,
+        }
+    }
 }
 
 /// Samples per pixel of a file that names none (a scene without `render.spp`, an OBJ or glTF
@@ -93,6 +103,7 @@ impl Default for SceneSettings {
             max_depth: 8,
             adaptive: None,
             antialias: None,
+            compact_meshes: false,
         }
     }
 }

@@ -34,6 +34,7 @@ impl Builder<'_> {
         if let Some(v) = &r.max_depth {
             s.max_depth = self.count(v, "render.max_depth", MAX_DEPTH)?;
         }
+        s.compact_meshes = r.compact_meshes.unwrap_or(false);
         let background = r
             .background
             .as_ref()

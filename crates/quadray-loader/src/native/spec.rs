@@ -126,6 +126,7 @@ pub(super) struct RenderSpec {
     pub(super) max_depth: Option<Spanned<i64>>,
     pub(super) background: Option<Spanned<V3>>,
     pub(super) environment: Option<Spanned<V3>>,
+    pub(super) compact_meshes: Option<bool>,
 }
 
 /// `[output]`: where `quadray render SCENE` writes when no `-o` is given.

@@ -83,6 +83,7 @@ direction = [0, 0, -1]
             max_depth: 8,
             adaptive: None,
             antialias: None,
+            compact_meshes: false,
         }
     );
     assert_eq!(g.planes[0].normal, DVec3::Z);

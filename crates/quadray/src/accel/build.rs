@@ -3,7 +3,7 @@
 
 use super::analytic::AnalyticBvh;
 use super::mesh_bvh::MeshBvh;
-use super::{Accel, FLAT_TOP, LevelAccel, Placed, SimdPath, TopItem, simd_path};
+use super::{Accel, BuildOptions, FLAT_TOP, LevelAccel, Placed, SimdPath, TopItem, simd_path};
 use crate::geometry::Geometry;
 use crate::geometry::instance::{Instance, Placements};
 use glam::{DVec3, Vec3A};
@@ -331,11 +331,17 @@ impl Accel {
     /// numbered ([`Placements::new`] fails) are left out.
     pub fn build(geometry: &Geometry, origin_extent: f64) -> Accel {
         let layout = Layout::new(geometry, Placements::new(geometry).ok());
-        Accel::build_with(geometry, layout, origin_extent)
+        Accel::build_with(geometry, layout, origin_extent, BuildOptions::default())
     }
 
-    /// [`Accel::build`] from a layout already computed (and validated) for `geometry`.
-    pub fn build_with(geometry: &Geometry, layout: Layout, origin_extent: f64) -> Accel {
+    /// [`Accel::build`] from a layout already computed (and validated) for `geometry`, as
+    /// `options` ask.
+    pub fn build_with(
+        geometry: &Geometry,
+        layout: Layout,
+        origin_extent: f64,
+        options: BuildOptions,
+    ) -> Accel {
         let Layout { placements, bounds } = layout;
         let world = bounds.all[0]
             .map_or(0.0, magnitude)
@@ -353,6 +359,7 @@ impl Accel {
                 mesh_bounds: bounds.meshes[level],
                 placements: placements.as_ref(),
                 built: &levels,
+                options,
             };
             let built = build_level(geometry, level, context);
             levels[level] = Some(built);
@@ -390,6 +397,8 @@ struct LevelContext<'a> {
     placements: Option<&'a Placements>,
     /// The levels built so far (every child of this one).
     built: &'a [Option<LevelAccel>],
+    /// What the scene's builder asked for.
+    options: BuildOptions,
 }
 
 /// One level's bottom-level BVHs and its top; its instances are boxed by their prototypes'
@@ -400,11 +409,12 @@ fn build_level(geometry: &Geometry, level: usize, cx: LevelContext<'_>) -> Level
         mesh_bounds,
         placements,
         built,
+        options,
     } = cx;
     let l = geometry.level(level);
     let analytic = AnalyticBvh::build(l, extent);
     let has_triangles = l.meshes.iter().any(|m| m.triangle_count() > 0);
-    let meshes = has_triangles.then(|| MeshBvh::build(l.meshes));
+    let meshes = has_triangles.then(|| MeshBvh::build(l.meshes, options.compact_meshes));
     let mut items = Vec::new();
     let mut item_boxes = Vec::new();
     let mut covering = Vec::new();
@@ -469,9 +479,15 @@ fn build_level(geometry: &Geometry, level: usize, cx: LevelContext<'_>) -> Level
         item_boxes = Vec::new();
         bvh
     });
+    // The compact BVH has a field of its own ([`LevelAccel::compact_meshes`]).
+    let (meshes, compact_meshes) = match meshes {
+        Some(bvh) if bvh.compact() => (None, Some(bvh)),
+        copied => (copied, None),
+    };
     LevelAccel {
         analytic,
         meshes,
+        compact_meshes,
         items,
         top,
         item_boxes,

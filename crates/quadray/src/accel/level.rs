@@ -155,6 +155,35 @@ impl Accel {
         }
     }
 
+    /// [`Accel::closest_in_meshes`] for the compact mesh BVH of level `l`, if it has one.
+    #[inline(never)]
+    fn closest_in_compact_meshes<const AVX2: bool>(
+        &self,
+        l: &LevelAccel,
+        q: &Query<'_>,
+        stack: &mut Vec<(u32, f32)>,
+        best_t: &mut f64,
+        best: &mut Option<PrimRef>,
+    ) {
+        let Some(bvh) = &l.compact_meshes else { return };
+        let meshes = q.g.level(q.level).meshes;
+        let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+        let (t_max, skip) = (round_up(*best_t), q.triangle_skip());
+        if let Some(h) = bvh.closest_compact::<AVX2>(meshes, &mray, t_max, skip, stack) {
+            // Mesh::refine_t, on the mesh's vertices.
+            let vertices = bvh.mesh_vertices(meshes, &h);
+            let t = plane_t(q.ray.origin, q.ray.dir, vertices, h.hit.t as f64);
+            let (mesh, tri) = h.id;
+            if t < *best_t {
+                *best_t = t;
+                *best = Some(PrimRef {
+                    placement: q.placement,
+                    local: LocalPrim::Triangle { mesh, tri },
+                });
+            }
+        }
+    }
+
     /// Lowers `best_t` to the nearest hit of the query's ray with the mesh BVH of level `l`,
     /// traversed on `stack` (the thread's: [`MeshBvh::take_stack`]).
     #[inline(always)]
@@ -166,7 +195,9 @@ impl Accel {
         best_t: &mut f64,
         best: &mut Option<PrimRef>,
     ) {
-        let Some(bvh) = &l.meshes else { return };
+        let Some(bvh) = &l.meshes else {
+            return self.closest_in_compact_meshes::<AVX2>(l, q, stack, best_t, best);
+        };
         let meshes = q.g.level(q.level).meshes;
         let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
         let (t_max, skip) = (round_up(*best_t), q.triangle_skip());
@@ -255,6 +286,22 @@ impl Accel {
         })
     }
 
+    /// Whether the compact mesh BVH of level `l` blocks the query's ray in (0, `t_max`).
+    #[inline(never)]
+    fn occluded_in_compact_meshes<const AVX2: bool>(
+        &self,
+        l: &LevelAccel,
+        q: &Query<'_>,
+        t_max: f64,
+    ) -> bool {
+        let Some(bvh) = &l.compact_meshes else {
+            return false;
+        };
+        let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+        let meshes = q.g.level(q.level).meshes;
+        bvh.occluded_compact::<AVX2>(meshes, &mray, round_up(t_max), q.triangle_skip())
+    }
+
     /// Whether an item of level `l` that its top BVH `top` reaches blocks the query's ray in
     /// (0, `t_max`) (the stack as in [`Accel::closest_top`]).
     #[inline(always)]
@@ -330,7 +377,7 @@ impl Accel {
                     let meshes = q.g.level(q.level).meshes;
                     bvh.occluded::<AVX2>(meshes, &mray, round_up(t_max), q.triangle_skip())
                 }
-                None => false,
+                None => self.occluded_in_compact_meshes::<AVX2>(l, q, t_max),
             },
             TopItem::Instance { index, level } => {
                 let inst = &q.g.level(q.level).instances[index as usize];

@@ -69,12 +69,24 @@ use obvhs::{aabb::Aabb, bvh2::Bvh2};
 pub use overlap::MAX_OVERLAP;
 pub use stats::AccelStats;
 
+/// Choices in how a scene's acceleration structure is built ([`crate::Scene::build`]); the
+/// defaults suit most scenes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BuildOptions {
+    /// Mesh BVH leaves hold their triangles' numbers instead of copies of their vertices, which
+    /// each test then reads from the meshes: the same hits and images in less memory, traced more
+    /// slowly (docs/performance.md, *Compact mesh BVHs*). For meshes too large for memory
+    /// otherwise.
+    pub compact_meshes: bool,
+}
+
 /// One leaf item of a level's top.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum TopItem {
     /// The level's BVH over its spheres and quadrics.
     Analytic,
-    /// The level's BVH over its meshes.
+    /// The level's BVH over its meshes (in [`LevelAccel::meshes`] or, compact,
+    /// [`LevelAccel::compact_meshes`]).
     Meshes,
     /// Instance `index` of the level, placing level `level` (`1 +` its prototype).
     Instance { index: u32, level: u32 },
@@ -99,7 +111,12 @@ struct Placed {
 #[derive(Clone, Default)]
 struct LevelAccel {
     analytic: Option<AnalyticBvh>,
+    /// The BVH over the level's meshes, with copies of their vertices in its leaves.
     meshes: Option<MeshBvh>,
+    /// Or that BVH in its compact form ([`crate::BuildOptions::compact_meshes`]). A field of its
+    /// own, asked for where `meshes` is `None`: a branch for it in the traversal of `meshes`
+    /// cost that traversal 0.5–1.5% more instructions, and so did an item of its own.
+    compact_meshes: Option<MeshBvh>,
     /// Top items in leaf order.
     items: Vec<TopItem>,
     /// The top's BVH; `None` when there are at most [`FLAT_TOP`] items.

@@ -33,6 +33,10 @@ impl LevelAccel {
     fn bottom_bytes(&self) -> usize {
         self.analytic.as_ref().map_or(0, AnalyticBvh::memory_bytes)
             + self.meshes.as_ref().map_or(0, MeshBvh::memory_bytes)
+            + self
+                .compact_meshes
+                .as_ref()
+                .map_or(0, MeshBvh::memory_bytes)
     }
 
     /// Bytes of the top (over the level's items).

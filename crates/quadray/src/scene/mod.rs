@@ -1,6 +1,6 @@
 //! A validated, immutable scene: camera, materials, lights, geometry and its BVH.
 
-use crate::accel::{Accel, EyeBuffer, LightBuffer};
+use crate::accel::{Accel, BuildOptions, EyeBuffer, LightBuffer};
 use crate::camera::{Camera, CameraError, Projection};
 use crate::footprint::HitFootprint;
 use crate::geometry::Geometry;
@@ -146,10 +146,15 @@ fn invalid(what: impl Into<String>, problem: impl Into<String>) -> SceneError {
 
 impl Scene {
     /// Validates a description and builds its BVH.
-    pub fn new(mut d: SceneDescription) -> Result<Scene, SceneError> {
+    pub fn new(d: SceneDescription) -> Result<Scene, SceneError> {
+        Scene::build(d, BuildOptions::default())
+    }
+
+    /// [`Scene::new`], the BVH built as `options` ask.
+    pub fn build(mut d: SceneDescription, options: BuildOptions) -> Result<Scene, SceneError> {
         let placements = validate_description(&mut d)?;
         let (layout, origin_extent) = checked_layout(&d, placements)?;
-        let accel = Accel::build_with(&d.geometry, layout, origin_extent);
+        let accel = Accel::build_with(&d.geometry, layout, origin_extent, options);
         let single_sided = (0..d.geometry.level_count())
             .any(|l| d.geometry.level(l).meshes.iter().any(Mesh::single_sided));
         let filters_textures = d.materials.iter().any(|m| {

@@ -11,9 +11,10 @@
 //!
 //! The traversals (closest hit and any hit, on each compiled path) are in [`traverse`].
 //!
-//! Leaves hold copies of their triangles' vertices (no index lookups while tracing). A block lane
-//! names its triangle by number: over a single mesh the mesh's triangle index, over several meshes
-//! an index into a table of (mesh, triangle).
+//! Leaves hold copies of their triangles' vertices (no index lookups while tracing), or in a
+//! compact BVH only their triangles' numbers ([`MeshBvh::numbered`]). A block lane names its triangle by
+//! number: over a single mesh the mesh's triangle index, over several meshes an index into a
+//! table of (mesh, triangle).
 
 mod leaves;
 mod traverse;
@@ -65,7 +66,13 @@ pub(crate) struct MeshHit {
 #[derive(Clone, Debug)]
 pub(crate) struct MeshBvh {
     nodes: Vec<Node8>,
+    /// The leaf blocks, four triangles each, with copies of their vertices (160 bytes a block):
+    /// no lookups while tracing. Empty in a compact BVH.
     blocks: Vec<Tri4>,
+    /// A compact BVH's leaf blocks ([`crate::BuildOptions::compact_meshes`]): the triangles'
+    /// numbers alone (16 bytes a block), the vertices read from the meshes at each test (the same
+    /// f32 values, so the same hits). Empty otherwise.
+    numbers: Vec<[u32; 4]>,
     /// (mesh, triangle) of each triangle number (the meshes' triangles numbered in turn); empty
     /// over a single mesh, whose triangle numbers are its triangle indices.
     ids: Vec<TriId>,
@@ -116,13 +123,32 @@ fn tri_id(ids: &[TriId], number: u32) -> TriId {
 }
 
 impl MeshBvh {
-    /// Builds the BVH over `meshes`.
-    pub(crate) fn build(meshes: &[Mesh]) -> MeshBvh {
+    /// Builds the BVH over `meshes`, its leaves holding only triangle numbers when `compact`.
+    pub(crate) fn build(meshes: &[Mesh], compact: bool) -> MeshBvh {
         let triangles = meshes.iter().map(Mesh::triangle_count).sum();
-        MeshBvh::build_in(meshes, leaves::layout_for(triangles))
+        let bvh = MeshBvh::build_in(meshes, leaves::layout_for(triangles));
+        if compact { bvh.numbered() } else { bvh }
     }
 
-    /// [`MeshBvh::build`] with leaves of `layout`.
+    /// The same BVH with its blocks' triangle numbers in place of their vertices. Packed with
+    /// the copies first, so both kinds of leaves are the same leaves (the copies' bytes are
+    /// needed only while building).
+    fn numbered(self) -> MeshBvh {
+        let numbers = self.blocks.iter().map(|block| block.tri).collect();
+        MeshBvh {
+            blocks: Vec::new(),
+            numbers,
+            ..self
+        }
+    }
+
+    /// Whether the leaves hold triangle numbers instead of vertices ([`MeshBvh::numbered`]).
+    #[inline(always)]
+    pub(crate) fn compact(&self) -> bool {
+        !self.numbers.is_empty()
+    }
+
+    /// [`MeshBvh::build`] with leaves of `layout`, holding copies of the vertices.
     fn build_in(meshes: &[Mesh], layout: LeafLayout) -> MeshBvh {
         let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         for p in meshes.iter().flat_map(|m| m.positions()) {
@@ -162,6 +188,7 @@ impl MeshBvh {
         let mut bvh = MeshBvh {
             nodes: Vec::new(),
             blocks: Vec::new(),
+            numbers: Vec::new(),
             ids: Vec::new(),
             masked,
             layout,
@@ -199,9 +226,32 @@ impl MeshBvh {
 
     /// Bytes of the wide nodes, the triangle blocks and the id table.
     pub(crate) fn memory_bytes(&self) -> usize {
-        self.nodes.capacity() * std::mem::size_of::<Node8>()
-            + self.blocks.capacity() * std::mem::size_of::<Tri4>()
-            + self.ids.capacity() * std::mem::size_of::<TriId>()
+        self.nodes.capacity() * size_of::<Node8>()
+            + self.blocks.capacity() * size_of::<Tri4>()
+            + self.numbers.capacity() * size_of::<[u32; 4]>()
+            + self.ids.capacity() * size_of::<TriId>()
+    }
+
+    /// A compact BVH's block of triangles `numbers`, lanes `lanes` (bit l for lane l) read from
+    /// `meshes` and the others unused.
+    #[inline(always)]
+    fn read(&self, meshes: &[Mesh], numbers: [u32; 4], lanes: u32) -> Tri4 {
+        let mut block = Tri4::EMPTY;
+        for (lane, number) in numbers.into_iter().enumerate() {
+            if lanes & (1 << lane) != 0 {
+                let (m, tri) = self.id(number);
+                let vertices = meshes[m as usize].triangle_positions(tri).map(|v| *v);
+                block.set(lane, vertices, number);
+            }
+        }
+        block
+    }
+
+    /// [`MeshBvh::vertices`] for a compact BVH, read from `meshes`.
+    #[inline(always)]
+    pub(crate) fn mesh_vertices(&self, meshes: &[Mesh], hit: &MeshHit) -> [DVec3; 3] {
+        let (m, tri) = hit.id;
+        (meshes[m as usize].triangle_positions(tri)).map(|v| Vec3::from(*v).as_dvec3())
     }
 
     /// (mesh, triangle) of triangle number `number`.
@@ -212,7 +262,8 @@ impl MeshBvh {
 
     /// The vertices of `hit`'s triangle, from the leaf block's copies: the mesh's own values, so
     /// the f64 refinement of a hit needs no lookup in the mesh (on the dragon's rays that lookup
-    /// was a quarter of a closest-hit query).
+    /// was a quarter of a closest-hit query). A compact BVH has no copies: see
+    /// [`MeshBvh::mesh_vertices`].
     #[inline(always)]
     pub(crate) fn vertices(&self, hit: &MeshHit) -> [DVec3; 3] {
         self.blocks[hit.block as usize].vertices(hit.lane as usize)
@@ -248,7 +299,7 @@ mod tests {
     #[test]
     fn covering_boxes_are_few_and_hold_the_mesh() {
         let meshes = [grid(64, 0)];
-        let bvh = MeshBvh::build(&meshes);
+        let bvh = MeshBvh::build(&meshes, false);
         for max in [8, 16, 64] {
             let boxes = bvh.covering_boxes(max);
             assert!(
