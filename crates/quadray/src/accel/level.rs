@@ -6,7 +6,7 @@
 //! module docs of [`super`]); a closure or a function that is not inlined would be compiled for
 //! the baseline, so the AVX2 copy's traversals keep out of them.
 
-use super::mesh_bvh::{MeshBvh, MeshRay};
+use super::mesh_bvh::{MeshBvh, MeshHit, MeshRay};
 use super::stack::{Stacks, put_stack, take_stack, with_stack};
 use super::top::TopLeaves;
 use super::{Accel, FLAT_TOP, LevelAccel, TopItem, round_up, to_obvhs};
@@ -14,7 +14,29 @@ use crate::geometry::Geometry;
 use crate::math::Ray;
 use crate::shape::{LocalPrim, PrimRef};
 use crate::triangle::plane_t;
+use glam::DVec3;
 use obvhs::bvh2::Bvh2;
+
+/// Lowers `best_t` to the query's mesh hit `h` where it is nearer, recording its triangle: its
+/// distance refined in f64 against the plane of its triangle's `vertices` (`Mesh::refine_t`).
+#[inline(always)]
+fn keep_mesh_hit(
+    q: &Query<'_>,
+    h: &MeshHit,
+    vertices: [DVec3; 3],
+    best_t: &mut f64,
+    best: &mut Option<PrimRef>,
+) {
+    let t = plane_t(q.ray.origin, q.ray.dir, vertices, h.hit.t as f64);
+    let (mesh, tri) = h.id;
+    if t < *best_t {
+        *best_t = t;
+        *best = Some(PrimRef {
+            placement: q.placement,
+            local: LocalPrim::Triangle { mesh, tri },
+        });
+    }
+}
 
 impl Accel {
     #[inline(always)]
@@ -170,17 +192,7 @@ impl Accel {
         let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
         let (t_max, skip) = (round_up(*best_t), q.triangle_skip());
         if let Some(h) = bvh.closest_compact::<AVX2>(meshes, &mray, t_max, skip, stack) {
-            // Mesh::refine_t, on the mesh's vertices.
-            let vertices = bvh.mesh_vertices(meshes, &h);
-            let t = plane_t(q.ray.origin, q.ray.dir, vertices, h.hit.t as f64);
-            let (mesh, tri) = h.id;
-            if t < *best_t {
-                *best_t = t;
-                *best = Some(PrimRef {
-                    placement: q.placement,
-                    local: LocalPrim::Triangle { mesh, tri },
-                });
-            }
+            keep_mesh_hit(q, &h, bvh.mesh_vertices(meshes, &h), best_t, best);
         }
     }
 
@@ -202,16 +214,7 @@ impl Accel {
         let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
         let (t_max, skip) = (round_up(*best_t), q.triangle_skip());
         if let Some(h) = bvh.closest_on::<AVX2>(meshes, &mray, t_max, skip, stack) {
-            // Mesh::refine_t, on the block's copy of the vertices.
-            let t = plane_t(q.ray.origin, q.ray.dir, bvh.vertices(&h), h.hit.t as f64);
-            let (mesh, tri) = h.id;
-            if t < *best_t {
-                *best_t = t;
-                *best = Some(PrimRef {
-                    placement: q.placement,
-                    local: LocalPrim::Triangle { mesh, tri },
-                });
-            }
+            keep_mesh_hit(q, &h, bvh.vertices(&h), best_t, best);
         }
     }
 
