@@ -6,7 +6,9 @@
 #   scripts/bench-speed.sh [ROUNDS=3] [MESHES="kitchen bunny dragon"]
 #
 # Each round also renders a camera-rays-only frame of each mesh (the coherent rays' camera, no
-# lights, 1 spp) and sets its rays per CPU-second against `bench rays` on the same rays.
+# lights, 1 spp) and sets its rays per CPU-second against `bench rays` on the same rays, and runs
+# `bench rays --compact-meshes` (the compact BVH: its bytes a triangle and its speed against the
+# default's).
 #
 # The meshes, the ray files and the Embree program come from the shared harness: its
 # convert_meshes.py, its obvhs-bench `genrays` and its embree_bench.cpp, built under /tmp (nothing
@@ -108,6 +110,8 @@ for r in $(seq "$ROUNDS"); do
     "$T/embree_bench" "$T/meshes/$m.obj" "$T/rays/$m" 3 > "$OUT/$m.embree.$r.txt"
     "$QR" bench rays "$T/meshes/$m.obj" "$T/rays/$m.coherent.rays" "$T/rays/$m.incoherent.rays" \
       --runs 3 -t 1 > "$OUT/$m.quadray.$r.txt"
+    "$QR" bench rays "$T/meshes/$m.obj" "$T/rays/$m.coherent.rays" "$T/rays/$m.incoherent.rays" \
+      --runs 3 --builds 1 -t 1 --compact-meshes > "$OUT/$m.compact.$r.txt"
     for k in 1 2 3; do
       "$QR" render "$T/$m.frame.toml" -o "$T/$m.frame.png" -t 1 --stats
     done 2> "$OUT/$m.frame.$r.txt"
@@ -172,4 +176,20 @@ for m in meshes:
     fv = statistics.median(frames) if frames else float("nan")
     qv = med(q, ("RESULT", "coherent", "intersect1", None, "1"), "cpu_mrays")
     print(f"| {m} | {fv:.2f} | {qv:.2f} | {fv / qv:.2f} |")
+print()
+print("| mesh | compact BVH: bytes/triangle (mesh + BVH) | coherent closest / any hit, compact / default | incoherent closest / any hit | hits equal |")
+print("|---|---|---|---|---|")
+for m in meshes:
+    q, c = results(f"{m}.quadray.*.txt"), results(f"{m}.compact.*.txt")
+    bk = ("BUILD", None, None, None, "1")
+    bpt = c[bk][0]["bytes_per_tri"] if bk in c else "?"
+    cells, same = [], True
+    for rays in ("coherent", "incoherent"):
+        pair = []
+        for api in ("intersect1", "occluded1"):
+            k = ("RESULT", rays, api, None, "1")
+            pair.append(f"{med(c, k, 'cpu_mrays') / med(q, k, 'cpu_mrays'):.2f}")
+            same &= k in q and k in c and q[k][0]["hits"] == c[k][0]["hits"]
+        cells.append(" / ".join(pair))
+    print(f"| {m} | {bpt} | {cells[0]} | {cells[1]} | {same} |")
 PY
