@@ -9,13 +9,15 @@
 //! on every mesh and ray set. The baseline path tests the same nodes in two 4-lane halves, so
 //! both paths visit the same nodes in the same order and give the same hits.
 //!
-//! The traversals (closest hit and any hit, on each compiled path) are in [`traverse`].
+//! The traversals (closest hit and any hit, on each compiled path) are in [`traverse`], the
+//! compact BVH's entry points in [`compact`].
 //!
 //! Leaves hold copies of their triangles' vertices (no index lookups while tracing), or in a
 //! compact BVH only their triangles' numbers ([`MeshBvh::numbered`]). A block lane names its triangle by
 //! number: over a single mesh the mesh's triangle index, over several meshes an index into a
 //! table of (mesh, triangle).
 
+mod compact;
 mod leaves;
 mod traverse;
 
@@ -130,24 +132,6 @@ impl MeshBvh {
         if compact { bvh.numbered() } else { bvh }
     }
 
-    /// The same BVH with its blocks' triangle numbers in place of their vertices. Packed with
-    /// the copies first, so both kinds of leaves are the same leaves (the copies' bytes are
-    /// needed only while building).
-    fn numbered(self) -> MeshBvh {
-        let numbers = self.blocks.iter().map(|block| block.tri).collect();
-        MeshBvh {
-            blocks: Vec::new(),
-            numbers,
-            ..self
-        }
-    }
-
-    /// Whether the leaves hold triangle numbers instead of vertices ([`MeshBvh::numbered`]).
-    #[inline(always)]
-    pub(crate) fn compact(&self) -> bool {
-        !self.numbers.is_empty()
-    }
-
     /// [`MeshBvh::build`] with leaves of `layout`, holding copies of the vertices.
     fn build_in(meshes: &[Mesh], layout: LeafLayout) -> MeshBvh {
         let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
@@ -230,28 +214,6 @@ impl MeshBvh {
             + self.blocks.capacity() * size_of::<Tri4>()
             + self.numbers.capacity() * size_of::<[u32; 4]>()
             + self.ids.capacity() * size_of::<TriId>()
-    }
-
-    /// A compact BVH's block of triangles `numbers`, lanes `lanes` (bit l for lane l) read from
-    /// `meshes` and the others unused.
-    #[inline(always)]
-    fn read(&self, meshes: &[Mesh], numbers: [u32; 4], lanes: u32) -> Tri4 {
-        let mut block = Tri4::EMPTY;
-        for (lane, number) in numbers.into_iter().enumerate() {
-            if lanes & (1 << lane) != 0 {
-                let (m, tri) = self.id(number);
-                let vertices = meshes[m as usize].triangle_positions(tri).map(|v| *v);
-                block.set(lane, vertices, number);
-            }
-        }
-        block
-    }
-
-    /// [`MeshBvh::vertices`] for a compact BVH, read from `meshes`.
-    #[inline(always)]
-    pub(crate) fn mesh_vertices(&self, meshes: &[Mesh], hit: &MeshHit) -> [DVec3; 3] {
-        let (m, tri) = hit.id;
-        (meshes[m as usize].triangle_positions(tri)).map(|v| Vec3::from(*v).as_dvec3())
     }
 
     /// (mesh, triangle) of triangle number `number`.
