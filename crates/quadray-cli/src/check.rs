@@ -53,7 +53,7 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     let settings = loaded.settings;
     let loaded_output = loaded.output;
     let built_at = Instant::now();
-    let scene = Scene::new(loaded.description)
+    let scene = Scene::build(loaded.description, settings.build_options())
         .with_context(|| format!("invalid scene {}", args.scene.display()))?;
     log_built(&scene, built_at);
     crate::warnings::print(
