@@ -1,6 +1,7 @@
 //! The mesh BVH's traversals: the closest hit and any hit, nearest children first for the
 //! former, each compiled twice (the AVX2 path's copy inlined into its caller, the baseline's a
-//! function of its own: see [`MeshBvh::closest_on`]).
+//! function of its own: see [`MeshBvh::closest_on`]), and twice more over compact leaves
+//! (`COMPACT`), entered from [`super::compact`].
 
 use super::leaves::LeafLanes;
 use super::{MeshBvh, MeshHit, MeshRay, TriId};
