@@ -11,6 +11,7 @@ use crate::accel::wide::{LEAF, Node8, pop_nearer};
 use crate::mesh::Mesh;
 use crate::triangle::TriangleHit;
 use std::cell::Cell;
+use std::mem::MaybeUninit;
 
 thread_local! {
     /// The traversal stack of (child reference, entry distance), reused across rays (taken out
@@ -46,6 +47,23 @@ impl MeshBvh {
                 // program.
                 unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(line)) };
             }
+        }
+    }
+
+    /// Leaf block `index`, of which lanes `lanes` (bit l for lane l) are tested: the BVH's own,
+    /// or over compact leaves (`COMPACT`) those lanes read from `meshes` into `read`.
+    #[inline(always)]
+    fn leaf_block<'s, const COMPACT: bool>(
+        &'s self,
+        meshes: &[Mesh],
+        index: usize,
+        lanes: u32,
+        read: &'s mut MaybeUninit<Tri4>,
+    ) -> &'s Tri4 {
+        if COMPACT {
+            read.write(self.read(meshes, self.numbers[index], lanes))
+        } else {
+            &self.blocks[index]
         }
     }
 
@@ -163,6 +181,8 @@ impl MeshBvh {
         if self.nodes.is_empty() || !ray.finite {
             return None;
         }
+        // Where a compact leaf's block is read to (unused over copied leaves).
+        let mut read = MaybeUninit::uninit();
         let mut limit = t_max;
         let mut best: Option<(u32, TriangleHit)> = None;
         // The best hit's block and lane, as block · 4 + lane.
@@ -189,14 +209,7 @@ impl MeshBvh {
                 let leaf = LeafLanes::of(current, self.layout);
                 let (mut lanes, mut index) = (leaf.lane_bits(), leaf.first_block());
                 while lanes != 0 {
-                    // A compact leaf's block, read from the meshes.
-                    let read;
-                    let block = if COMPACT {
-                        read = self.read(meshes, self.numbers[index], lanes & 0xF);
-                        &read
-                    } else {
-                        &self.blocks[index]
-                    };
+                    let block = self.leaf_block::<COMPACT>(meshes, index, lanes & 0xF, &mut read);
                     let (hits, mask) =
                         self.block_hits(meshes, block, lanes & 0xF, ray, limit, skip);
                     if let Some(h) = hits.nearest(mask) {
@@ -266,6 +279,8 @@ impl MeshBvh {
         if self.nodes.is_empty() || !ray.finite {
             return false;
         }
+        // As in the closest-hit traversal.
+        let mut read = MaybeUninit::uninit();
         let cell = local_cell(&STACK);
         let mut stack = cell.take();
         stack.clear();
@@ -283,14 +298,7 @@ impl MeshBvh {
                 let leaf = LeafLanes::of(current, self.layout);
                 let (mut lanes, mut index) = (leaf.lane_bits(), leaf.first_block());
                 while lanes != 0 {
-                    // A compact leaf's block, read from the meshes.
-                    let read;
-                    let block = if COMPACT {
-                        read = self.read(meshes, self.numbers[index], lanes & 0xF);
-                        &read
-                    } else {
-                        &self.blocks[index]
-                    };
+                    let block = self.leaf_block::<COMPACT>(meshes, index, lanes & 0xF, &mut read);
                     if self
                         .block_hits(meshes, block, lanes & 0xF, ray, t_max, skip)
                         .1
