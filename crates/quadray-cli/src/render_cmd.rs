@@ -209,9 +209,8 @@ fn prepare(args: &RenderArgs) -> Result<(quadray_loader::LoadedScene, Job)> {
     s.adaptive = args.sampling.resolve(args.spp, s.adaptive)?;
     s.antialias = (args.sampling).resolve_antialias(s.spp, &mut s.adaptive, s.antialias)?;
     let mut settings = s.render_settings();
-    let build_options = quadray::BuildOptions {
-        compact_meshes: s.compact_meshes || args.compact_meshes,
-    };
+    s.compact_meshes |= args.compact_meshes;
+    let build_options = s.build_options();
     settings.seed = args.seed;
     settings.texture_filter = args.texture_filter == crate::args::TextureFilterArg::Box;
     if let Some(crop) = args.crop {

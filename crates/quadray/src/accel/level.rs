@@ -189,7 +189,7 @@ impl Accel {
     ) {
         let Some(bvh) = &l.compact_meshes else { return };
         let meshes = q.g.level(q.level).meshes;
-        let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+        let mray = q.mesh_ray();
         let (t_max, skip) = (round_up(*best_t), q.triangle_skip());
         if let Some(h) = bvh.closest_compact::<AVX2>(meshes, &mray, t_max, skip, stack) {
             keep_mesh_hit(q, &h, bvh.mesh_vertices(meshes, &h), best_t, best);
@@ -211,7 +211,7 @@ impl Accel {
             return self.closest_in_compact_meshes::<AVX2>(l, q, stack, best_t, best);
         };
         let meshes = q.g.level(q.level).meshes;
-        let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+        let mray = q.mesh_ray();
         let (t_max, skip) = (round_up(*best_t), q.triangle_skip());
         if let Some(h) = bvh.closest_on::<AVX2>(meshes, &mray, t_max, skip, stack) {
             keep_mesh_hit(q, &h, bvh.vertices(&h), best_t, best);
@@ -300,7 +300,7 @@ impl Accel {
         let Some(bvh) = &l.compact_meshes else {
             return false;
         };
-        let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+        let mray = q.mesh_ray();
         let meshes = q.g.level(q.level).meshes;
         bvh.occluded_compact::<AVX2>(meshes, &mray, round_up(t_max), q.triangle_skip())
     }
@@ -376,7 +376,7 @@ impl Accel {
                 .is_some_and(|a| a.occluded(q.g.level(q.level), q.ray, t_max, q.skip())),
             TopItem::Meshes => match &l.meshes {
                 Some(bvh) => {
-                    let mray = MeshRay::new(q.ray.origin.as_vec3(), q.ray.dir.as_vec3());
+                    let mray = q.mesh_ray();
                     let meshes = q.g.level(q.level).meshes;
                     bvh.occluded::<AVX2>(meshes, &mray, round_up(t_max), q.triangle_skip())
                 }
@@ -437,6 +437,12 @@ impl<'a> Query<'a> {
             ray,
             from,
         }
+    }
+
+    /// The query's ray in f32, prepared for a mesh BVH.
+    #[inline(always)]
+    fn mesh_ray(&self) -> MeshRay {
+        MeshRay::new(self.ray.origin.as_vec3(), self.ray.dir.as_vec3())
     }
 
     /// The (mesh, triangle) the ray was spawned on, if in this placement.

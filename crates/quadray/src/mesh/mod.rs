@@ -306,8 +306,9 @@ impl Mesh {
         self.indices.len()
     }
 
+    /// The vertices of triangle `tri`, in f64.
     #[inline]
-    fn vertices(&self, tri: u32) -> [DVec3; 3] {
+    pub(crate) fn vertices(&self, tri: u32) -> [DVec3; 3] {
         let [a, b, c] = self.indices[tri as usize];
         [a, b, c].map(|i| self.positions[i as usize].as_dvec3())
     }

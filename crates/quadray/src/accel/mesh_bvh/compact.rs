@@ -8,7 +8,7 @@
 use super::{MeshBvh, MeshHit, MeshRay, TriId};
 use crate::accel::tri4::Tri4;
 use crate::mesh::Mesh;
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 
 impl MeshBvh {
     /// The same BVH with its blocks' triangle numbers in place of their vertices. Packed with
@@ -48,7 +48,7 @@ impl MeshBvh {
     #[inline(always)]
     pub(crate) fn mesh_vertices(&self, meshes: &[Mesh], hit: &MeshHit) -> [DVec3; 3] {
         let (m, tri) = hit.id;
-        (meshes[m as usize].triangle_positions(tri)).map(|v| Vec3::from(*v).as_dvec3())
+        meshes[m as usize].vertices(tri)
     }
 
     /// [`MeshBvh::closest_on`] for a compact BVH ([`MeshBvh::numbered`]), out of line on both
